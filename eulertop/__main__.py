@@ -1,0 +1,3 @@
+from eulertop.cli import main
+
+raise SystemExit(main())

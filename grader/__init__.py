@@ -1,0 +1,1 @@
+"""Executes student notebooks and compares their answers with the key."""

@@ -1,0 +1,1 @@
+"""Parameterised problem families and the assignment generator."""
