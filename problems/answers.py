@@ -1,0 +1,753 @@
+"""Answer kinds, and how a submitted value is compared with the key.
+
+This is the contract between the generator (which writes :class:`Answer` records into
+``key.json``), the grader (which extracts each answer variable from the executed notebook as
+plain JSON and asks :func:`grade`) and ``eulertop check`` (which asks :func:`check_form`, or
+:func:`check_spec` when it only has the public answer spec of the notebook's metadata).
+
+As in PrairieLearn, reading a value is kept apart from judging it: a value that is missing or
+malformed (a string where a number is due, NaN, a list of the wrong length, an unknown symbol)
+is ``"missing"`` or ``"invalid"`` with a message saying what is wrong with its *form*; only a
+well-formed value is compared with the key, and is then ``"correct"`` or ``"wrong"``. A wrong
+value is compared with each known :class:`Mistake`; when one matches, the student gets that
+mistake's feedback. Messages never contain the key's value.
+
+Kinds and their comparison (``v`` the key, ``x`` the submission)
+-----------------------------------------------------------------
+``scalar``
+    A real number (int, float, numpy or sympy number; *not* a bool, *not* a string).
+    Correct when ``|x − v| ≤ atol + rtol·|v|``.
+``angle``
+    A real number, in radians; as ``scalar`` but, when ``period`` is set, the difference is
+    first wrapped into ``(−period/2, period/2]`` (so 2π − 0.001 matches 0.001 modulo 2π).
+``vector``
+    A flat list (tuple, numpy array, sympy row or column matrix) of exactly ``len(v)`` real
+    numbers. Norm-based: correct when ``‖x − v‖₂ ≤ atol + rtol·‖v‖₂``. Chosen over a
+    component-wise test so that a component that is zero in the key (a body axis at rest)
+    does not demand an exact zero from a student's floating-point computation.
+``boolean``
+    ``True`` or ``False`` (also numpy and sympy booleans). The numbers 0 and 1 and the strings
+    ``"True"``/``"False"`` are *invalid*: the question asks for a boolean, and accepting ``1``
+    would make a numerical answer typed into the wrong variable look like a yes.
+``choice``
+    One of ``options``, compared case-insensitively with surrounding spaces removed.
+    Anything else is invalid, and the message lists the options.
+``expression``
+    A formula in the answer's ``symbols``: a string, or in-process a sympy expression (graded
+    through its ``str``). Read safely by :mod:`problems.expressions` (never executed). Graded by
+    evaluating both expressions at sample points drawn reproducibly from the answer's name and
+    symbols (:func:`problems.expressions.sample_points`), keeping the points where the key is
+    defined: correct when ``|x − v| ≤ atol + rtol·|v|`` at every point. An expression that is
+    undefined (division by zero, overflow, complex value) at every point is invalid.
+
+A key of exactly zero (norm zero, or an expression zero at every sample point) needs
+``atol > 0``: with a relative tolerance alone only an exact zero would match, which a student's
+floating-point computation rarely produces. :class:`Answer` refuses such a record.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, fields
+from functools import lru_cache
+from typing import Any, NamedTuple
+
+import numpy as np
+import sympy
+from numpy.typing import NDArray
+
+from problems.expressions import (
+    ExpressionError,
+    check_symbol_names,
+    evaluate_expression,
+    parse_expression,
+    sample_points,
+)
+from solver.parameters import ParameterError
+
+__all__ = [
+    "KINDS",
+    "STATUSES",
+    "Answer",
+    "Mistake",
+    "Verdict",
+    "check_form",
+    "check_spec",
+    "grade",
+]
+
+KINDS = ("scalar", "vector", "angle", "boolean", "choice", "expression")
+STATUSES = ("correct", "wrong", "invalid", "missing")
+
+N_SAMPLE_CANDIDATES = 32
+"""Sample points drawn for an expression answer (those where the key is undefined are dropped)."""
+
+MIN_SAMPLE_POINTS = 8
+"""Fewest sample points at which an expression key must be defined."""
+
+
+@dataclass(frozen=True)
+class Mistake:
+    """A known mistake the grader recognises.
+
+    Attributes
+    ----------
+    name : str
+        Short id, e.g. ``"degrees"``, ``"I1_I3_swapped"``, ``"missing_factor_2"``; it is
+        recorded in the verdict's ``mistake``.
+    value : Any
+        The value a student making this mistake gets, of the answer's kind (normalised to plain
+        JSON by the :class:`Answer` that holds it).
+    feedback : str
+        What the student is told when their value matches this one.
+    """
+
+    name: str
+    value: Any
+    feedback: str
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name.strip():
+            raise ParameterError("mistakes", f"a mistake needs a non-empty name, got {self.name!r}")
+        if not isinstance(self.feedback, str) or not self.feedback.strip():
+            raise ParameterError("mistakes", f"mistake {self.name!r} needs a feedback text")
+
+
+@dataclass(frozen=True)
+class Answer:
+    """One answer of a question: the key value, its kind, and how it is compared.
+
+    Attributes
+    ----------
+    name : str
+        Variable suffix: the notebook variable is ``f"q{question}_{name}"``.
+    kind : str
+        One of :data:`KINDS` (see the module docstring for each kind's comparison).
+    value : Any
+        The key, normalised to plain JSON: ``float`` (scalar, angle), ``list[float]`` (vector),
+        ``bool`` (boolean), ``str`` (choice: the option as spelled in ``options``; expression:
+        its text). numpy and sympy values are converted on construction.
+    unit : str
+        SI unit, e.g. ``"rad"``, ``"rad/s"``, ``"kg m^2"``; ``""`` if dimensionless.
+    rtol, atol : float
+        Relative and absolute tolerance (≥ 0; ``atol`` in ``unit``).
+    points : float
+        Points for a correct answer (≥ 0).
+    mistakes : tuple of Mistake
+        Known mistakes; each value must be of the answer's kind and *distinguishable* from the
+        key (not within tolerance of it).
+    options : tuple of str
+        ``choice`` only: the allowed strings (distinct ignoring case and surrounding spaces).
+    symbols : tuple of str
+        ``expression`` only: the symbol names the expression may use.
+    period : float or None
+        ``angle`` only: compare modulo this (e.g. 2π) when set.
+    description : str
+        One line shown next to the answer variable.
+
+    Raises
+    ------
+    solver.parameters.ParameterError
+        A ``ValueError`` naming the field at fault: unknown kind, negative tolerance, a value not
+        of the kind's form, a zero key without ``atol``, options or symbols missing or given to
+        the wrong kind, a mistake indistinguishable from the key.
+    """
+
+    name: str
+    kind: str
+    value: Any
+    unit: str = ""
+    rtol: float = 1e-3
+    atol: float = 0.0
+    points: float = 1.0
+    mistakes: tuple[Mistake, ...] = ()
+    options: tuple[str, ...] = ()
+    symbols: tuple[str, ...] = ()
+    period: float | None = None
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        _validate_fields(self)
+        form = _Form.of(self, reading_key=True)
+        key = _read_key(form, self.value, "value")
+        object.__setattr__(self, "value", _to_json(key))
+        _require_gradable_key(self)
+        mistakes = tuple(_checked_mistake(self, m) for m in self.mistakes)
+        object.__setattr__(self, "mistakes", mistakes)
+        names = [m.name for m in mistakes]
+        if len(set(names)) != len(names):
+            raise ParameterError("mistakes", f"answer {self.name!r}: duplicate names {names}")
+
+    def to_dict(self) -> dict:
+        """Plain JSON (lists for tuples); ``Answer.from_dict(a.to_dict()) == a``."""
+        d = asdict(self)
+        d["mistakes"] = [asdict(m) for m in self.mistakes]
+        d["options"], d["symbols"] = list(self.options), list(self.symbols)
+        return d
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> Answer:
+        """Inverse of :meth:`to_dict`; unknown keys are an error (a key file from elsewhere)."""
+        d = dict(_known_keys(cls, d, "answer"))
+        d["mistakes"] = tuple(
+            Mistake(**_known_keys(Mistake, m, "mistake")) for m in d.get("mistakes", ())
+        )
+        return cls(**d)
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The outcome of reading (and grading) one submitted answer.
+
+    Attributes
+    ----------
+    status : str
+        One of :data:`STATUSES`. From :func:`check_form`, ``"correct"`` means *well formed*.
+    points : float
+        Points awarded (``max_points`` when correct, else 0; always 0 from :func:`check_form`).
+    max_points : float
+        The answer's points.
+    message : str
+        For the student: what was read, or what is wrong with its form. Never the key.
+    mistake : str or None
+        :attr:`Mistake.name` when a known mistake was recognised.
+    """
+
+    status: str
+    points: float
+    max_points: float
+    message: str
+    mistake: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.status not in STATUSES:
+            raise ParameterError("status", f"must be one of {STATUSES}, got {self.status!r}")
+        for field in ("points", "max_points"):
+            value = getattr(self, field)
+            if isinstance(value, bool) or not isinstance(value, numbers.Real):
+                raise ParameterError(field, f"must be a number, got {value!r}")
+            object.__setattr__(self, field, float(value))
+        if not 0.0 <= self.points <= self.max_points:
+            raise ParameterError("points", f"must lie in [0, {self.max_points}], got {self.points}")
+        if not isinstance(self.message, str):
+            raise ParameterError("message", f"must be a string, got {self.message!r}")
+        if self.mistake is not None and not isinstance(self.mistake, str):
+            raise ParameterError("mistake", f"must be a string or None, got {self.mistake!r}")
+
+    def to_dict(self) -> dict:
+        """Plain JSON; ``Verdict.from_dict(v.to_dict()) == v``."""
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> Verdict:
+        """Inverse of :meth:`to_dict`."""
+        return cls(**_known_keys(cls, d, "verdict"))
+
+
+# --------------------------------------------------------------------------------------------
+# The public entry points
+
+
+def check_form(answer: Answer, submitted: Any) -> Verdict:
+    """Is ``submitted`` present and well formed for ``answer``? Never says right or wrong.
+
+    Parameters
+    ----------
+    answer : Answer
+        The answer the value is for (only its form is used: kind, length, options, symbols).
+    submitted : Any
+        The extracted value; ``None`` when the variable is missing or still ``None``.
+
+    Returns
+    -------
+    Verdict
+        ``"missing"``, ``"invalid"`` (the message says why), or ``"correct"`` meaning *well
+        formed* (the message echoes what was read). ``points`` is always 0: nothing is graded.
+
+    Examples
+    --------
+    >>> a = Answer("beta1", "angle", 0.7, unit="rad")
+    >>> check_form(a, "0.7").message
+    "the string '0.7', not a number — remove the quotes"
+    >>> check_form(a, 12.0).status      # well formed, even though wrong
+    'correct'
+    """
+    return _check(_Form.of(answer), submitted)
+
+
+def check_spec(spec: Mapping[str, Any], submitted: Any) -> Verdict:
+    """:func:`check_form` from the *public* answer spec, for ``eulertop check`` without the key.
+
+    ``spec`` is :func:`problems.variant.answer_spec`'s dict: ``name``, ``kind``, ``unit``,
+    ``length`` (vectors), ``options``, ``symbols``, ``points``. Expressions are tried at sample
+    points drawn from the name and symbols alone, so one defined at none of them is invalid.
+    """
+    return _check(_Form.of_spec(spec), submitted)
+
+
+def grade(answer: Answer, submitted: Any) -> Verdict:
+    """Grade ``submitted`` against ``answer``: missing, invalid, correct, or wrong.
+
+    A missing or malformed value is reported exactly as by :func:`check_form`. A well-formed
+    value is compared with the key under the kind's rule (module docstring); if it is not
+    within tolerance, each known mistake is tried with the same rule, and the first that matches
+    gives the feedback and ``mistake``.
+
+    Examples
+    --------
+    >>> a = Answer("omega", "scalar", 2.5, unit="rad/s", rtol=1e-2,
+    ...            mistakes=(Mistake("rpm", 23.87, "rad/s, not rpm"),))
+    >>> grade(a, 2.51).status, grade(a, 2.51).points
+    ('correct', 1.0)
+    >>> grade(a, 23.9).mistake
+    'rpm'
+    >>> grade(a, None).status
+    'missing'
+    """
+    form = _Form.of(answer)
+    value, unreadable = _reading(form, submitted)
+    if unreadable:
+        return unreadable
+    if _matches(answer, value, _read_key(form, answer.value, "value")):
+        return Verdict("correct", answer.points, answer.points, f"correct: {_show(form, value)}")
+    for mistake in answer.mistakes:
+        if _matches(answer, value, _read_key(form, mistake.value, "mistakes")):
+            return _verdict(form, "wrong", mistake.feedback, mistake=mistake.name)
+    return _verdict(form, "wrong", f"{_show(form, value)}: {_not_within(answer)}")
+
+
+# --------------------------------------------------------------------------------------------
+# The form of an answer: everything needed to read a value, nothing of the key
+
+
+class _Form(NamedTuple):
+    name: str
+    kind: str
+    unit: str
+    points: float
+    length: int | None  # vector
+    options: tuple[str, ...]  # choice
+    symbols: tuple[str, ...]  # expression
+    sample: Mapping[str, NDArray] | None  # expression: where to try it
+
+    @classmethod
+    def of(cls, answer: Answer, reading_key: bool = False) -> _Form:
+        """The form of ``answer``; ``reading_key`` while its key is not read yet (no length, and
+        expressions tried at every candidate point, not only where the key is defined)."""
+        length = len(answer.value) if answer.kind == "vector" and not reading_key else None
+        sample = None
+        if answer.kind == "expression":
+            sample = _candidates(answer.name, answer.symbols) if reading_key \
+                else _key_points(answer.name, answer.symbols, answer.value, answer.atol)
+        return cls(answer.name, answer.kind, answer.unit, answer.points, length,
+                   answer.options, answer.symbols, sample)
+
+    @classmethod
+    def of_spec(cls, spec: Mapping[str, Any]) -> _Form:
+        kind, name = spec.get("kind"), spec.get("name", "")
+        if kind not in KINDS:
+            raise ParameterError("kind", f"must be one of {KINDS}, got {kind!r}")
+        symbols = tuple(spec.get("symbols") or ())
+        sample = _candidates(name, symbols) if kind == "expression" else None
+        return cls(name, kind, spec.get("unit", ""), float(spec.get("points", 1.0)),
+                   spec.get("length"), tuple(spec.get("options") or ()), symbols, sample)
+
+
+class _Missing(Exception):
+    """No value was submitted."""
+
+
+class _Invalid(Exception):
+    """The submitted value is malformed; the message says why, for the student."""
+
+
+_MISSING = "no answer: the variable is missing or still None"
+
+
+def _reading(form: _Form, submitted: Any) -> tuple[Any, Verdict | None]:
+    """(value in normal form, None), or (None, the missing/invalid verdict)."""
+    try:
+        return _read(form, submitted), None
+    except _Missing:
+        return None, _verdict(form, "missing", _MISSING)
+    except _Invalid as err:
+        return None, _verdict(form, "invalid", str(err))
+
+
+def _check(form: _Form, submitted: Any) -> Verdict:
+    value, unreadable = _reading(form, submitted)
+    return unreadable or _verdict(form, "correct", f"well formed: {_show(form, value)}")
+
+
+def _verdict(form: _Form, status: str, message: str, mistake: str | None = None) -> Verdict:
+    return Verdict(status, 0.0, form.points, message, mistake)
+
+
+def _read(form: _Form, submitted: Any) -> Any:
+    """The submitted value in the kind's normal form, or raise _Missing / _Invalid."""
+    if submitted is None:
+        raise _Missing
+    try:
+        return _READERS[form.kind](_plain(submitted), form)
+    except (_Invalid, _Missing):
+        raise
+    except Exception as err:  # fail closed: a value nobody foresaw is invalid, not a crash
+        raise _Invalid(f"the value could not be read ({type(err).__name__})") from None
+
+
+def _read_key(form: _Form, value: Any, field: str) -> Any:
+    """Read a value written by the template (key or mistake): malformed is a template bug."""
+    try:
+        return _read(form, value)
+    except (_Missing, _Invalid) as err:
+        message = str(err) or "no value (None)"
+        raise ParameterError(field, f"answer {form.name!r}: {message}") from None
+
+
+# --------------------------------------------------------------------------------------------
+# Readers: plain value -> normal form of the kind
+
+
+def _plain(x: Any) -> Any:
+    """numpy and sympy objects as plain Python, one level deep (elements are read one by one)."""
+    if isinstance(x, np.ndarray):
+        return x.tolist() if x.ndim else x.item()
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, tuple):
+        return list(x)
+    if isinstance(x, sympy.MatrixBase):
+        return list(x) if 1 in x.shape else x.tolist()  # a row or column vector is flat
+    if isinstance(x, sympy.logic.boolalg.BooleanAtom):
+        return bool(x)
+    if isinstance(x, sympy.Expr) and x.is_number:
+        return _sympy_number(x)
+    return x
+
+
+def _sympy_number(x: sympy.Expr) -> float | complex | sympy.Expr:
+    try:
+        return float(x)
+    except (TypeError, ValueError):
+        try:
+            return complex(x)
+        except (TypeError, ValueError):
+            return x
+
+
+def _quote(text: str, limit: int = 30) -> str:
+    return repr(text if len(text) <= limit else text[: limit - 1] + "…")
+
+
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}{'' if n == 1 else 's'}"
+
+
+def _describe(x: Any) -> str:
+    """A short, student-facing description of a value that is not of the expected form."""
+    if isinstance(x, bool):
+        return f"{x}, a boolean"
+    if isinstance(x, str):
+        return f"the string {_quote(x)}"
+    if isinstance(x, numbers.Integral) and abs(x) > 10**15:
+        return "a very large integer"
+    if isinstance(x, numbers.Real):
+        return f"the number {float(x):.6g}"
+    if isinstance(x, complex):
+        return f"the complex number {x:.4g}"
+    if isinstance(x, list):
+        nested = any(isinstance(_plain(e), list) for e in x)
+        return f"a {'nested ' if nested else ''}list of {_count(len(x), 'element')}"
+    if isinstance(x, sympy.Basic):
+        return f"the sympy object {_quote(str(x))}"
+    return f"a value of type {type(x).__name__}"
+
+
+def _number(x: Any, what: str = "", unit: str = "") -> float:
+    """A finite real number, or _Invalid with a message about ``what`` ("component 2"; empty
+    for the value itself, so that the message starts with the description of the value)."""
+    x = _plain(x)
+    subject = f"{what} is " if what else ""
+    if isinstance(x, numbers.Real) and not isinstance(x, bool):
+        try:
+            value = float(x)
+        except OverflowError:
+            raise _Invalid(f"{subject}a number too large for a float") from None
+        if math.isnan(value):
+            raise _Invalid(f"{subject}NaN (not a number); check the computation")
+        if math.isinf(value):
+            raise _Invalid(f"{subject}infinite; check the computation")
+        return value
+    in_unit = f" (in {unit})" if unit else ""
+    if isinstance(x, str) and _numeric_string(x):
+        raise _Invalid(f"{subject}{_describe(x)}, not a number — remove the quotes")
+    if isinstance(x, sympy.Expr) and x.free_symbols:
+        names = ", ".join(sorted(map(str, x.free_symbols)))
+        raise _Invalid(f"{subject}an expression in {names}; a number{in_unit} is expected")
+    if isinstance(x, complex):
+        raise _Invalid(f"{subject}{_describe(x)}; a real number{in_unit} is expected")
+    raise _Invalid(f"{subject}{_describe(x)}, not a number{in_unit}")
+
+
+def _numeric_string(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _read_scalar(x: Any, form: _Form) -> float:
+    if isinstance(x, list):
+        raise _Invalid(f"{_describe(x)}; a single number is expected")
+    return _number(x, unit=form.unit)
+
+
+def _read_vector(x: Any, form: _Form) -> NDArray[np.float64]:
+    expected = f"a list of {form.length} numbers" if form.length else "a list of numbers"
+    if not isinstance(x, list):
+        raise _Invalid(f"{_describe(x)}; {expected} is expected")
+    if any(isinstance(_plain(e), list) for e in x):
+        raise _Invalid(f"{_describe(x)}; a flat list ({expected}) is expected")
+    if (form.length is not None and len(x) != form.length) or not x:
+        raise _Invalid(f"a list of {_count(len(x), 'number')}; {expected} is expected")
+    return np.array([_number(e, f"component {i}", form.unit) for i, e in enumerate(x, 1)])
+
+
+def _read_boolean(x: Any, form: _Form) -> bool:
+    if isinstance(x, bool):
+        return x
+    if isinstance(x, str) and x.strip().lower() in ("true", "false"):
+        raise _Invalid(f"{_describe(x)}; write True or False without quotes")
+    raise _Invalid(f"{_describe(x)}; True or False is expected")
+
+
+def _fold(option: str) -> str:
+    return option.strip().casefold()
+
+
+def _read_choice(x: Any, form: _Form) -> str:
+    listed = ", ".join(repr(o) for o in form.options)
+    if isinstance(x, str):
+        for option in form.options:
+            if _fold(option) == _fold(x):
+                return option
+        raise _Invalid(f"{_describe(x)} is not one of the options: {listed}")
+    raise _Invalid(f"{_describe(x)}; one of the strings {listed} is expected")
+
+
+def _read_expression(x: Any, form: _Form) -> str:
+    if isinstance(x, sympy.Basic):
+        x = str(x)
+    elif isinstance(x, numbers.Real) and not isinstance(x, bool):
+        x = repr(_number(x))  # a constant is a (probably wrong) expression
+    if not isinstance(x, str):
+        expected = "an expression (sympy, or a string) in " + ", ".join(form.symbols)
+        raise _Invalid(f"{_describe(x)}; {expected} is expected")
+    try:
+        parse_expression(x, form.symbols)
+        values = evaluate_expression(x, form.symbols, form.sample)
+    except ExpressionError as err:
+        raise _Invalid(f"expression {_quote(x.strip())}: {err}") from None
+    if not np.any(np.isfinite(values)):
+        raise _Invalid(
+            f"expression {_quote(x.strip())} cannot be evaluated at any test point "
+            "(division by zero, overflow, or the root or logarithm of a negative number)"
+        )
+    return x.strip()
+
+
+_READERS = {
+    "scalar": _read_scalar,
+    "angle": _read_scalar,
+    "vector": _read_vector,
+    "boolean": _read_boolean,
+    "choice": _read_choice,
+    "expression": _read_expression,
+}
+
+
+# --------------------------------------------------------------------------------------------
+# Comparison of two values in normal form
+
+
+def _within(x: NDArray | float, v: NDArray | float, answer: Answer) -> bool:
+    return bool(np.all(np.abs(np.subtract(x, v)) <= answer.atol + answer.rtol * np.abs(v)))
+
+
+def _same_angle(x: float, v: float, answer: Answer) -> bool:
+    if answer.period is None:
+        return _within(x, v, answer)
+    half = answer.period / 2
+    wrapped = half - np.remainder(half - (x - v), answer.period)  # x − v wrapped to (−P/2, P/2]
+    return bool(abs(wrapped) <= answer.atol + answer.rtol * abs(v))
+
+
+def _same_vector(x: NDArray, v: NDArray, answer: Answer) -> bool:
+    return bool(np.linalg.norm(x - v) <= answer.atol + answer.rtol * np.linalg.norm(v))
+
+
+def _same_expression(x: str, v: str, answer: Answer) -> bool:
+    points = _key_points(answer.name, answer.symbols, answer.value, answer.atol)
+    with np.errstate(all="ignore"):
+        xs = evaluate_expression(x, answer.symbols, points)
+        vs = evaluate_expression(v, answer.symbols, points)
+        return bool(np.all(np.isfinite(xs))) and _within(xs, vs, answer)
+
+
+_COMPARATORS = {
+    "scalar": _within,
+    "angle": _same_angle,
+    "vector": _same_vector,
+    "boolean": lambda x, v, answer: x is v,
+    "choice": lambda x, v, answer: x == v,
+    "expression": _same_expression,
+}
+
+
+def _matches(answer: Answer, x: Any, v: Any) -> bool:
+    return _COMPARATORS[answer.kind](x, v, answer)
+
+
+def _show(form: _Form, value: Any) -> str:
+    """What was read, for messages: ``1.234 rad``, ``[1, 2, 3] rad/s``, ``'loops'``."""
+    unit = f" {form.unit}" if form.unit else ""
+    if form.kind in ("scalar", "angle"):
+        return f"{value:.6g}{unit}"
+    if form.kind == "vector":
+        return "[" + ", ".join(f"{c:.6g}" for c in value) + "]" + unit
+    if form.kind in ("choice", "expression"):
+        return _quote(value, 60)
+    return str(value)
+
+
+def _not_within(answer: Answer) -> str:
+    if answer.kind in ("boolean", "choice"):
+        return "not correct"
+    parts = [f"relative {answer.rtol:.2g}"] if answer.rtol else []
+    parts += [f"absolute {answer.atol:.2g}{' ' + answer.unit if answer.unit else ''}"] \
+        if answer.atol else []
+    modulo = f", modulo {answer.period:.6g}" if answer.period else ""
+    return f"not correct (not within the tolerance: {' + '.join(parts)}{modulo})"
+
+
+# --------------------------------------------------------------------------------------------
+# Expression sample points (cached: pure functions of immutable arguments)
+
+
+@lru_cache(maxsize=256)
+def _candidates(name: str, symbols: tuple[str, ...]) -> Mapping[str, NDArray]:
+    return sample_points(symbols, name, N_SAMPLE_CANDIDATES)
+
+
+@lru_cache(maxsize=1024)
+def _key_points(
+    name: str, symbols: tuple[str, ...], key: str, atol: float
+) -> Mapping[str, NDArray]:
+    """The candidate points at which the key expression is defined."""
+    candidates = _candidates(name, symbols)
+    values = evaluate_expression(key, symbols, candidates)
+    keep = np.isfinite(values)
+    if np.count_nonzero(keep) < MIN_SAMPLE_POINTS:
+        raise ParameterError(
+            "value",
+            f"answer {name!r}: the key expression is defined at only {np.count_nonzero(keep)} "
+            f"of {N_SAMPLE_CANDIDATES} sample points (need {MIN_SAMPLE_POINTS})",
+        )
+    if atol == 0 and not np.any(values[keep]):
+        raise ParameterError("atol", f"answer {name!r}: the key is zero everywhere; set atol > 0")
+    points = {}
+    for symbol, column in candidates.items():
+        points[symbol] = column[keep]
+        points[symbol].flags.writeable = False
+    return points
+
+
+# --------------------------------------------------------------------------------------------
+# Validation of an Answer record (template bugs, reported at construction)
+
+
+def _validate_fields(answer: Answer) -> None:
+    name = answer.name
+    if not isinstance(name, str) or not name.isidentifier():
+        raise ParameterError("name", f"must be a Python identifier, got {name!r}")
+    if answer.kind not in KINDS:
+        raise ParameterError("kind", f"answer {name!r}: one of {KINDS}, not {answer.kind!r}")
+    for field in ("rtol", "atol", "points"):
+        value = getattr(answer, field)
+        if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+                or not math.isfinite(value) or value < 0:
+            raise ParameterError(field, f"answer {name!r}: must be finite and ≥ 0, got {value!r}")
+        object.__setattr__(answer, field, float(value))
+    for field in ("unit", "description"):
+        if not isinstance(getattr(answer, field), str):
+            raise ParameterError(field, f"answer {name!r}: must be a string")
+    for field in ("mistakes", "options", "symbols"):
+        object.__setattr__(answer, field, tuple(getattr(answer, field)))
+    _validate_kind_fields(answer)
+
+
+def _validate_kind_fields(answer: Answer) -> None:
+    name, kind = answer.name, answer.kind
+    for field, owner in (("options", "choice"), ("symbols", "expression")):
+        if bool(getattr(answer, field)) != (kind == owner):
+            raise ParameterError(field, f"answer {name!r}: required for, and only for, {owner}")
+    if answer.period is not None:
+        if kind != "angle":
+            raise ParameterError("period", f"answer {name!r}: only an angle has a period")
+        period = answer.period
+        if isinstance(period, bool) or not isinstance(period, numbers.Real) \
+                or not math.isfinite(period) or period <= 0:
+            raise ParameterError("period", f"answer {name!r}: must be > 0, got {period!r}")
+        object.__setattr__(answer, "period", float(period))
+    if kind == "choice":
+        folded = [_fold(o) if isinstance(o, str) else None for o in answer.options]
+        if None in folded or "" in folded or len(set(folded)) != len(folded):
+            raise ParameterError(
+                "options", f"answer {name!r}: need distinct non-empty strings, got {answer.options}"
+            )
+    if kind == "expression":
+        try:
+            check_symbol_names(answer.symbols)
+        except ValueError as err:
+            raise ParameterError("symbols", f"answer {name!r}: {err}") from None
+
+
+def _to_json(value: Any) -> Any:
+    return value.tolist() if isinstance(value, np.ndarray) else value
+
+
+def _require_gradable_key(answer: Answer) -> None:
+    if answer.kind == "expression":  # defined at enough sample points; zero needs atol
+        _key_points(answer.name, answer.symbols, answer.value, answer.atol)
+    elif answer.kind in ("scalar", "angle", "vector") and answer.atol == 0 \
+            and not np.any(answer.value):
+        raise ParameterError(
+            "atol", f"answer {answer.name!r}: the key is zero, so rtol alone accepts only an exact "
+            "zero; set atol > 0"
+        )
+
+
+def _checked_mistake(answer: Answer, mistake: Any) -> Mistake:
+    if not isinstance(mistake, Mistake):
+        raise ParameterError("mistakes", f"answer {answer.name!r}: not a Mistake: {mistake!r}")
+    form = _Form.of(answer)
+    value = _read_key(form, mistake.value, "mistakes")
+    if _matches(answer, value, _read_key(form, answer.value, "value")):
+        raise ParameterError(
+            "mistakes",
+            f"answer {answer.name!r}: mistake {mistake.name!r} is indistinguishable from the key "
+            "within tolerance",
+        )
+    return Mistake(mistake.name, _to_json(value), mistake.feedback)
+
+
+def _known_keys(cls: type, d: Mapping[str, Any], what: str) -> dict[str, Any]:
+    if not isinstance(d, Mapping):
+        raise ParameterError(what, f"expected a JSON object, got {type(d).__name__}")
+    unknown = sorted(set(d) - {f.name for f in fields(cls)})
+    if unknown:
+        raise ParameterError(what, f"unknown keys {unknown}")
+    return dict(d)

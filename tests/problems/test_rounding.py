@@ -1,0 +1,135 @@
+"""Significant-figure rounding and printing, checked against Python's decimal arithmetic.
+
+The reference rounds ``Decimal(x)`` — the exact value of the binary float — to ``sig`` digits
+with ROUND_HALF_EVEN, an independent path from the formatted-string rounding under test.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from decimal import ROUND_HALF_EVEN, Decimal
+
+import numpy as np
+import pytest
+
+from problems.rounding import PLAIN_RANGE, format_sig, latex_sig, round_sig
+from solver.parameters import ParameterError
+
+
+def decimal_round(x: float, sig: int) -> float:
+    """``x`` rounded to ``sig`` significant digits in exact decimal arithmetic."""
+    exact = Decimal(x)
+    if exact == 0:
+        return 0.0
+    quantum = Decimal(1).scaleb(exact.adjusted() - sig + 1)
+    return float(exact.quantize(quantum, rounding=ROUND_HALF_EVEN))
+
+
+def latex_to_float(text: str) -> float:
+    text = re.sub(r"^(-?)10\^\{(-?\d+)\}$", r"\g<1>1e\2", text)
+    return float(re.sub(r" \\times 10\^\{(-?\d+)\}$", r"e\1", text))
+
+
+@pytest.fixture(scope="module")
+def samples() -> np.ndarray:
+    """Numbers over 40 decades, both signs, plus decimal-looking values near ties."""
+    rng = np.random.default_rng(20240611)
+    spread = rng.uniform(1, 10, 400) * 10.0 ** rng.integers(-20, 20, 400)
+    signs = rng.choice([-1.0, 1.0], 400)
+    near_ties = np.round(rng.uniform(0, 100, 100), 3) + 0.0005  # e.g. 12.3455: looks like a tie
+    return np.concatenate([spread * signs, near_ties, [0.0, 9.9995, 99999.5, 0.00099995]])
+
+
+@pytest.mark.parametrize("sig", [1, 2, 3, 4, 6, 9])
+def test_round_sig_matches_exact_decimal_rounding(samples: np.ndarray, sig: int) -> None:
+    expected = [decimal_round(x, sig) for x in samples.tolist()]
+    np.testing.assert_array_equal(round_sig(samples, sig), expected)
+
+
+@pytest.mark.parametrize("sig", [1, 2, 3, 4, 6, 9])
+@pytest.mark.parametrize("trailing_zeros", [False, True])
+def test_displayed_string_is_the_rounded_value(
+    samples: np.ndarray, sig: int, trailing_zeros: bool
+) -> None:
+    for x in samples.tolist():
+        r = round_sig(x, sig)
+        assert float(format_sig(x, sig, trailing_zeros=trailing_zeros)) == r, x
+        assert latex_to_float(latex_sig(x, sig, trailing_zeros=trailing_zeros)) == r, x
+
+
+@pytest.mark.parametrize(
+    ("x", "sig", "expected"),
+    [
+        (0.125, 2, 0.12),  # an exact binary tie: half to even
+        (0.375, 2, 0.38),
+        (2.675, 3, 2.67),  # 2.675 is stored as 2.67499999…
+        (9.996, 3, 10.0),  # carries into a new decade
+        (-1234.5678, 2, -1200.0),
+        (6.02214076e23, 3, 6.02e23),
+    ],
+)
+def test_round_sig_known_values(x: float, sig: int, expected: float) -> None:
+    assert round_sig(x, sig) == expected
+
+
+def test_round_sig_shapes() -> None:
+    assert isinstance(round_sig(3.14159, 3), float)
+    grid = np.full((2, 3), math.pi)
+    out = round_sig(grid, 3)
+    assert out.shape == (2, 3)
+    np.testing.assert_array_equal(out, 3.14)
+
+
+@pytest.mark.parametrize(
+    ("x", "sig", "plain", "latex"),
+    [
+        (0.1 + 0.2, 3, "0.3", "0.3"),  # no floating-point noise digits
+        (1234.5678, 3, "1230", "1230"),
+        (2.0, 3, "2", "2"),
+        (-0.25, 2, "-0.25", "-0.25"),
+        (0.0, 3, "0", "0"),
+        (-0.0, 3, "0", "0"),
+        (PLAIN_RANGE[0], 3, "0.001", "0.001"),
+        (0.000999, 3, "9.99e-4", r"9.99 \times 10^{-4}"),
+        (99999.7, 3, "1e5", "10^{5}"),  # the rounded value decides the notation
+        (6.02214076e23, 4, "6.022e23", r"6.022 \times 10^{23}"),
+        (-1.602176634e-19, 2, "-1.6e-19", r"-1.6 \times 10^{-19}"),
+        (1e-7, 2, "1e-7", "10^{-7}"),
+    ],
+)
+def test_format_sig_examples(x: float, sig: int, plain: str, latex: str) -> None:
+    assert format_sig(x, sig) == plain
+    assert latex_sig(x, sig) == latex
+
+
+@pytest.mark.parametrize(
+    ("x", "sig", "expected"),
+    [(2.5, 3, "2.50"), (1.0, 2, "1.0"), (1.0e5, 3, "1.00e5"), (0.00123, 4, "0.001230")],
+)
+def test_format_sig_trailing_zeros(x: float, sig: int, expected: str) -> None:
+    assert format_sig(x, sig, trailing_zeros=True) == expected
+
+
+@pytest.mark.parametrize(
+    ("x", "sig", "parameter"),
+    [
+        (float("nan"), 3, "x"),
+        (float("inf"), 3, "x"),
+        ("1.5", 3, "x"),
+        (1.5, 0, "sig"),
+        (1.5, 2.5, "sig"),
+        (1.5, True, "sig"),
+    ],
+)
+def test_bad_input_is_refused(x: object, sig: object, parameter: str) -> None:
+    with pytest.raises(ParameterError) as err:
+        round_sig(x, sig)
+    assert err.value.parameter == parameter
+    with pytest.raises(ParameterError):
+        format_sig(x, sig)
+
+
+def test_format_sig_wants_one_number() -> None:
+    with pytest.raises(ParameterError, match="single number"):
+        format_sig([1.0, 2.0], 3)
