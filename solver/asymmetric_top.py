@@ -39,12 +39,9 @@ steady rotations (ω along a principal axis, any ω of a spherical top, ω in th
 plane of a symmetric top) are detected from Euler's right-hand side vanishing exactly and
 returned as constant ω with an infinite period.
 
-Near the separatrix scipy's ``ellipj(u, m)`` is unusable (measured: for ``1 − m = 2⁻⁴⁰`` it
-returns values of order 1e13 at ``u ≈ 2K``; at ``2⁻³⁰`` errors reach 1e-12) and passing
-``m = 1 − (1 − m)`` would in any case round away the digits of ``1 − m``. ``_jacobi_sncndn``
-therefore applies the descending Landen transformation (DLMF 22.7.1–22.7.3), which takes
-the complementary parameter ``m1`` to ``4√m1/(1 + √m1)²`` without cancellation, until
-``m1 ≥ 1/16`` and only then calls ``ellipj``.
+Near the separatrix scipy's ``ellipj(u, m)`` is unusable and passing ``m = 1 − (1 − m)`` would
+in any case round away the digits of ``1 − m``: sn, cn, dn come from
+:func:`solver.jacobi.jacobi_sncndn` (descending Landen transformation), in ``1 − m``.
 """
 
 from __future__ import annotations
@@ -53,8 +50,9 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.special import ellipj, ellipkm1, elliprf
+from scipy.special import ellipkm1, elliprf
 
+from solver.jacobi import jacobi_sncndn
 from solver.parameters import as_real, principal_moments
 from solver.torque_free import _gyroscopic_torque, invariants, near_axis_stability
 
@@ -64,48 +62,6 @@ __all__ = [
     "flip_time",
     "solve_free_top",
 ]
-
-# From this complementary parameter on, scipy's ellipj is accurate to ~1e-15 over a period
-# (measured against mpmath); below it the Landen transformation is applied first.
-_DIRECT_M1 = 1.0 / 16.0
-
-
-def _jacobi_sncndn(
-    u: NDArray[np.float64], m1: NDArray[np.float64]
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """sn, cn, dn of ``u`` for parameter ``m = 1 − m1``, accurate as ``m1 → 0`` (R10).
-
-    ``u`` is first reduced modulo the period ``4K``; ``m1 = 0`` gives tanh, sech, sech.
-    """
-    K = ellipkm1(m1)
-    finite = m1 > 0
-    turns = np.where(finite, np.round(u / np.where(finite, 4 * K, 1.0)), 0.0)
-    u = u - 4 * np.where(finite, K, 0.0) * turns
-    sn, cn, dn = _landen_sncndn(u, np.where(finite, m1, 1.0))
-    with np.errstate(over="ignore"):  # cosh overflows to inf far out: sech is then 0
-        sech = 1.0 / np.cosh(u)
-    return np.where(finite, sn, np.tanh(u)), np.where(finite, cn, sech), np.where(finite, dn, sech)
-
-
-def _landen_sncndn(
-    u: NDArray[np.float64], m1: NDArray[np.float64]
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """Descending Landen transformation (DLMF 22.7.1–22.7.3) down to ``m1 ≥ _DIRECT_M1``."""
-    near = m1 < _DIRECT_M1
-    if not np.any(near):
-        sn, cn, dn, _ = ellipj(u, 1.0 - m1)
-        return sn, cn, dn
-    kc = np.sqrt(m1)  # complementary modulus k'
-    k1 = (1.0 - kc) / (1.0 + kc)  # the transformed modulus
-    m1_next = 4.0 * kc / (1.0 + kc) ** 2  # 1 − k1², free of cancellation
-    s, c, d = _landen_sncndn(np.where(near, u / (1.0 + k1), u), np.where(near, m1_next, m1))
-    denom = 1.0 + k1 * s**2
-    sn = (1.0 + k1) * s / denom
-    cn = c * d / denom
-    # dn = (1 − k1 s²)/(1 + k1 s²), with 1 − k1 s² = c² + (1 − k1) s² summed without cancellation
-    dn = (c**2 + 2.0 * kc / (1.0 + kc) * s**2) / denom
-    return np.where(near, sn, s), np.where(near, cn, c), np.where(near, dn, d)
-
 
 def _parity(order: NDArray[np.intp]) -> NDArray[np.float64]:
     """+1 for an even permutation of (0, 1, 2) along the last axis, −1 for an odd one."""
@@ -140,7 +96,7 @@ class _EllipticMotion:
     def omega(self, t: NDArray[np.float64]) -> NDArray[np.float64]:
         """ω(t), shape broadcast(t, initial conditions) + (3,)."""
         u = self.u0 + self.direction * self.lam * t
-        sn, cn, dn = _jacobi_sncndn(u, np.broadcast_to(self.m1, u.shape))
+        sn, cn, dn = jacobi_sncndn(u, np.broadcast_to(self.m1, u.shape))
         relabelled = self.amplitude * np.stack([cn, sn, dn], axis=-1)
         order = np.broadcast_to(self.order, relabelled.shape)
         omega = np.empty_like(relabelled)

@@ -54,7 +54,7 @@ def _solve_heavy_top(**kw: Any) -> dict[str, Any]:
 
 
 def _solve_free_top(**kw: Any) -> dict[str, Any]:
-    from solver.torque_free import solve_free_top
+    from solver.asymmetric_top import solve_free_top
 
     out = solve_free_top(**kw)
     # R10: the period is infinite on the separatrix (and undefined for a steady spin): no finite

@@ -1,0 +1,342 @@
+"""Nutation of the heavy symmetric top: the cubic ``f(u)``, its roots, and its elliptic integrals.
+
+R17 and R20 of ``physics.md``. With ``u = cos β`` the motion obeys ``u̇² = f(u)``,
+``f(u) = (1 − u²)(A − B u) − (b − a u)² = B (u − u1)(u − u2)(u − u3)``.
+
+Numerical design (why it is not ``np.roots``)
+---------------------------------------------
+The expanded coefficients of ``f`` cancel catastrophically for a fast top (``a²``, ``2ab``,
+``b²`` are huge, the roots ``u1, u2`` are not), and ``u1 ≈ u2`` (steady precession) is a double
+root whose position ``np.roots`` gets to only ``√ε``. Everything here is therefore written in
+the offset ``w = u − u0`` from ``u0 = cos β0``, with the coefficients taken straight from the
+initial rates, where nothing cancels::
+
+    f = B w³ + c2 w² + c1 w + c0,
+    c0 = sin²β0 β̇0²                         (= f(u0) ≥ 0)
+    c1 = −B sin²β0 − 2 u0 P + 2 a Q
+    c2 = 2 u0 B − P − a²
+    P  = A − B u0 = β̇0² + α̇0² sin²β0,   Q = b − a u0 = α̇0 sin²β0.
+
+* ``β̇0 = 0``: ``w = 0`` is an exact root; it is deflated analytically, and the remaining
+  quadratic ``B w² + c2 w + c1`` is solved in the cancellation-free ("citardauq") form.
+* ``β̇0 ≠ 0``: the largest root ``w3`` is found by Newton's method started above it (a cubic
+  with three real roots is increasing and convex there, so the iterates decrease monotonically;
+  they stop when they stop decreasing), then Vieta gives ``w1 + w2 = (c1 + c0/w3)/(B w3)`` and
+  ``w1 w2 = −c0/(B w3)``; the discriminant of that quadratic is a sum of two non-negative terms,
+  so the two nutation limits — however close — come out to full relative accuracy.
+
+Distances to the poles ``1 ∓ u`` are carried separately (``1 − u0 = 2 sin²(β0/2)``), and where
+``1 − u2`` (or ``1 + u1``) would be a cancelling difference it is taken from the exact
+identities ``(b − a)² = B (1 − u1)(1 − u2)(u3 − 1)`` and ``(b + a)² = B (1 + u1)(1 + u2)(1 + u3)``
+(``f(±1) = −(b ∓ a)²``). Angles are ``β = 2 atan2(√(1 − u), √(1 + u))``: full accuracy at both
+poles.
+
+The nutation period and the precession angle per period are complete elliptic integrals,
+evaluated with Carlson's symmetric forms (``scipy.special.elliprf``, ``elliprj``); see
+:func:`nutation_period_of` and :func:`precession_angle_of`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.special import elliprf, elliprj
+
+from solver.jacobi import incomplete_f, jacobi_sncndn
+
+__all__ = [
+    "NutationCubic",
+    "cos_beta_of",
+    "nutation_cubic",
+    "nutation_period_of",
+    "precession_angle_of",
+    "precession_rate_at",
+]
+
+_EPS = np.finfo(float).eps
+_NEWTON_MAX_ITER = 200  # monotone Newton: ~10 linear steps from the bound, then quadratic
+
+
+@dataclass(frozen=True)
+class NutationCubic:
+    """The cubic ``f(u)`` of R17 about ``u0 = cos β0``, with its roots, for a batch of tops.
+
+    All fields are 1-D float arrays of one length (one entry per top), dimensionless except
+    ``B`` (s⁻²), ``a``, ``Q``, ``b_minus_a``, ``b_plus_a`` (s⁻¹) and ``c0..c2`` (s⁻²).
+
+    Attributes
+    ----------
+    u0, one_minus_u0, one_plus_u0 : ndarray
+        ``cos β0``, ``2 sin²(β0/2)``, ``2 cos²(β0/2)``.
+    B, a, Q : ndarray
+        ``2 Mgl / I1``, ``p_γ / I1``, ``b − a u0 = α̇0 sin²β0``.
+    b_minus_a, b_plus_a : ndarray
+        ``(p_α ∓ p_γ) / I1``, computed without cancellation from the initial state.
+    c0, c1, c2 : ndarray
+        Coefficients of ``f = B w³ + c2 w² + c1 w + c0`` in ``w = u − u0``.
+    w : ndarray, shape (n, 3)
+        Roots ``u_i − u0``, ascending (``w1 ≤ 0 ≤ w2``, ``w3 ≥ 1 − u0``).
+    one_minus_u, one_plus_u : ndarray, shape (n, 3)
+        ``1 − u_i`` and ``1 + u_i`` to full relative accuracy near the poles.
+    exact_root : ndarray of bool
+        ``β̇0 = 0``: ``u0`` itself is a turning point, deflated exactly.
+    steady_tolerance : ndarray
+        Width below which ``u2 − u1`` is rounding of ``c1`` (see :func:`nutation_cubic`).
+    """
+
+    u0: NDArray[np.float64]
+    one_minus_u0: NDArray[np.float64]
+    one_plus_u0: NDArray[np.float64]
+    B: NDArray[np.float64]
+    a: NDArray[np.float64]
+    Q: NDArray[np.float64]
+    b_minus_a: NDArray[np.float64]
+    b_plus_a: NDArray[np.float64]
+    c0: NDArray[np.float64]
+    c1: NDArray[np.float64]
+    c2: NDArray[np.float64]
+    w: NDArray[np.float64]
+    one_minus_u: NDArray[np.float64]
+    one_plus_u: NDArray[np.float64]
+    exact_root: NDArray[np.bool_]
+    steady_tolerance: NDArray[np.float64]
+
+    @property
+    def u(self) -> NDArray[np.float64]:
+        """Roots ``(u1, u2, u3)`` of R17, shape (n, 3)."""
+        return self.u0[:, None] + self.w
+
+    @property
+    def beta(self) -> NDArray[np.float64]:
+        """``arccos u_i`` for the three roots (NaN for ``u3 > 1``), shape (n, 3), rad."""
+        with np.errstate(invalid="ignore"):
+            return 2.0 * np.arctan2(np.sqrt(self.one_minus_u), np.sqrt(self.one_plus_u))
+
+    @property
+    def steady(self) -> NDArray[np.bool_]:
+        """``β1 = β2`` up to the rounding of the initial rates (and ``β̇0 = 0``)."""
+        return self.exact_root & (self.w[:, 1] - self.w[:, 0] <= self.steady_tolerance)
+
+
+def nutation_cubic(
+    I1: NDArray[np.float64],
+    I3: NDArray[np.float64],
+    Mgl: NDArray[np.float64],
+    beta0: NDArray[np.float64],
+    alpha_dot0: NDArray[np.float64],
+    beta_dot0: NDArray[np.float64],
+    gamma_dot0: NDArray[np.float64],
+) -> NutationCubic:
+    """Build the cubic of R17 in ``w = u − cos β0`` and find its roots (vectorised).
+
+    Parameters
+    ----------
+    I1, I3, Mgl, beta0, alpha_dot0, beta_dot0, gamma_dot0 : ndarray
+        Validated, broadcast 1-D arrays of one length: the heavy top's initial state (SI, rad).
+
+    Returns
+    -------
+    NutationCubic
+
+    Notes
+    -----
+    ``steady_tolerance`` is ``32 ε`` times the largest term of ``c1`` over the size of the
+    other root of the deflated quadratic: a separation ``u2 − u1`` below it is the rounding of
+    ``c1`` (e.g. a steady-precession rate typed with 16 digits), not nutation.
+    """
+    u0, s0 = np.cos(beta0), np.sin(beta0)
+    s2 = s0 * s0
+    hm, hp = 2.0 * np.sin(0.5 * beta0) ** 2, 2.0 * np.cos(0.5 * beta0) ** 2
+    B = 2.0 * Mgl / I1
+    a = I3 * (alpha_dot0 * u0 + gamma_dot0) / I1
+    Q = alpha_dot0 * s2
+    P = beta_dot0**2 + alpha_dot0**2 * s2
+    c0 = s2 * beta_dot0**2
+    c1_terms = np.stack([-B * s2, -2.0 * u0 * P, 2.0 * a * Q])
+    c1 = c1_terms.sum(axis=0)
+    c2 = 2.0 * u0 * B - P - a * a
+
+    exact = c0 == 0
+    w = np.empty((u0.size, 3))
+    big = np.ones_like(u0)  # B·(the deflated quadratic's large root): scale for steady_tolerance
+    if np.any(exact):
+        w[exact], big[exact] = _roots_with_zero(B[exact], c1[exact], c2[exact])
+    if np.any(~exact):
+        g = ~exact
+        w[g] = _roots_general(B[g], c0[g], c1[g], c2[g], hm[g])
+    w.sort(axis=1)
+    steady_tol = 32.0 * _EPS * np.abs(c1_terms).max(axis=0) / np.maximum(np.abs(big), 1e-300)
+
+    b_minus_a = Q - a * hm
+    b_plus_a = Q + a * hp
+    one_minus_u = np.maximum(hm[:, None] - w, 0.0)
+    one_plus_u = np.maximum(hp[:, None] + w, 0.0)
+    one_minus_u[:, 1] = _near_pole(one_minus_u[:, 1], hm, w[:, 1], b_minus_a, a, Q, B,
+                                   one_minus_u[:, 0], w[:, 2] - hm, w[:, 2] + hm)
+    one_plus_u[:, 0] = _near_pole(one_plus_u[:, 0], hp, w[:, 0], b_plus_a, a, Q, B,
+                                  one_plus_u[:, 1], hp + w[:, 2], hp + w[:, 2])
+    return NutationCubic(u0, hm, hp, B, a, Q, b_minus_a, b_plus_a, c0, c1, c2, w,
+                         one_minus_u, one_plus_u, exact, steady_tol)
+
+
+def _roots_with_zero(B, c1, c2):
+    """Roots of ``w (B w² + c2 w + c1)``: 0 and the quadratic's, cancellation-free."""
+    disc = np.maximum(c2 * c2 - 4.0 * B * c1, 0.0)  # ≥ 0 for a physical state; clip rounding
+    q = -0.5 * (c2 + np.where(c2 < 0, -1.0, 1.0) * np.sqrt(disc))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        small = np.where(q != 0, c1 / q, 0.0)
+    return np.stack([np.zeros_like(B), q / B, small], axis=1), q
+
+
+def _roots_general(B, c0, c1, c2, hm):
+    """Roots of ``B w³ + c2 w² + c1 w + c0`` with ``c0 > 0``: Newton for w3, then Vieta."""
+    # Fujiwara's bound exceeds every root's magnitude; w3 ≥ 1 − u0 anyway.
+    bound = 2.0 * np.maximum.reduce(
+        [np.abs(c2 / B), np.sqrt(np.abs(c1 / B)), np.cbrt(np.abs(c0 / (2.0 * B)))]
+    )
+    w3 = np.maximum(bound, hm) * (1.0 + 4.0 * _EPS) + np.finfo(float).tiny
+    active = np.ones(B.shape, dtype=bool)
+    for _ in range(_NEWTON_MAX_ITER):
+        x = w3[active]
+        fx = ((B[active] * x + c2[active]) * x + c1[active]) * x + c0[active]
+        dfx = (3.0 * B[active] * x + 2.0 * c2[active]) * x + c1[active]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            nxt = x - fx / dfx
+        moving = (fx > 0) & (nxt < x)
+        x[moving] = nxt[moving]
+        w3[active] = x
+        active[np.flatnonzero(active)[~moving]] = False
+        if not active.any():
+            break
+    s = (c1 + c0 / w3) / (B * w3)  # w1 + w2
+    p = -c0 / (B * w3)  # w1 w2 < 0
+    q = 0.5 * (s + np.where(s < 0, -1.0, 1.0) * np.sqrt(s * s - 4.0 * p))
+    return np.stack([q, p / q, w3], axis=1)
+
+
+def _near_pole(direct, h0, w, b_pm_a, a, Q, B, other, u3_gap, u3_size):
+    """``1 ∓ u`` of the root nearest a pole: the direct difference or the f(±1) identity.
+
+    ``direct = h0 ∓ w`` loses relative accuracy when the root is much nearer the pole than u0;
+    the identity ``(b ∓ a)² = B (1 ∓ u_other)(1 ∓ u)(|u3 ∓ 1|)`` does not, unless ``b ∓ a`` or
+    the ``u3`` gap cancel. Whichever has the smaller (relative) rounding estimate is used.
+    """
+    err_direct = (h0 + np.abs(w)) / np.maximum(direct, 1e-300)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ident = b_pm_a * b_pm_a / (B * other * u3_gap)
+        err_ident = (2.0 * (np.abs(Q) + np.abs(a) * h0) / np.abs(b_pm_a)
+                     + u3_size / u3_gap + 2.0)
+    use = np.isfinite(ident) & np.isfinite(err_ident) & (err_ident < err_direct)
+    return np.where(use, ident, direct)
+
+
+def precession_rate_at(cubic: NutationCubic, i: int) -> NDArray[np.float64]:
+    """``α̇ = (b − a u)/(1 − u²)`` at root ``u_i`` (R18), from the better-conditioned form.
+
+    Away from the poles ``(Q − a w_i) / ((1 − u_i)(1 + u_i))``: its numerator has no
+    cancellation (for a fast top ``b`` and ``a u`` are huge, their difference is not). Near a
+    pole ``½[(b − a)/(1 − u) + (b + a)/(1 + u)]``, whose terms are finite there (a pole that
+    the top reaches has ``b ∓ a = 0`` exactly: the limit ``(b ± a)/4``). Each element takes the
+    form with the smaller rounding estimate.
+    """
+    om, op = cubic.one_minus_u[:, i], cubic.one_plus_u[:, i]
+    q, aw = cubic.Q, cubic.a * cubic.w[:, i]
+    pole_form = 0.5 * (_ratio(cubic.b_minus_a, om) + _ratio(cubic.b_plus_a, op))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        direct = (q - aw) / (om * op)
+        err_direct = (np.abs(q) + np.abs(aw)) * (1.0 / om + 1.0 / op) / (om * op)
+        err_pole = ((np.abs(q) + np.abs(cubic.a) * cubic.one_minus_u0 + np.abs(cubic.b_minus_a))
+                    / om**2 + (np.abs(q) + np.abs(cubic.a) * cubic.one_plus_u0
+                               + np.abs(cubic.b_plus_a)) / op**2)
+    use_direct = (om > 0) & (op > 0) & ~(err_pole < err_direct)
+    return np.where(use_direct, direct, pole_form)
+
+
+def _ratio(num, den):
+    """``num / den`` with ``0 / 0 = 0``: a pole the top reaches has ``b ∓ a = 0`` exactly."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(num == 0, 0.0, num / den)
+
+
+def nutation_period_of(cubic: NutationCubic) -> NDArray[np.float64]:
+    """``T_nut = 2 ∫ du/√f = 4 R_F(0, u3 − u2, u3 − u1) / √B`` (R20), s.
+
+    Equal to ``4 K(k) / √(B (u3 − u1))``; the homogeneous Carlson form needs no ``k``, so
+    ``k → 1`` (``u3 − u2 → 0``) loses nothing; it is ``inf`` at ``u2 = u3`` (the asymptotic
+    fall of an unstable sleeping top).
+    """
+    y, z = _gaps(cubic)
+    with np.errstate(divide="ignore"):
+        return 4.0 * elliprf(0.0, y, z) / np.sqrt(cubic.B)
+
+
+def _gaps(cubic):
+    return cubic.w[:, 2] - cubic.w[:, 1], cubic.w[:, 2] - cubic.w[:, 0]
+
+
+def precession_angle_of(cubic: NutationCubic) -> NDArray[np.float64]:
+    """Precession ``Δα`` over one nutation period (R20), rad.
+
+    ``Δα = 2 ∫_{u1}^{u2} (b − a u) / ((1 − u²) √f) du = [(b − a) J₊ + (b + a) J₋] / √B`` with
+    ``J± = ∫ du / ((1 ∓ u) √((u − u1)(u2 − u)(u3 − u)))`` (partial fractions
+    ``(b − au)/(1 − u²) = ½[(b − a)/(1 − u) + (b + a)/(1 + u)]``). The substitution
+    ``u = u1 + (u2 − u1) z/(t + z)`` (for J₊; ``u = u1 + (u2 − u1) t/(t + y)`` for J₋), with
+    ``y = u3 − u2``, ``z = u3 − u1``, maps each onto Carlson's integrals::
+
+        J₊ = [2 R_F(0,y,z) + (2/3) z (u2 − u1)/(1 − u1) R_J(0,y,z, z (1 − u2)/(1 − u1))] / (1 − u1)
+        J₋ = [2 R_F(0,y,z) + (2/3) y (u2 − u1)/(1 + u2) R_J(0,y,z, y (1 + u1)/(1 + u2))] / (1 + u2)
+
+    Every term in brackets is positive (no cancellation, unlike ``Π(n, k)`` with ``n → −∞``).
+    The ``R_F`` parts of ``(b − a) J₊`` and ``(b + a) J₋`` are huge and opposite for a fast top;
+    their sum ``2 R_F(0,y,z) [(b − a)/(1 − u1) + (b + a)/(1 + u2)]`` is taken in the closed form
+    ``[Q (2 + u2 − u1) − a (w1 (1 + u0) + w2 (1 − u0))] / ((1 − u1)(1 + u2))``, where nothing
+    large cancels. A pole the top reaches (``u2 = 1`` or ``u1 = −1``) has ``b ∓ a = 0`` and its
+    ``R_J`` term is zero.
+    """
+    y, z = _gaps(cubic)
+    w1, w2 = cubic.w[:, 0], cubic.w[:, 1]
+    om1, om2 = cubic.one_minus_u[:, 0], cubic.one_minus_u[:, 1]
+    op1, op2 = cubic.one_plus_u[:, 0], cubic.one_plus_u[:, 1]
+    bma, bpa, gap = cubic.b_minus_a, cubic.b_plus_a, w2 - w1
+    # (b − a)/(1 − u1) + (b + a)/(1 + u2), whose terms cancel for a fast top, in closed form.
+    value_terms = (cubic.Q * (2.0 + gap) - cubic.a * (w1 * cubic.one_plus_u0
+                                                      + w2 * cubic.one_minus_u0)) / (om1 * op2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rj_plus = _product(bma, z / om1**2 * elliprj(0.0, y, z, z * om2 / om1))
+        rj_minus = _product(bpa, y / op2**2 * elliprj(0.0, y, z, y * op1 / op2))
+    total = 2.0 * elliprf(0.0, y, z) * value_terms + (2.0 / 3.0) * gap * (rj_plus + rj_minus)
+    return total / np.sqrt(cubic.B)
+
+
+def _product(coef, integral):
+    """``coef · integral`` with ``0 · ∞ = 0`` (a pole on the path of the top: ``b ∓ a = 0``)."""
+    with np.errstate(invalid="ignore"):
+        return np.where(coef == 0, 0.0, coef * integral)
+
+
+def cos_beta_of(
+    cubic: NutationCubic, t: NDArray[np.float64], beta_dot0: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """``u(t) = u1 + (u2 − u1) sn²(λ t + φ, k)`` (R20), ``λ = √(B (u3 − u1))/2``.
+
+    The phase ``φ = ∓F(ψ0, k)`` with ``sin²ψ0 = (u0 − u1)/(u2 − u1)`` puts ``u(0) = u0``; its
+    sign is opposite to ``β̇0`` (``sn²`` increases on ``(0, K)``, and ``u̇ = −sin β β̇``).
+    ``t`` and the cubic's arrays are 1-D of one length.
+    """
+    w1, w2 = cubic.w[:, 0], cubic.w[:, 1]
+    y, z = _gaps(cubic)
+    gap = w2 - w1
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # k'² = 1 − k² = (u3 − u2)/(u3 − u1) from the root gaps, so nothing cancels as k → 1
+        # (u2 near the vertical); sn and F in the complementary parameter (solver.jacobi).
+        m1 = np.where(gap > 0, y / z, 1.0)
+        sin_psi0 = np.where(gap > 0, np.sqrt(np.clip(-w1 / gap, 0.0, 1.0)), 0.0)
+        cos_psi0 = np.where(gap > 0, np.sqrt(np.clip(w2 / gap, 0.0, 1.0)), 1.0)
+        phase = np.where(beta_dot0 > 0, -1.0, 1.0) * incomplete_f(sin_psi0, cos_psi0, m1)
+        sn = jacobi_sncndn(0.5 * np.sqrt(cubic.B * z) * t + phase, m1)[0]
+    u = cubic.u0 + w1 + gap * sn * sn
+    # No motion in β: steady or sleeping, or resting on the unstable vertical (u2 = u3 = u0).
+    still = (gap == 0) | ((y == 0) & (w2 == 0))
+    return np.where(still, cubic.u0, u)
