@@ -286,6 +286,33 @@ def mean_precession_rate(
     return _out(_mean_rate(cubic, flat, _period(cubic, flat)), shape)
 
 
+def nutation(
+    I1: ArrayLike, I3: ArrayLike, Mgl: ArrayLike, beta0: ArrayLike,
+    alpha_dot0: ArrayLike, beta_dot0: ArrayLike, gamma_dot0: ArrayLike,
+) -> dict[str, NDArray[np.float64]]:
+    """Turning points, nutation period and mean precession rate in one vectorised pass (R17, R20).
+
+    The same values as :func:`turning_points`, :func:`nutation_period` and
+    :func:`mean_precession_rate`, from one solution of the cubic instead of three: the call to
+    use for many tops at once (the bench times it on 10^5).
+
+    Returns
+    -------
+    dict
+        ``beta1, beta2`` (rad), ``nutation_period`` (s), ``mean_precession_rate`` (rad/s), each
+        of the broadcast shape of the inputs, NaN where the quantity does not exist (see the
+        single-quantity functions).
+    """
+    shape, cubic, flat = _cubic(I1, I3, Mgl, beta0, alpha_dot0, beta_dot0, gamma_dot0)
+    period = _period(cubic, flat)
+    return {
+        "beta1": _out(cubic.beta[:, 1], shape),
+        "beta2": _out(cubic.beta[:, 0], shape),
+        "nutation_period": _out(period, shape),
+        "mean_precession_rate": _out(_mean_rate(cubic, flat, period), shape),
+    }
+
+
 def cos_beta(
     t: ArrayLike, I1: ArrayLike, I3: ArrayLike, Mgl: ArrayLike, beta0: ArrayLike,
     alpha_dot0: ArrayLike, beta_dot0: ArrayLike, gamma_dot0: ArrayLike,

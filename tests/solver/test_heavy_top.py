@@ -107,10 +107,21 @@ def reference(case: str) -> dict:
             return -a / (1 - u)
         return (b - a * u) / ((1 - u) * (1 + u))
 
-    ref = {"p_alpha": pa, "p_gamma": pg, "E_prime": e_prime, "u": (u1, u2, u3), "a": a, "b": b,
-           "beta1": mp.acos(min(u2, 1)), "beta2": mp.acos(max(u1, -1)),
-           "rate1": rate(u2), "rate2": rate(u1), "E": e_prime + pg**2 / (2 * I3)}
+    ref = {
+        "p_alpha": pa,
+        "p_gamma": pg,
+        "E_prime": e_prime,
+        "u": (u1, u2, u3),
+        "a": a,
+        "b": b,
+        "beta1": mp.acos(min(u2, 1)),
+        "beta2": mp.acos(max(u1, -1)),
+        "rate1": rate(u2),
+        "rate2": rate(u1),
+        "E": e_prime + pg**2 / (2 * I3),
+    }
     if u2 - u1 > mp.mpf(10) ** -25 and u3 - u2 > mp.mpf(10) ** -30:
+
         def u_of(th):  # (u − u1)(u2 − u) = ((u2 − u1) sin θ / 2)², du = that root dθ
             return u1 + (u2 - u1) * (1 - mp.cos(th)) / 2
 
@@ -149,8 +160,10 @@ def test_turning_points(case):
         assert abs(got - float(want)) <= TOL * max(1.0, abs(float(want)))
 
 
-@pytest.mark.parametrize("name", ["generic_loops", "hanging_loops", "fast_top_moving",
-                                  "near_steady_nudged", "simo_wong_1991"])
+@pytest.mark.parametrize(
+    "name",
+    ["generic_loops", "hanging_loops", "fast_top_moving", "near_steady_nudged", "simo_wong_1991"],
+)
 def test_turning_points_solve_the_effective_potential(name):
     """R17 as stated: V_eff(β_i) = E', by mpmath.findroot on R16 (not on the cubic)."""
     I1, _, Mgl, *_ = (mp.mpf(x) for x in CASES[name])
@@ -188,8 +201,7 @@ def test_nutation_period_and_mean_precession(case):
     assert _close(period, ref["T"])
     # ⟨α̇⟩ can be a small difference of forward and backward precession (loops): scale by the
     # largest |α̇| on the path.
-    assert _close(mean, ref["mean"], 1e-6 * max(abs(float(ref["rate1"])),
-                                                abs(float(ref["rate2"]))))
+    assert _close(mean, ref["mean"], 1e-6 * max(abs(float(ref["rate1"])), abs(float(ref["rate2"]))))
 
 
 def test_motion_type(case):
@@ -236,8 +248,11 @@ def _equations_of_motion():
     t = sp.Symbol("t")
     I1, I3, Mgl = sp.symbols("I1 I3 Mgl", positive=True)
     al, be, ga = (sp.Function(n)(t) for n in ("alpha", "beta", "gamma"))
-    lag = (I1 / 2 * (al.diff(t) ** 2 * sp.sin(be) ** 2 + be.diff(t) ** 2)
-           + I3 / 2 * (al.diff(t) * sp.cos(be) + ga.diff(t)) ** 2 - Mgl * sp.cos(be))
+    lag = (
+        I1 / 2 * (al.diff(t) ** 2 * sp.sin(be) ** 2 + be.diff(t) ** 2)
+        + I3 / 2 * (al.diff(t) * sp.cos(be) + ga.diff(t)) ** 2
+        - Mgl * sp.cos(be)
+    )
     coords = (al, be, ga)
     eqs = [sp.diff(lag.diff(q.diff(t)), t) - lag.diff(q) for q in coords]
     acc = sp.symbols("acc0:3")
@@ -250,8 +265,9 @@ def _equations_of_motion():
     return sp.lambdify((pos, vel, I1, I3, Mgl), [sp.simplify(sol[a]) for a in acc], "numpy")
 
 
-@pytest.mark.parametrize("name", ["generic_loops", "hanging_loops", "released_from_rest",
-                                  "generic_waves"])
+@pytest.mark.parametrize(
+    "name", ["generic_loops", "hanging_loops", "released_from_rest", "generic_waves"]
+)
 def test_against_the_equations_of_motion(name):
     """Integrate R14 for one period: β returns, α advances by Δα, β's extrema are β1, β2."""
     state = CASES[name]
@@ -262,8 +278,15 @@ def test_against_the_equations_of_motion(name):
     def rhs(_, y):
         return [*y[3:], *accel(y[:3], y[3:], I1, I3, Mgl)]
 
-    sol = solve_ivp(rhs, (0.0, period), [0.0, b0, 0.0, ad, bd, gd], method="DOP853",
-                    rtol=1e-12, atol=1e-12, dense_output=True)
+    sol = solve_ivp(
+        rhs,
+        (0.0, period),
+        [0.0, b0, 0.0, ad, bd, gd],
+        method="DOP853",
+        rtol=1e-12,
+        atol=1e-12,
+        dense_output=True,
+    )
     assert abs(sol.y[1, -1] - b0) < 1e-8
     assert abs(sol.y[0, -1] - float(mean_precession_rate(*state)) * period) < 1e-8
     t = np.linspace(0.0, period, 2001)
@@ -308,9 +331,21 @@ def test_effective_potential_and_spin_rate(beta):
 
 def test_solve_heavy_top_dict():
     out = solve_heavy_top(*CASES["released_from_rest"])
-    assert list(out) == ["p_alpha", "p_gamma", "E_prime", "beta1", "beta2", "alpha_dot_beta1",
-                         "alpha_dot_beta2", "nutation_period", "mean_precession_rate", "motion",
-                         "sleeping_stable", "omega3_critical", "steady_precession_rates"]
+    assert list(out) == [
+        "p_alpha",
+        "p_gamma",
+        "E_prime",
+        "beta1",
+        "beta2",
+        "alpha_dot_beta1",
+        "alpha_dot_beta2",
+        "nutation_period",
+        "mean_precession_rate",
+        "motion",
+        "sleeping_stable",
+        "omega3_critical",
+        "steady_precession_rates",
+    ]
     assert all(type(out[k]) is float for k in ("p_alpha", "beta1", "nutation_period"))
     assert out["motion"] == "cusps" and out["sleeping_stable"] is True
     assert out["omega3_critical"] == pytest.approx(40.0, rel=1e-15)
@@ -322,7 +357,8 @@ def test_solve_heavy_top_dict():
     steady = solve_heavy_top(*_steady(0.5, 150.0, 0))
     assert steady["nutation_period"] is None and steady["motion"] == "steady"
     assert steady["mean_precession_rate"] == pytest.approx(
-        steady["steady_precession_rates"][0], rel=1e-12)
+        steady["steady_precession_rates"][0], rel=1e-12
+    )
     unstable = solve_heavy_top(*TOY, 0.0, 0.0, 0.0, 30.0)
     assert unstable["beta1"] == 0.0 and unstable["beta2"] > 0.5
     assert unstable["steady_precession_rates"] is None
@@ -356,10 +392,42 @@ def test_vectorised_over_states():
     ],
 )
 def test_bad_input_names_the_parameter(kwargs, name):
-    state = dict(zip(("I1", "I3", "Mgl", "beta0", "alpha_dot0", "beta_dot0", "gamma_dot0"),
-                     CASES["released_from_rest"], strict=True)) | kwargs
+    state = (
+        dict(
+            zip(
+                ("I1", "I3", "Mgl", "beta0", "alpha_dot0", "beta_dot0", "gamma_dot0"),
+                CASES["released_from_rest"],
+                strict=True,
+            )
+        )
+        | kwargs
+    )
     with pytest.raises(ParameterError) as err:
         solve_heavy_top(**state)
     assert err.value.parameter == name
     with pytest.raises(ParameterError):
         turning_points(**state)
+
+
+def test_nutation_pass_equals_the_single_quantity_functions():
+    """`nutation` (one pass over the cubic) agrees with the three one-quantity calls."""
+    from solver.heavy_top import mean_precession_rate, nutation, nutation_period, turning_points
+
+    rng = np.random.default_rng(11)
+    n = 200
+    I1 = rng.uniform(1e-4, 1e-3, n)
+    state = (
+        I1,
+        I1 * rng.uniform(0.2, 1.8, n),
+        rng.uniform(0.01, 0.3, n),
+        rng.uniform(0.0, 3.0, n),
+        rng.normal(0, 3, n),
+        rng.normal(0, 1, n) * (rng.random(n) < 0.5),
+        rng.uniform(20, 3000, n),
+    )
+    out = nutation(*state)
+    beta1, beta2 = turning_points(*state)
+    np.testing.assert_array_equal(out["beta1"], beta1)
+    np.testing.assert_array_equal(out["beta2"], beta2)
+    np.testing.assert_array_equal(out["nutation_period"], nutation_period(*state))
+    np.testing.assert_array_equal(out["mean_precession_rate"], mean_precession_rate(*state))
