@@ -1,0 +1,75 @@
+"""Benchmark ``eulertop generate``: 300 students × 8 questions, notebooks and key (issue 3).
+
+Uses the registered templates in catalogue order, repeated when there are fewer than 8. Prints
+the machine, the median wall time of a few full runs (target: under 10 s on the 2-core
+machine) and, from one extra pass, how much of it the templates alone take.
+
+Run from the repository root (or after ``pip install -e .``):
+``PYTHONPATH=. python benchmarks/bench_generate.py [--students 300] [--questions 8] [--runs 3]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from problems.generate import generate_assignment, student_variants
+from problems.roster import Roster
+from problems.templates import FAMILIES
+
+TARGET_S = 10.0
+
+
+def machine() -> str:
+    """One line describing where the numbers were measured."""
+    return (f"{platform.machine()} {platform.processor() or ''} {os.cpu_count()} cores, "
+            f"Python {platform.python_version()}, numpy {np.__version__}, {platform.system()}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--students", type=int, default=300)
+    parser.add_argument("--questions", type=int, default=8)
+    parser.add_argument("--runs", type=int, default=3)
+    args = parser.parse_args(argv)
+    if not FAMILIES:
+        print("bench_generate: no problem families are registered "
+              "(problems.templates.CATALOGUE is empty): nothing to measure", file=sys.stderr)
+        return 1
+    names = list(FAMILIES)
+    problems = tuple((names * args.questions)[: args.questions])
+    roster = Roster(columns=("id", "name"), rows=tuple(
+        {"id": f"s{i:04d}", "name": f"Student {i}"} for i in range(args.students)))
+
+    times = []
+    for run in range(args.runs):
+        with tempfile.TemporaryDirectory() as folder:
+            start = time.perf_counter()
+            generate_assignment(roster, Path(folder) / "HW", FAMILIES, problems=problems,
+                                seed=run, title="benchmark")
+            times.append(time.perf_counter() - start)
+    start = time.perf_counter()
+    for sid in roster.ids:
+        student_variants(FAMILIES, problems, 0, sid)
+    templates_s = time.perf_counter() - start
+
+    median = statistics.median(times)
+    print(f"machine: {machine()}")
+    print(f"problems: {', '.join(problems)}")
+    print(f"generate {args.students} students × {args.questions} questions: median {median:.2f} s "
+          f"over {args.runs} runs (min {min(times):.2f}, max {max(times):.2f}); "
+          f"templates alone {templates_s:.2f} s; target < {TARGET_S:.0f} s: "
+          f"{'met' if median < TARGET_S else 'MISSED'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

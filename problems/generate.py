@@ -1,0 +1,415 @@
+"""``eulertop generate``: a roster and a list of problem families → one assignment folder.
+
+Layout (``/work/shared/design.md``)::
+
+    HW/assignment.json          manifest: title, seed, problems, roster, generator version, and
+                                every student's reroll count and *resolved* questions (params,
+                                statement, public answer spec) — no answer values
+    HW/key.json                 instructor-only: every student's answers (Answer.to_dict()),
+                                per question, and a content hash per student
+    HW/release/<id>.ipynb       what the student gets
+    HW/solutions/<id>.ipynb     the same with the key's answers filled in
+
+Seeding
+    Question ``k`` of student ``id`` is ``FAMILIES[family].generate(rng)`` with ``rng`` seeded by
+    SHA-256 of ``(assignment seed, id, k, family, reroll count)`` (:func:`variant_seed`): stable
+    across runs, machines and Python versions, independent of roster order and of the other
+    students. numpy does not promise that every distribution draws the same numbers in every
+    future version, and templates change; that is why the manifest stores the resolved
+    parameters and statements, so an assignment, once generated, is what it is.
+
+Determinism
+    JSON is written with sorted keys, Python's shortest round-trip float ``repr`` and one line
+    per student (:func:`json_text`); notebook cell ids are fixed names. The same inputs give
+    byte-identical files. Without ``--seed`` a fresh seed is drawn, reported, and stored in the
+    manifest.
+
+Atomicity and existing folders
+    Inputs are checked before anything is written. Files are written into a temporary folder
+    beside ``HW`` which replaces ``HW`` by ``rename`` at the end; on any failure it is removed,
+    so there is never half an assignment. An existing ``HW`` is refused unless ``force``;
+    ``force`` replaces only a folder this generator wrote (``assignment.json``, ``key.json``,
+    ``release/``, ``solutions/``) and refuses one holding anything else (``graded/``, or a wrong
+    ``--out``). Replacing keeps the old seed when none is given and keeps every remaining
+    student's reroll count when seed and problems are unchanged — so re-running with a roster
+    that gained a student adds that student and leaves everybody else's files byte-identical.
+
+Rerolls (:func:`reroll_students`)
+    ``--reroll ID`` works on an existing ``HW`` (no ``force`` needed, no roster, seed, problems
+    or title: those are the manifest's): it bumps the student's reroll count, draws their
+    questions afresh with the current templates, and rewrites their two notebooks and their
+    entries in ``assignment.json`` and ``key.json``. Every other file and entry — including
+    anything else in ``HW`` such as ``graded/`` — is kept byte for byte; the student's key hash
+    changes, which tells the grader their results are stale.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import secrets
+import shutil
+import tempfile
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from importlib import metadata
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+from problems.answers import Answer
+from problems.notebook import build_notebook, notebook_text
+from problems.roster import Roster
+from problems.variant import Variant, variable_name
+
+FORMAT_VERSION = 1
+ASSIGNMENT = "assignment.json"
+KEY = "key.json"
+RELEASE = "release"
+SOLUTIONS = "solutions"
+OWNED = frozenset({ASSIGNMENT, KEY, RELEASE, SOLUTIONS})
+
+Progress = Callable[[int, int], None]
+
+
+class GenerateError(ValueError):
+    """Bad input to the generator (unknown problem, existing folder …); nothing was written."""
+
+
+class TemplateError(RuntimeError):
+    """A template failed or returned something that is not a valid Variant; nothing was written."""
+
+
+@dataclass(frozen=True)
+class Summary:
+    """What a generate or reroll run did, for the command line to report."""
+
+    out: Path
+    seed: int
+    problems: tuple[str, ...]
+    students: tuple[str, ...]  # the students whose files were (re)written
+    notes: tuple[str, ...] = ()
+
+
+def generator_version() -> str:
+    """The installed eulertop version, recorded in the manifest."""
+    try:
+        return metadata.version("eulertop")
+    except metadata.PackageNotFoundError:
+        return "0+unknown"
+
+
+def variant_seed(seed: int, student_id: str, question: int, family: str, reroll: int = 0) -> int:
+    """The 256-bit integer seeding one student's question (stable everywhere; no ``hash()``).
+
+    Examples
+    --------
+    >>> variant_seed(1, "alice", 1, "rod") == variant_seed(1, "alice", 1, "rod")
+    True
+    >>> variant_seed(1, "alice", 1, "rod") == variant_seed(1, "alice", 1, "rod", reroll=1)
+    False
+    """
+    payload = json.dumps(
+        ["eulertop-variant", 1, int(seed), student_id, int(question), family, int(reroll)],
+        ensure_ascii=False,
+        separators=(",", ":"),
+    )
+    return int.from_bytes(hashlib.sha256(payload.encode("utf-8")).digest(), "big")
+
+
+def variant_rng(
+    seed: int, student_id: str, question: int, family: str, reroll: int = 0
+) -> np.random.Generator:
+    """A fresh ``numpy.random.Generator`` for one student's question (see :func:`variant_seed`)."""
+    return np.random.default_rng(variant_seed(seed, student_id, question, family, reroll))
+
+
+def resolve_problems(
+    names: Sequence[str] | None, families: Mapping[str, ModuleType]
+) -> tuple[str, ...]:
+    """The problem list: ``names`` checked against ``families``, or all of them in order.
+
+    A name may repeat (two variants of one family). Raises :class:`GenerateError` naming the
+    unknown names and listing the known ones.
+    """
+    if not families:
+        raise GenerateError("no problem families are registered (problems.templates.CATALOGUE)")
+    if names is None:
+        return tuple(families)
+    names = tuple(n.strip() for n in names)
+    if not names or "" in names:
+        raise GenerateError("--problems: empty problem name (give a comma-separated list)")
+    unknown = [n for n in names if n not in families]
+    if unknown:
+        raise GenerateError(
+            f"--problems: unknown problem {', '.join(map(repr, unknown))}; "
+            f"known: {', '.join(families)}"
+        )
+    return names
+
+
+def student_variants(
+    families: Mapping[str, ModuleType],
+    problems: Sequence[str],
+    seed: int,
+    student_id: str,
+    reroll: int = 0,
+) -> tuple[Variant, ...]:
+    """Draw one student's questions; a failing or misbehaving template raises TemplateError."""
+    variants = []
+    for k, name in enumerate(problems, start=1):
+        where = f"template {name!r}, student {student_id!r}, question {k}"
+        try:
+            variant = families[name].generate(variant_rng(seed, student_id, k, name, reroll))
+        except Exception as e:
+            raise TemplateError(f"{where} failed: {type(e).__name__}: {e}") from e
+        if not isinstance(variant, Variant) or variant.family != name:
+            raise TemplateError(f"{where}: generate() must return a Variant of family {name!r}")
+        variants.append(variant)
+    return tuple(variants)
+
+
+def _compact(obj: Any) -> str:
+    return json.dumps(obj, sort_keys=True, ensure_ascii=False, allow_nan=False)
+
+
+def json_text(document: Mapping[str, Any]) -> str:
+    """Deterministic JSON for the manifest and the key: one line per top-level field, and one
+    line per student under ``"students"``.
+
+    Keys are sorted and floats written by Python's shortest round-trip ``repr``. A student per
+    line keeps a reroll's change to one line (diff-friendly), and lets json use its C encoder:
+    ``indent`` would select the pure-Python one, several times slower on a class of 300.
+    """
+    fields = []
+    for name in sorted(document):
+        value = document[name]
+        if name == "students" and value:
+            rows = ",\n".join(f"  {_compact(sid)}: {_compact(value[sid])}" for sid in sorted(value))
+            fields.append(f' "students": {{\n{rows}\n }}')
+        else:
+            fields.append(f" {_compact(name)}: {_compact(value)}")
+    return "{\n" + ",\n".join(fields) + "\n}\n"
+
+
+def key_hash(questions: Sequence[Mapping]) -> str:
+    """``"sha256:<hex>"`` of a student's key entry ``questions`` in canonical compact JSON.
+
+    The grader recomputes it to detect that a student's key changed (a reroll, a regeneration).
+    """
+    canonical = json.dumps(
+        questions, sort_keys=True, separators=(",", ":"), ensure_ascii=False, allow_nan=False
+    )
+    return "sha256:" + hashlib.sha256(canonical.encode("utf-8")).hexdigest()
+
+
+def key_entry(variants: Sequence[Variant]) -> dict:
+    """One student's entry in ``key.json``: answers per question, and their hash."""
+    questions = [
+        {"question": k, "family": v.family, "answers": [a.to_dict() for a in v.answers]}
+        for k, v in enumerate(variants, start=1)
+    ]
+    return {"hash": key_hash(questions), "questions": questions}
+
+
+def manifest_entry(variants: Sequence[Variant], reroll: int) -> dict:
+    """One student's entry in ``assignment.json``: reroll count and public questions."""
+    return {"reroll": reroll, "questions": [v.public_dict(k) for k, v in enumerate(variants, 1)]}
+
+
+def student_answers(key: Mapping, student_id: str) -> dict[str, Answer]:
+    """A student's answers from a loaded ``key.json``, by notebook variable (``q3_beta1``)."""
+    return {
+        variable_name(q["question"], a["name"]): Answer.from_dict(a)
+        for q in key["students"][student_id]["questions"]
+        for a in q["answers"]
+    }
+
+
+def _write_student(
+    folder: Path, title: str, row: Mapping[str, str], variants: Sequence[Variant]
+) -> None:
+    for sub, solutions in ((RELEASE, False), (SOLUTIONS, True)):
+        nb = build_notebook(title, row, variants, solutions=solutions)
+        (folder / sub / f"{row['id']}.ipynb").write_text(notebook_text(nb), encoding="utf-8")
+
+
+def _write_json(folder: Path, manifest: dict, key: dict) -> None:
+    (folder / ASSIGNMENT).write_text(json_text(manifest), encoding="utf-8")
+    (folder / KEY).write_text(json_text(key), encoding="utf-8")
+    os.chmod(folder / KEY, 0o600)  # the key is the instructor's alone
+
+
+def _read_json(path: Path) -> dict:
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise GenerateError(f"{path}: cannot read: {e}") from None
+
+
+def _existing_assignment(out: Path, force: bool) -> dict | None:
+    """Check the target folder; the old manifest when ``force`` replaces one, else None."""
+    if not out.exists() and not out.is_symlink():
+        return None
+    if not out.is_dir():
+        raise GenerateError(f"--out {out}: exists and is not a folder")
+    if not force:
+        raise GenerateError(
+            f"--out {out}: already exists; pass --force to replace it, "
+            "or --reroll ID to give one student a new variant"
+        )
+    extra = sorted(set(os.listdir(out)) - OWNED)
+    if extra:
+        raise GenerateError(
+            f"--out {out}: --force replaces only a folder written by 'eulertop generate', "
+            f"but it also holds {', '.join(extra)}; move them away or choose another --out"
+        )
+    return _read_json(out / ASSIGNMENT) if (out / ASSIGNMENT).exists() else None
+
+
+class _Staging:
+    """A temporary folder beside ``out`` that becomes ``out`` on success, vanishes on failure."""
+
+    def __init__(self, out: Path) -> None:
+        self.out = out
+
+    def __enter__(self) -> Path:
+        self.out.parent.mkdir(parents=True, exist_ok=True)
+        self.tmp = Path(tempfile.mkdtemp(
+            prefix=f".{self.out.name}.", suffix=".eulertop-tmp", dir=self.out.parent
+        ))
+        return self.tmp
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            try:
+                self._publish()
+                return
+            except BaseException:
+                shutil.rmtree(self.tmp, ignore_errors=True)
+                raise
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    def _publish(self) -> None:
+        # mkdtemp made the folder private while the key was written into it; the finished
+        # folder gets the usual permissions (key.json alone stays private).
+        umask = os.umask(0o022)
+        os.umask(umask)
+        os.chmod(self.tmp, 0o777 & ~umask)
+        if not self.out.exists():
+            os.rename(self.tmp, self.out)
+            return
+        # A folder cannot be renamed over a non-empty one: move the old one aside first, and
+        # back if the new one cannot take its place.
+        old = Path(f"{self.tmp}-old")
+        os.rename(self.out, old)
+        try:
+            os.rename(self.tmp, self.out)
+        except BaseException:
+            os.rename(old, self.out)
+            raise
+        shutil.rmtree(old)
+
+
+def generate_assignment(
+    roster: Roster,
+    out: Path,
+    families: Mapping[str, ModuleType],
+    *,
+    problems: Sequence[str] | None = None,
+    seed: int | None = None,
+    title: str | None = None,
+    force: bool = False,
+    progress: Progress | None = None,
+) -> Summary:
+    """Generate an assignment folder ``out`` (layout, seeding, ``force``: module docstring).
+
+    Raises
+    ------
+    GenerateError
+        Unknown problem, no families, ``out`` exists (without ``force``, or holding foreign
+        files). Nothing is written.
+    TemplateError
+        A template failed; nothing is written (the temporary folder is removed).
+    """
+    out = Path(out)
+    problems = resolve_problems(problems, families)
+    old = _existing_assignment(out, force)
+    notes = []
+    if seed is None:
+        seed = old["seed"] if old else secrets.randbelow(2**32)
+        notes.append(f"seed {seed} ({'kept from the replaced assignment' if old else 'drawn'}; "
+                     f"pass --seed {seed} to reproduce)")
+    rerolls: dict[str, int] = {}
+    if old and old.get("seed") == seed and tuple(old.get("problems", ())) == problems:
+        rerolls = {sid: s["reroll"] for sid, s in old["students"].items() if s["reroll"]}
+        kept = sorted(set(rerolls) & set(roster.ids))
+        if kept:
+            notes.append(f"kept the reroll counts of {', '.join(kept)}")
+    title = out.name if title is None else title
+    manifest = {
+        "format": "eulertop-assignment",
+        "format_version": FORMAT_VERSION,
+        "generator": {"name": "eulertop", "version": generator_version()},
+        "title": title,
+        "seed": seed,
+        "problems": list(problems),
+        "roster": roster.to_dict(),
+        "students": {},
+    }
+    key = {"format": "eulertop-key", "format_version": FORMAT_VERSION, "title": title,
+           "seed": seed, "students": {}}
+    with _Staging(out) as tmp:
+        (tmp / RELEASE).mkdir()
+        (tmp / SOLUTIONS).mkdir()
+        for done, row in enumerate(roster.rows, start=1):
+            sid, reroll = row["id"], rerolls.get(row["id"], 0)
+            variants = student_variants(families, problems, seed, sid, reroll)
+            _write_student(tmp, title, row, variants)
+            manifest["students"][sid] = manifest_entry(variants, reroll)
+            key["students"][sid] = key_entry(variants)
+            if progress:
+                progress(done, len(roster.rows))
+        _write_json(tmp, manifest, key)
+    return Summary(out, seed, problems, roster.ids, tuple(notes))
+
+
+def reroll_students(
+    out: Path,
+    student_ids: Sequence[str],
+    families: Mapping[str, ModuleType],
+    *,
+    progress: Progress | None = None,
+) -> Summary:
+    """Give each of ``student_ids`` a fresh variant in the existing assignment ``out``.
+
+    Everything else in ``out`` is kept byte for byte (module docstring, "Rerolls").
+    """
+    out = Path(out)
+    if not (out / ASSIGNMENT).is_file() or not (out / KEY).is_file():
+        raise GenerateError(f"--reroll: {out} is not a generated assignment (no {ASSIGNMENT} "
+                            f"and {KEY})")
+    manifest, key = _read_json(out / ASSIGNMENT), _read_json(out / KEY)
+    rows = {row["id"]: row for row in manifest["roster"]["rows"]}
+    unknown = [sid for sid in student_ids if sid not in rows]
+    if unknown:
+        raise GenerateError(f"--reroll: not in the assignment's roster: {', '.join(unknown)}")
+    problems = resolve_problems(manifest["problems"], families)
+    seed, title = manifest["seed"], manifest["title"]
+    ids = tuple(dict.fromkeys(student_ids))  # once each, in the order given
+    with _Staging(out) as tmp:
+        shutil.copytree(out, tmp, dirs_exist_ok=True)
+        for done, sid in enumerate(ids, start=1):
+            reroll = manifest["students"][sid]["reroll"] + 1
+            variants = student_variants(families, problems, seed, sid, reroll)
+            _write_student(tmp, title, rows[sid], variants)
+            manifest["students"][sid] = manifest_entry(variants, reroll)
+            key["students"][sid] = key_entry(variants)
+            if progress:
+                progress(done, len(ids))
+        _write_json(tmp, manifest, key)
+    notes = tuple(f"{sid}: reroll {manifest['students'][sid]['reroll']}" for sid in ids)
+    return Summary(out, seed, problems, ids, notes)

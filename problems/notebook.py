@@ -1,0 +1,225 @@
+"""A student's notebook: the release version (answers ``None``) and the solutions version.
+
+Layout (cell ids are fixed names, so the same inputs give byte-identical files):
+
+==================  ========  ==========================================================
+id                  type      content
+==================  ========  ==========================================================
+``title``           markdown  the assignment title
+``rules``           markdown  the student's id, the rules, the table of answer variables
+``parameters``      code      the student's parameters, ``q{k}_{name} = value  # unit``
+``q{k}-statement``  markdown  question k: title and statement
+``q{k}-answer``     code      one line per answer, ``q{k}_{name} = None  # unit — what``
+==================  ========  ==========================================================
+
+All cells but the answer cells are marked ``"editable": false`` (and every generated cell
+``"deletable": false``); the grader does not rely on it. ``metadata["eulertop"]`` holds the
+public answer spec (:func:`problems.variant.answer_spec`: names, kinds, units, vector lengths,
+options, symbols — never values, never mistakes) so ``eulertop check`` works without the key.
+
+Parameters are prefixed by their question (``q2_M``) because two questions may both have an
+``M``; one cell holding all of them keeps a student who reruns cells out of order from using
+another question's values.
+
+In the solutions notebook every answer is a Python literal of the key's plain-JSON value:
+floats by ``repr`` (which round-trips exactly), vectors as lists, booleans, choice strings, and
+expressions as *strings* — exactly what the grader extracts from a student's sympy expression,
+so executing the solutions notebook and extracting its answers reproduces ``key.json``.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import nbformat
+from nbformat import v4
+
+from problems.variant import Variant, answer_spec, variable_name
+
+FORMAT_VERSION = 1
+KERNELSPEC = {"name": "python3", "display_name": "Python 3 (ipykernel)", "language": "python"}
+_READ_ONLY = {"editable": False, "deletable": False}
+
+_KIND_HINTS = {
+    "scalar": "a number",
+    "angle": "an angle (a number)",
+    "boolean": "True or False",
+}
+
+RULES = """\
+**Student:** {who}
+
+Your numbers differ from your classmates': this notebook is yours alone.
+
+- Use the parameters in the cell below as given (SI units, angles in radians unless a \
+question says otherwise): the key is computed from exactly these values.
+- Write each answer into its variable in the question's answer cell; add cells for your \
+working anywhere. Leave a variable as `None` to skip it.
+- Only these variables are graded, after the whole notebook runs top to bottom in a fresh \
+kernel; what you print or plot does not count. Numbers may be Python or numpy numbers, vectors \
+lists or arrays, expressions sympy expressions (or strings) in the named symbols.
+- Before you submit, check the form of your answers (not whether they are right) with \
+`eulertop check {file}` — it runs the notebook and lists missing or malformed answers.
+
+| variable | kind | unit | points | what |
+| --- | --- | --- | --- | --- |
+{table}
+"""
+
+
+def python_literal(value: Any) -> str:
+    """A Python literal for a plain-JSON answer value (None, bool, number, str, list).
+
+    Floats use ``repr``, the shortest string that reads back as the same float.
+
+    Examples
+    --------
+    >>> python_literal([0.1, 2.5e-07, True, "loops"])
+    "[0.1, 2.5e-07, True, 'loops']"
+    """
+    if value is None or isinstance(value, bool | str):
+        return repr(value)
+    if isinstance(value, int):
+        return repr(int(value))
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise ValueError(f"cannot write a non-finite answer {value!r}")
+        return repr(float(value))
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(python_literal(v) for v in value) + "]"
+    raise TypeError(f"answer value {value!r} is not plain JSON (number, bool, str or list)")
+
+
+def _one_line(text: str) -> str:
+    return " ".join(text.split())
+
+
+def kind_hint(spec: Mapping[str, Any]) -> str:
+    """How an answer must look, in words, from its public spec."""
+    kind = spec["kind"]
+    if kind == "vector":
+        return f"a list of {spec['length']} numbers"
+    if kind == "choice":
+        return "one of " + ", ".join(f'"{o}"' for o in spec["options"])
+    if kind == "expression":
+        return "an expression in " + ", ".join(spec["symbols"])
+    return _KIND_HINTS.get(kind, kind)
+
+
+def answer_line(spec: Mapping[str, Any], value: Any = None) -> str:
+    """``q3_beta1 = None  # rad — β₁, the upper turning point`` (value None in the release)."""
+    notes = [spec["unit"] or kind_hint(spec), _one_line(spec["description"])]
+    comment = " — ".join(n for n in notes if n)
+    return f"{spec['variable']} = {python_literal(value)}  # {comment}"
+
+
+def _parameter_cell(variants: Sequence[Variant]) -> str:
+    lines = ["# Your parameters: use them as given. SI units, angles in radians."]
+    for k, variant in enumerate(variants, start=1):
+        lines.append(f"\n# Question {k}: {_one_line(variant.title)}")
+        for name, value in variant.params.items():
+            unit = variant.param_units.get(name, "")
+            comment = f"  # {unit}" if unit else ""
+            lines.append(f"{variable_name(k, name)} = {python_literal(value)}{comment}")
+    return "\n".join(lines)
+
+
+def _rules_cell(student: Mapping[str, str], specs: Sequence[dict]) -> str:
+    sid = student["id"]
+    name = student.get("name", "").strip()
+    who = f"`{sid}`" + (f" ({html.escape(name)})" if name else "")
+    rows = [
+        f"| `{s['variable']}` | {kind_hint(s)} | {s['unit'] or '—'} | {s['points']:g} | "
+        f"{html.escape(_one_line(s['description'])).replace('|', '&#124;')} |"
+        for s in specs
+    ]
+    return RULES.format(who=who, file=f"{sid}.ipynb", table="\n".join(rows)).rstrip("\n")
+
+
+def build_notebook(
+    title: str,
+    student: Mapping[str, str],
+    variants: Sequence[Variant],
+    *,
+    solutions: bool = False,
+) -> dict:
+    """The release notebook of one student, or (``solutions=True``) its solutions version.
+
+    Returned as a plain nbformat-v4-shaped dict (``nbformat.from_dict`` makes it a
+    ``NotebookNode``); :func:`notebook_text` validates and serialises it.
+
+    Parameters
+    ----------
+    title : str
+        The assignment's title.
+    student : mapping
+        The student's roster row; ``"id"`` is required, ``"name"`` is shown when present.
+    variants : sequence of Variant
+        The student's questions, in order (question ``k`` is ``variants[k - 1]``).
+    solutions : bool
+        Fill the answer variables with the key's values instead of ``None``.
+    """
+    questions = [
+        {"question": k, "family": v.family, "title": v.title,
+         "answers": [answer_spec(a, k) for a in v.answers]}
+        for k, v in enumerate(variants, start=1)
+    ]
+    specs = [s for q in questions for s in q["answers"]]
+    cells = [
+        _cell("markdown", "title", f"# {_one_line(title)}", _READ_ONLY),
+        _cell("markdown", "rules", _rules_cell(student, specs), _READ_ONLY),
+        _cell("code", "parameters", _parameter_cell(variants), _READ_ONLY),
+    ]
+    for k, variant in enumerate(variants, start=1):
+        statement = f"## Question {k}: {_one_line(variant.title)}\n\n{variant.statement.strip()}"
+        lines = [
+            answer_line(answer_spec(a, k), a.value if solutions else None) for a in variant.answers
+        ]
+        cells.append(_cell("markdown", f"q{k}-statement", statement, _READ_ONLY, question=k))
+        cells.append(_cell("code", f"q{k}-answer", "\n".join(lines), {"deletable": False},
+                           question=k))
+    metadata = {
+        "kernelspec": dict(KERNELSPEC),
+        "language_info": {"name": "python"},
+        "eulertop": {
+            "format_version": FORMAT_VERSION,
+            "notebook": "solutions" if solutions else "release",
+            "student": student["id"],
+            "assignment": title,
+            "questions": questions,
+        },
+    }
+    return {"nbformat": v4.nbformat, "nbformat_minor": v4.nbformat_minor, "metadata": metadata,
+            "cells": cells}
+
+
+def _cell(kind: str, cell_id: str, source: str, flags: dict, question: int | None = None) -> dict:
+    # Built as plain dicts: nbformat.v4.new_*_cell validates every cell against the schema, which
+    # made it most of the generator's run time; notebook_text validates the whole notebook once.
+    role = cell_id.split("-")[-1]
+    metadata = {**flags, "eulertop": {"role": role}}
+    if question is not None:
+        metadata["eulertop"]["question"] = question
+    # Sources as lists of lines, the way nbformat writes them (line-based diffs).
+    cell = {"cell_type": kind, "id": cell_id, "metadata": metadata,
+            "source": source.splitlines(keepends=True)}
+    if kind == "code":
+        cell.update(execution_count=None, outputs=[])
+    return cell
+
+
+def notebook_text(nb: Mapping) -> str:
+    """The notebook as JSON in nbformat's own layout; ValueError if it is not valid nbformat v4.
+
+    Same layout as ``nbformat.writes`` (indent 1, sorted keys, sources split into lines) without
+    its defensive deep copy, which doubled the time per notebook.
+    """
+    try:
+        nbformat.validate(nb)
+    except nbformat.ValidationError as e:
+        raise ValueError(f"generated an invalid notebook: {e}") from None
+    return json.dumps(nb, indent=1, sort_keys=True, ensure_ascii=False, allow_nan=False) + "\n"

@@ -1,0 +1,248 @@
+"""Exact torque-free asymmetric top (R10): the period of ω(t) and the Dzhanibekov flip time.
+
+A phone, a book, a brick, a tennis racket or a T-handle (bodies of
+:func:`problems.templates.near_axis_stability.draw_body`) is tossed either mainly about its
+intermediate axis with a small perturbation (it flips over and back: Dzhanibekov's wing nut) or
+mainly about its smallest or largest axis with a large wobble. Moments are ordered
+``I1 < I2 < I3``. Asked:
+
+``period``
+    the period of ω(t) in the body frame, ``4K(k)/λ`` (R10): the least ``P > 0`` with
+    ``ω(t + P) = ω(t)`` for all three components (``ω`` of the dn axis alone repeats after
+    ``P/2``);
+``t_flip``
+    the flip time as :func:`solver.asymmetric_top.flip_time` defines it: the time for ``ω2``
+    (the intermediate-axis component, ``∝ sn``) to go from a maximum to the next minimum,
+    ``2K(k)/λ = P/2``;
+``circled_axis``
+    the principal axis ω circles in the body frame (the "dn axis", whose component never
+    changes sign): ê3 when ``L² > 2T I2``, ê1 when ``L² < 2T I2``.
+
+Rejected draws (resampled): moments within ``MIN_GAP`` of each other; motion within
+``SEPARATRIX_GAP`` of the separatrix ``L² = 2T I2`` (where the period diverges and the
+circled axis hangs on the last digit); known mistakes within five tolerances of the key or of
+one another (e.g. a small-amplitude R9 period indistinguishable from the exact one).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.special import ellipk
+
+from problems.answers import Answer, Mistake, grade
+from problems.rounding import latex_sig, round_sig
+from problems.templates.near_axis_stability import Body, draw_body
+from problems.variant import Variant
+from solver.asymmetric_top import asymmetric_top_period, flip_time
+from solver.parameters import ParameterError
+from solver.torque_free import invariants, near_axis_stability
+
+NAME = "asymmetric_free_top"
+TITLE = "The tumbling asymmetric body: exact period and intermediate-axis flip"
+SUMMARY = "exact asymmetric top (elliptic functions): period of ω(t), Dzhanibekov flip time"
+RESULTS = ("R7", "R10")
+
+SIG = 3
+"""Significant figures of ω(0)."""
+SIG_MOMENTS = 4
+"""Moments get one more: a phone is nearly a flat plate, whose largest moment is within 0.5 % of
+the sum of the other two (the triangle inequality's edge), which 3-figure rounding can cross."""
+RTOL = 1e-3
+"""K(k) from scipy or a table and 3-figure data reproduce the key to ~1e-10; 1e-3 leaves room
+for a student who carries 4 figures, and is far from every known mistake."""
+MARGIN = 5.0
+"""Known mistakes must lie this many tolerances from the key and from each other."""
+MIN_GAP = 0.05
+"""Least relative difference between two moments (the order I1 < I2 < I3 must be clear)."""
+SEPARATRIX_GAP = 1e-5
+"""Least ``|L² − 2T I2| / L²``. Closer, the period grows like ``ln(1/gap)`` and which axis ω
+circles is decided by digits beyond those shown."""
+FLIP_PERTURBATION = (0.02, 0.1)
+"""Flip scenario: ω1, ω3 as fractions of ω2."""
+WOBBLE = (0.15, 0.7)
+"""Wobble scenario: the two smaller components as fractions of the spin about ê1 or ê3."""
+MAX_ATTEMPTS = 1000
+
+
+@dataclass(frozen=True)
+class Draw:
+    """Displayed values: ``axes[i]`` names principal axis ``i + 1`` of the body."""
+
+    body: Body
+    axes: tuple[str, str, str]
+    moments: tuple[float, float, float]  # I1 < I2 < I3
+    spin_axis: int  # the axis spun mainly about
+    omega0: tuple[float, float, float]
+
+
+def _draw(rng: np.random.Generator) -> Draw:
+    body = draw_body(rng)
+    order = np.argsort(body.moments)
+    moments = tuple(round_sig(np.asarray(body.moments)[order], SIG_MOMENTS).tolist())
+    spin_axis = 2 if rng.random() < 0.5 else int(rng.choice([1, 3]))
+    fractions = FLIP_PERTURBATION if spin_axis == 2 else WOBBLE
+    omega = rng.uniform(*fractions, size=3) * rng.choice([-1.0, 1.0], size=3)
+    omega[spin_axis - 1] = 1.0
+    omega *= rng.uniform(*body.spin)
+    axes = tuple(body.axes[i] for i in order)
+    return Draw(body, axes, moments, spin_axis, tuple(round_sig(omega, SIG).tolist()))
+
+
+def _well_posed(d: Draw) -> bool:
+    I1, I2, I3 = d.moments
+    if I3 > I1 + I2 or min(I2 - I1, I3 - I2) < MIN_GAP * I3:  # the rounding made no rigid body
+        return False
+    T, L2 = invariants(I1, I2, I3, d.omega0)
+    return abs(float(L2 - 2 * T * I2)) >= SEPARATRIX_GAP * float(L2)
+
+
+def _circled_axis(d: Draw) -> int:
+    """ê3 if ``L² > 2T I2``, else ê1 (R10; the separatrix itself is rejected)."""
+    T, L2 = invariants(*d.moments, d.omega0)
+    return 3 if L2 > 2 * T * d.moments[1] else 1
+
+
+def _parameter_m(d: Draw) -> float:
+    """R10's ``m = k²``: ``x = (I2 − I1)(2T I3 − L²)/((I3 − I2)(L² − 2T I1))`` for
+    ``L² > 2T I2``, and ``1/x`` (indices 1 and 3 exchanged) otherwise; so ``m = min(x, 1/x)``."""
+    I1, I2, I3 = d.moments
+    T, L2 = invariants(I1, I2, I3, d.omega0)
+    x = float((I2 - I1) * (2 * T * I3 - L2) / ((I3 - I2) * (L2 - 2 * T * I1)))
+    return min(x, 1 / x)
+
+
+def _answers(d: Draw) -> tuple[Answer, ...]:
+    period = float(asymmetric_top_period(*d.moments, d.omega0))
+    t_flip = float(flip_time(*d.moments, d.omega0))
+    c = _circled_axis(d)
+    r9 = float(near_axis_stability(*d.moments, d.omega0[c - 1], axis=c)["rate"])
+    m = _parameter_m(d)
+    # scipy's ellipk takes the parameter m = k²; passing the modulus k is the classic slip
+    modulus_slip = float(ellipk(math.sqrt(m)) / ellipk(m))
+    period_m = (
+        Mistake("flip_time", period / 2, "That is half the period (the flip time): ω2 goes "
+                "from its maximum to its minimum in P/2, and ω is back where it started after P "
+                "= 4K(k)/λ."),
+        Mistake("small_amplitude", 2 * math.pi / r9, "That is 2π/√(Ω1Ω2), the small-amplitude "
+                "period of R9; the exact period is 4K(k)/λ (R10)."),
+        Mistake("angular_frequency", 2 * math.pi / period, "That is an angular frequency "
+                "(rad/s); the period (s) is asked."),
+        Mistake("ellipk_modulus", period * modulus_slip, "scipy.special.ellipk(m) takes the "
+                "parameter m = k², not the modulus k."),
+    )
+    flip_m = (
+        Mistake("full_period", period, "That is the full period of ω(t); the flip (ω2 from "
+                "maximum to minimum) takes half of it, 2K(k)/λ."),
+        Mistake("quarter_period", period / 4, "That is a quarter period (ω2 from zero to its "
+                "maximum); from maximum to minimum takes 2K(k)/λ."),
+        Mistake("ellipk_modulus", t_flip * modulus_slip, "scipy.special.ellipk(m) takes the "
+                "parameter m = k², not the modulus k."),
+    )
+    rule = "ω circles ê3 when L² > 2T I2 and ê1 when L² < 2T I2 (R10)."
+    axis_m = (
+        Mistake("intermediate", "2", "ω never circles the intermediate axis ê2 (R9: spin about "
+                "it is unstable); " + rule),
+        Mistake("other_side", str(4 - c), "Compare L² with 2T I2: " + rule),
+    )
+    return (
+        Answer("period", "scalar", period, unit="s", rtol=RTOL, mistakes=period_m,
+               description="period of ω(t) in the body frame (exact)"),
+        Answer("t_flip", "scalar", t_flip, unit="s", rtol=RTOL, mistakes=flip_m,
+               description="time for ω2 to go from a maximum to the next minimum"),
+        Answer("circled_axis", "choice", str(c), options=("1", "2", "3"), mistakes=axis_m,
+               description="the principal axis ω circles in the body frame"),
+    )
+
+
+def _distinct(answer: Answer) -> bool:
+    """Every mistake lies ``MARGIN`` tolerances from the key and from every other mistake."""
+    try:
+        wide = replace(answer, rtol=MARGIN * answer.rtol, atol=MARGIN * answer.atol)
+    except ParameterError:  # a mistake within the widened tolerance of the key
+        return False
+    return all(grade(wide, m.value).mistake == m.name for m in wide.mistakes)
+
+
+def _statement(d: Draw) -> str:
+    b, s = d.body, d.spin_axis
+    axes = "; ".join(
+        f"$\\hat e_{i}$ {d.axes[i - 1]}, $I_{i} = {latex_sig(d.moments[i - 1], SIG_MOMENTS)}$ kg m²"
+        for i in (1, 2, 3)
+    )
+    w = ",\\ ".join(latex_sig(x, SIG) for x in d.omega0)
+    how = ("mainly about its intermediate axis $\\hat e_2$, with a small perturbation"
+           if s == 2 else f"mainly about $\\hat e_{s}$, with a large wobble")
+    return (
+        f"{b.noun[0].upper()}{b.noun[1:]} ({b.description}) is tossed into the air spinning "
+        f"{how}; no torque acts about its centre of mass (ignore air). Its principal axes "
+        f"and moments about the centre of mass, **ordered** $I_1 < I_2 < I_3$, are: {axes} "
+        "(`I1`, `I2`, `I3`; use them as given). The frame $(\\hat e_1, \\hat e_2, \\hat e_3)$ is "
+        "right-handed.\n\n"
+        "At $t = 0$ the body-frame components of the angular velocity are "
+        f"$(\\omega_1, \\omega_2, \\omega_3) = ({w})$ rad/s (`omega0`). Solve Euler's "
+        "equations exactly (Jacobi elliptic functions), not in the small-amplitude "
+        "approximation.\n\n"
+        "1. `period`: the period $P$ (s) of $\\boldsymbol\\omega(t)$ in the body frame: the "
+        "smallest $P > 0$ with $\\boldsymbol\\omega(t + P) = \\boldsymbol\\omega(t)$ for all "
+        "three components.\n"
+        "2. `t_flip`: the flip time (s): the time $\\omega_2$ takes to go from one of its "
+        "maxima to the next minimum (for a body spun near $\\hat e_2$, the time it takes to "
+        "turn over).\n"
+        "3. `circled_axis`: the principal axis that $\\boldsymbol\\omega$ circles in the body "
+        "frame (the one whose component of $\\boldsymbol\\omega$ never changes sign): "
+        '`"1"`, `"2"` or `"3"`.'
+    )
+
+
+def _variant(d: Draw) -> Variant | None:
+    if not _well_posed(d):
+        return None
+    try:
+        answers = _answers(d)
+    except ParameterError as err:
+        if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
+            raise
+        return None  # a mistake indistinguishable from the key
+    if not all(_distinct(a) for a in answers):
+        return None
+    I1, I2, I3 = d.moments
+    return Variant(
+        family=NAME,
+        title=TITLE,
+        params={"I1": I1, "I2": I2, "I3": I3, "omega0": list(d.omega0)},
+        param_units={"I1": "kg m^2", "I2": "kg m^2", "I3": "kg m^2", "omega0": "rad/s"},
+        statement=_statement(d),
+        answers=answers,
+    )
+
+
+def generate(rng: np.random.Generator) -> Variant:
+    """One variant of the exact torque-free asymmetric top (R10), from ``rng`` only.
+
+    Parameters are rounded to the figures shown and every answer is computed from the rounded
+    values by :mod:`solver.asymmetric_top`. Ill-posed draws are resampled.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The only source of randomness; the same generator state gives the same variant.
+
+    Returns
+    -------
+    Variant
+        Parameters (SI), statement and answers of one student's question.
+
+    Raises
+    ------
+    RuntimeError
+        No acceptable draw in ``MAX_ATTEMPTS`` (a template bug: about one draw in a few is
+        rejected).
+    """
+    for _ in range(MAX_ATTEMPTS):
+        variant = _variant(_draw(rng))
+        if variant is not None:
+            return variant
+    raise RuntimeError(f"{NAME}: no acceptable draw in {MAX_ATTEMPTS} attempts")

@@ -1,0 +1,201 @@
+"""Kinetic energy and angular momentum for a given ω and inertia tensor; the angle between L and ω.
+
+Two scenes, drawn at random:
+
+``tumbling_satellite``
+    A small satellite's inertia tensor in its body axes (from a spec sheet: principal moments of
+    5–60 kg m², axes turned at random, entries shown to 4 significant figures, so the products of
+    inertia do not vanish) and its tumbling rate ω (components up to 0.3 rad/s).
+``askew_disc``
+    A grinding wheel or saw blade, a uniform thin disc (R2) mounted on an axle through its centre
+    with its symmetry axis tilted by θ from the axle, spinning at ω about the axle. Its tensor in
+    the axle frame is the disc's principal tensor turned by θ about y.
+
+Answers (R3, R5): ``T = ½ ω·I·ω``, ``L = I·ω`` and the angle between ``L`` and ``ω``, in
+``[0, π/2)`` (``L·ω = 2T > 0``). Known mistakes: the missing ½ in T, products of inertia ignored,
+L assumed parallel to ω, the angle in degrees, the disc's tilt θ given for the angle of L.
+
+Tolerance: ``rtol = 1e-3`` (vectors by norm). The parameters are exact inputs with 3–4 figures,
+so a student keeping 4 figures in the working is inside it; the angle is a smooth function of
+them (no cancellation: draws with an angle below 0.03 rad are rejected, where the relative error
+of a hand computation of a small angle from nearly parallel vectors would grow).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from problems.answers import Answer, Mistake
+from problems.rounding import format_sig, latex_sig, round_sig
+from problems.variant import Variant
+from solver.inertia import angular_momentum, kinetic_energy, shape_tensor
+from solver.parameters import principal_moments
+
+NAME = "energy_momentum"
+TITLE = "Kinetic energy and angular momentum"
+SUMMARY = "T and L for a given ω and inertia tensor; the angle between L and ω"
+RESULTS = ("R3", "R5")
+
+RTOL = 1e-3
+MIN_ANGLE = 0.03  # rad; below it the angle between L and ω is a small difference of directions
+SEPARATION = 5.0  # key and mistakes at least this many tolerances apart
+MAX_TRIES = 200
+
+# Discs: (radius range m, mass range kg, spin range rad/s).
+DISCS = {
+    "grinding wheel": ((0.075, 0.1), (0.5, 1.5), (200.0, 350.0)),
+    "circular saw blade": ((0.09, 0.125), (0.3, 0.8), (400.0, 520.0)),
+}
+
+_TOLERANCE_NOTE = (
+    "Answers are graded to a relative tolerance of $10^{-3}$ (vectors: on their length); keep "
+    "at least four significant figures in your working."
+)
+_HALF = "T = ½ ω·I·ω (R3): the factor ½ is missing."
+_DEGREES = "The angle is asked in radians; this is the angle in degrees."
+
+
+def _angle(u: np.ndarray, v: np.ndarray) -> float:
+    """The angle between two vectors, in rad (atan2 form: accurate for small angles too)."""
+    return float(np.arctan2(np.linalg.norm(np.cross(u, v)), np.dot(u, v)))
+
+
+def _answer(name, kind, key, mistakes, unit, description) -> Answer | None:
+    """An answer, or None if a mistake is within SEPARATION tolerances of the key or another."""
+    values = [np.atleast_1d(np.asarray(v, float)) for v in (key, *(m[1] for m in mistakes))]
+    tol = SEPARATION * RTOL * np.linalg.norm(values[0])
+    if any(np.linalg.norm(a - b) <= tol for i, a in enumerate(values) for b in values[i + 1:]):
+        return None
+    return Answer(  # Answer converts numpy values to plain JSON
+        name, kind, key, unit=unit, rtol=RTOL, description=description,
+        mistakes=tuple(Mistake(n, v, f) for n, v, f in mistakes),
+    )
+
+
+def _answers(tensor, omega, T_naive, L_naive, naive, extra_angle=()) -> tuple | None:
+    """T, L and the angle, with their mistakes; ``naive = (name, feedback on T, feedback on L)``
+    is the simplification that gave ``T_naive`` and ``L_naive``."""
+    T = float(kinetic_energy(tensor, omega))
+    L = angular_momentum(tensor, omega)
+    angle = _angle(L, omega)
+    if angle < MIN_ANGLE:
+        return None
+    name, T_feedback, L_feedback = naive
+    answers = (
+        _answer("T", "scalar", T, [("missing_half", 2 * T, _HALF), (name, T_naive, T_feedback)],
+                "J", "kinetic energy"),
+        _answer("L", "vector", L, [(name, L_naive, L_feedback)], "kg m^2/s",
+                "angular momentum (same axes as ω)"),
+        _answer("angle", "angle", angle,
+                [("degrees", np.degrees(angle), _DEGREES), *extra_angle], "rad",
+                "angle between L and ω"),
+    )
+    return None if None in answers else answers
+
+
+def _tumbling_satellite(rng: np.random.Generator) -> Variant | None:
+    moments = np.sort(rng.uniform(5.0, 60.0, size=3))
+    if moments[2] >= moments[0] + moments[1] or np.min(np.diff(moments)) < 2.0:
+        return None  # not a physical body, or a nearly symmetric one (small products)
+    Q = Rotation.random(rng=rng).as_matrix()
+    upper = round_sig(np.triu(Q @ np.diag(moments) @ Q.T), 4)
+    tensor = upper + np.triu(upper, 1).T
+    try:
+        principal_moments(*np.linalg.eigvalsh(tensor))  # still a physical tensor after rounding
+    except ValueError:
+        return None
+    omega = round_sig(rng.uniform(-0.3, 0.3, size=3), 3)
+    if np.linalg.norm(omega) < 0.1:
+        return None
+    diag = np.diag(np.diag(tensor))
+    answers = _answers(
+        tensor, omega, float(kinetic_energy(diag, omega)), angular_momentum(diag, omega),
+        ("products_ignored",
+         "The products of inertia (off-diagonal entries) matter: the body axes are not principal "
+         "axes, so T = ½ ω·I·ω with the full tensor (R3).",
+         "The products of inertia (off-diagonal entries) matter: the body axes are not principal "
+         "axes, so L = I·ω with the full tensor (R5)."),
+    )
+    if answers is None:
+        return None
+    params = {"I": tensor.tolist(), "omega": omega.tolist()}
+    units = {"I": "kg m^2", "omega": "rad/s"}
+    rows = " \\\\ ".join(" & ".join(latex_sig(x, 4) for x in row) for row in tensor)
+    statement = (
+        "A small satellite tumbles after the failure of its attitude control. In its body axes "
+        "its inertia tensor about the centre of mass is (`I`, kg m²)\n\n"
+        f"$$\\mathsf I = \\begin{{pmatrix}} {rows} \\end{{pmatrix}}\\ \\mathrm{{kg\\,m^2}},$$\n\n"
+        "and its angular velocity has the body components "
+        f"$\\boldsymbol\\omega = ({', '.join(format_sig(w, 3) for w in omega)})$ rad/s "
+        "(`omega`).\n\n"
+        "Find the rotational kinetic energy $T$, the angular momentum $\\mathbf L$ about the "
+        "centre of mass (body components), and the angle between $\\mathbf L$ and "
+        f"$\\boldsymbol\\omega$ in radians.\n\n{_TOLERANCE_NOTE}"
+    )
+    return Variant(NAME, "Energy and angular momentum of a tumbling satellite", params, units,
+                   statement, answers)
+
+
+def _askew_disc(rng: np.random.Generator) -> Variant | None:
+    kind = list(DISCS)[int(rng.integers(len(DISCS)))]
+    radius_range, mass_range, spin_range = DISCS[kind]
+    M, R = round_sig(rng.uniform(*mass_range), 3), round_sig(rng.uniform(*radius_range), 3)
+    theta = round_sig(rng.uniform(0.12, 0.4), 3)
+    w = round_sig(rng.uniform(*spin_range), 3)
+    disc = shape_tensor("disc", M, radius=R)  # principal: symmetry axis along z
+    tilt = Rotation.from_euler("y", theta).as_matrix()  # the disc's axis (sin θ, 0, cos θ)
+    tensor = tilt @ disc @ tilt.T
+    omega = np.array([0.0, 0.0, w])
+    I3 = disc[2, 2]
+    answers = _answers(
+        tensor, omega, 0.5 * I3 * w**2, I3 * omega,
+        ("untilted",
+         "½ I3 ω² would hold for an untilted disc. Tilted, its moment about the axle is "
+         "I_zz = I1 sin²θ + I3 cos²θ, with I1 = MR²/4 the moment about a diameter (R3).",
+         "The disc's axis is tilted from the axle, so L = I·ω is not along ω: in the axle frame "
+         "the tensor has a product of inertia I_xz ≠ 0 (R5)."),
+        extra_angle=[("tilt_angle", theta, "θ is the angle between the disc's axis and ω; the "
+                      "question asks for the angle between L and ω, which is smaller.")],
+    )
+    if answers is None:
+        return None
+    params = {"M": M, "R": R, "theta": theta, "omega": w}
+    units = {"M": "kg", "R": "m", "theta": "rad", "omega": "rad/s"}
+    statement = (
+        f"A {kind}, a uniform thin disc of mass $M = {latex_sig(M, 3)}$ kg (`M`) and radius "
+        f"$R = {latex_sig(R, 3)}$ m (`R`), is mounted askew on its axle: the axle passes "
+        "through the disc's centre, but the disc's symmetry axis makes the angle "
+        f"$\\theta = {latex_sig(theta, 3)}$ rad (`theta`) with it. The axle spins at "
+        f"$\\omega = {latex_sig(w, 3)}$ rad/s (`omega`).\n\n"
+        "Take axes through the disc's centre with $z$ along the axle and the disc's symmetry "
+        "axis in the $xz$ plane, along $(\\sin\\theta, 0, \\cos\\theta)$, at the instant "
+        "shown. Find the kinetic energy $T$, the angular momentum $\\mathbf L$ about the "
+        "centre (components along $x, y, z$), and the angle between $\\mathbf L$ and "
+        f"$\\boldsymbol\\omega$ in radians.\n\n{_TOLERANCE_NOTE}"
+    )
+    return Variant(NAME, f"A {kind} mounted askew", params, units, statement, answers)
+
+
+SCENES = (_tumbling_satellite, _askew_disc)
+
+
+def generate(rng: np.random.Generator) -> Variant:
+    """One variant: a scene drawn from :data:`SCENES`, redrawn until it is well posed (R3, R5).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The only source of randomness.
+
+    Returns
+    -------
+    Variant
+        Answers ``T`` (J), ``L`` (kg m²/s, vector) and ``angle`` (rad).
+    """
+    scene = SCENES[int(rng.integers(len(SCENES)))]
+    for _ in range(MAX_TRIES):
+        variant = scene(rng)
+        if variant is not None:
+            return variant
+    raise RuntimeError(f"{NAME}: no well-posed draw in {MAX_TRIES} tries")  # pragma: no cover

@@ -1,0 +1,221 @@
+"""Rotational kinetic energy in Euler angles: a number, and the symmetric top's expression (R13).
+
+Two scenes, drawn at random:
+
+``toy_top``
+    A toy top (a disc of 2–5 cm radius and 30–100 g on a light axle, the disc 2–6 cm above the
+    tip): principal moments ``I1`` (about the tip, R2's disc plus the parallel-axis term) and
+    ``I3``, shown to 3 significant figures, with the Euler angles and rates of a top spinning at
+    60–150 rad/s.
+``tumbling_box``
+    A smartphone or a book tossed in the air, a uniform box (R2) with ``I1 < I2 < I3``, tumbling
+    at rates of up to 15 rad/s.
+
+Answers: ``T``, the number from R13 (``½ Σ I_i ω_i²`` with R12's ω), and ``T_expr``, the
+symmetric top's ``T`` as an expression in ``I1, I3, beta, alpha_dot, beta_dot, gamma_dot``,
+derived by :func:`solver.symbolic.kinetic_energy_euler_expr` with ``I2 = I1``.
+
+Known mistakes: the missing ½, a calculator in degree mode, the rates taken as the components of
+ω, two moments swapped (for the expression: ``I1`` and ``I3``), the cross term of
+``(α̇ cos β + γ̇)²`` dropped, and ``sin β``/``cos β`` exchanged (β taken from the horizontal).
+
+Tolerance: ``T`` has ``rtol = 1e-3`` (the moments are exact 3-figure inputs; 4 figures kept in
+the working suffice). The expression is compared at sample points with ``rtol = 1e-6``: a right
+formula agrees to rounding error (≈1e-15), so the tolerance only has to absorb a decimal
+coefficient such as ``0.5``; any wrong term changes the values by far more at generic points.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+
+import numpy as np
+import sympy as sp
+
+from problems.answers import Answer, Mistake
+from problems.rounding import latex_sig, round_sig
+from problems.variant import Variant
+from solver.euler_angles import kinetic_energy_euler
+from solver.inertia import parallel_axis, shape_tensor
+from solver.parameters import principal_moments
+from solver.symbolic import SYMBOLS, kinetic_energy_euler_expr
+
+NAME = "euler_kinetic_energy"
+TITLE = "Kinetic energy in Euler angles"
+SUMMARY = "kinetic energy from Euler angles and rates: a number, and the symmetric top's formula"
+RESULTS = ("R12", "R13")
+
+RTOL = 1e-3
+RTOL_EXPRESSION = 1e-6
+SEPARATION = 5.0  # key and mistakes at least this many tolerances apart
+MAX_TRIES = 200
+EXPRESSION_SYMBOLS = ("I1", "I3", "beta", "alpha_dot", "beta_dot", "gamma_dot")
+
+# Boxes tossed in the air: (a, b, c ranges in m, mass range in kg).
+BOXES = {
+    "smartphone": ((0.14, 0.17), (0.065, 0.08), (0.007, 0.01), (0.14, 0.22)),
+    "book": ((0.20, 0.30), (0.13, 0.21), (0.015, 0.05), (0.4, 1.5)),
+}
+
+_HALF = "T = ½ Σ I_i ω_i² (R13): the factor ½ is missing."
+_DEGREE_MODE = (
+    "The angles are in radians, but this value comes from reading them as degrees (a calculator "
+    "in degree mode, or numpy.deg2rad applied to radians)."
+)
+_RATES = (
+    "The Euler-angle rates are not the components of ω: ω = α̇ ẑ + β̇ ê'₂ + γ̇ ê₃ along three "
+    "non-orthogonal axes; take its body components from R12 before using T = ½ Σ I_i ω_i²."
+)
+_CONVENTION = (
+    "Conventions (as in the lecture): $R = R_\\gamma R_\\beta R_\\alpha$ ($\\alpha$ about the "
+    "lab $z$, $\\beta$ about the new $y'$, $\\gamma$ about the body $\\hat e_3$), $\\beta$ "
+    "from the upward vertical, $V' = R\\,V$; the body axes $\\hat e_1, \\hat e_2, \\hat e_3$ "
+    "are the principal axes with moments $I_1, I_2, I_3$. Angles in radians, rates in rad/s."
+)
+_EXPRESSION_TASK = (
+    "For a **symmetric** body ($I_2 = I_1$), write the kinetic energy as an expression in "
+    "`I1, I3, beta, alpha_dot, beta_dot, gamma_dot` (a sympy expression or a string, e.g. "
+    "`\"I1*beta_dot**2/2 + ...\"`)."
+)
+
+
+@cache
+def _symmetric_top_energy() -> sp.Expr:
+    """The symmetric top's ``T`` (R13 with ``I2 = I1``), derived by :mod:`solver.symbolic`.
+
+    Simplified term by term in the moments, which gives the textbook form
+    ``I1 (α̇² sin²β + β̇²)/2 + I3 (α̇ cos β + γ̇)²/2`` (γ drops out).
+    """
+    S = SYMBOLS
+    T = kinetic_energy_euler_expr().subs(S["I2"], S["I1"])
+    parts = sp.collect(sp.expand(T), [S["I1"], S["I3"]], evaluate=False)
+    return sp.Add(*(k * sp.factor(sp.trigsimp(v)) for k, v in parts.items()))
+
+
+@cache
+def _expression_answer() -> Answer:
+    S = SYMBOLS
+    I1, I3, beta = S["I1"], S["I3"], S["beta"]
+    T = _symmetric_top_energy()
+    mistakes = (
+        ("missing_half", 2 * T, _HALF),
+        ("I1_I3_swapped", T.subs({I1: I3, I3: I1}, simultaneous=True),
+         "I1 and I3 are swapped: I3 is the moment about the symmetry axis ê₃, so it multiplies "
+         "ω₃² = (α̇ cos β + γ̇)²."),
+        ("missing_cross_term", T - I3 * S["alpha_dot"] * S["gamma_dot"] * sp.cos(beta),
+         "(α̇ cos β + γ̇)² has a cross term 2 α̇ γ̇ cos β: square the sum, not each term."),
+        ("sin_cos_swapped", T.subs(beta, sp.pi / 2 - beta),
+         "sin β and cos β are exchanged: β is measured from the upward vertical, so the "
+         "component of α̇ ẑ along ê₃ is α̇ cos β (R12)."),
+    )
+    return Answer(
+        "T_expr", "expression", str(T), unit="J", rtol=RTOL_EXPRESSION, points=1.0,
+        symbols=EXPRESSION_SYMBOLS, description="T of a symmetric top (I2 = I1) in Euler angles",
+        mistakes=tuple(Mistake(n, str(e), f) for n, e, f in mistakes),
+    )
+
+
+def _energy_answer(moments, angles, rates, swap: tuple[int, int]) -> Answer | None:
+    """``T`` with its mistakes, or None if two of them are within SEPARATION tolerances."""
+    beta, gamma = angles
+    T = float(kinetic_energy_euler(*moments, beta, gamma, *rates))
+    swapped = list(moments)
+    swapped[swap[0]], swapped[swap[1]] = swapped[swap[1]], swapped[swap[0]]
+    names = ("I1", "I2", "I3")
+    pair = f"{names[swap[0]]}_{names[swap[1]]}_swapped"
+    mistakes = (
+        ("missing_half", 2 * T, _HALF),
+        ("degree_mode", float(kinetic_energy_euler(*moments, *np.radians(angles), *rates)),
+         _DEGREE_MODE),
+        ("rates_as_components", 0.5 * float(np.dot(moments, np.square(rates))), _RATES),
+        (pair, float(kinetic_energy_euler(*swapped, beta, gamma, *rates)),
+         f"{names[swap[0]]} and {names[swap[1]]} are swapped: I_i multiplies ω_i², the square "
+         "of the component along the same principal axis ê_i."),
+    )
+    values = np.array([T, *(v for _, v, _ in mistakes)])
+    gaps = np.abs(values[:, None] - values[None, :])
+    if np.min(gaps[~np.eye(len(values), dtype=bool)]) <= SEPARATION * RTOL * abs(T):
+        return None
+    return Answer("T", "scalar", T, unit="J", rtol=RTOL, description="kinetic energy",
+                  mistakes=tuple(Mistake(n, v, f) for n, v, f in mistakes))
+
+
+def _toy_top(rng: np.random.Generator):
+    M, R = rng.uniform(0.03, 0.1), rng.uniform(0.02, 0.05)
+    h = rng.uniform(0.02, 0.06)
+    about_tip = parallel_axis(shape_tensor("disc", M, radius=R), M, [0.0, 0.0, h])
+    I1, I3 = round_sig(np.diag(about_tip)[[0, 2]], 3)
+    angles = (round_sig(rng.uniform(0.1, 1.3), 3), round_sig(rng.uniform(0.1, 6.2), 3))
+    rates = round_sig([rng.uniform(1.0, 6.0), rng.uniform(-2.0, 2.0), rng.uniform(60, 150)], 3)
+    text = (
+        "A toy top spins with its tip fixed on a table. Its principal moments about the tip are "
+        f"$I_1 = I_2 = {latex_sig(I1, 3)}$ kg m² (`I1`, about any axis through the tip "
+        f"perpendicular to the symmetry axis) and $I_3 = {latex_sig(I3, 3)}$ kg m² (`I3`, about "
+        "the symmetry axis)."
+    )
+    return "A spinning toy top", {"I1": I1, "I3": I3}, (I1, I1, I3), angles, rates, (0, 2), text
+
+
+def _tumbling_box(rng: np.random.Generator):
+    kind = list(BOXES)[int(rng.integers(len(BOXES)))]
+    *edges, mass_range = BOXES[kind]
+    dims = dict(zip("abc", (rng.uniform(*r) for r in edges), strict=True))
+    moments = round_sig(np.diag(shape_tensor("box", rng.uniform(*mass_range), **dims)), 3)
+    principal_moments(*moments)  # a physical body (R4); guards the sampling ranges
+    angles = tuple(round_sig([rng.uniform(0.2, 2.9), rng.uniform(0.1, 6.2)], 3))
+    rates = round_sig(rng.uniform(-15.0, 15.0, size=3), 3)
+    I1, I2, I3 = moments
+    text = (
+        f"A {kind} is tossed in the air, tumbling about its centre of mass. Its principal moments "
+        f"are $I_1 = {latex_sig(I1, 3)}$ kg m² (`I1`), $I_2 = {latex_sig(I2, 3)}$ kg m² (`I2`) "
+        f"and $I_3 = {latex_sig(I3, 3)}$ kg m² (`I3`)."
+    )
+    params = {"I1": I1, "I2": I2, "I3": I3}
+    return f"A tumbling {kind}", params, (I1, I2, I3), angles, rates, (0, 1), text
+
+
+SCENES = (_toy_top, _tumbling_box)
+
+
+def _draw(rng: np.random.Generator) -> Variant | None:
+    scene = SCENES[int(rng.integers(len(SCENES)))]
+    title, params, moments, angles, rates, swap, text = scene(rng)
+    energy = _energy_answer(np.array(moments, dtype=float), angles, rates, swap)
+    if energy is None:
+        return None
+    names = ("beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot")
+    params = {k: float(v) for k, v in params.items()}
+    params |= dict(zip(names, map(float, (*angles, *rates)), strict=True))
+    units = {k: "kg m^2" for k in params if k.startswith("I")}
+    units |= {n: ("rad" if i < 2 else "rad/s") for i, n in enumerate(names)}
+    symbols = (r"\beta", r"\gamma", r"\dot\alpha", r"\dot\beta", r"\dot\gamma")
+    shown = ", ".join(f"${s} = {latex_sig(params[n], 3)}$ {units[n]} (`{n}`)"
+                      for s, n in zip(symbols, names, strict=True))
+    statement = (
+        f"{text} At one instant its Euler angles and their rates are {shown}.\n\n"
+        f"{_CONVENTION}\n\n"
+        "1. Find its rotational kinetic energy $T$ at that instant (relative tolerance "
+        "$10^{-3}$).\n"
+        f"2. {_EXPRESSION_TASK}"
+    )
+    return Variant(NAME, title, params, units, statement, (energy, _expression_answer()))
+
+
+def generate(rng: np.random.Generator) -> Variant:
+    """One variant, redrawn until every mistake is distinguishable from the key (R12, R13).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The only source of randomness.
+
+    Returns
+    -------
+    Variant
+        Answers ``T`` (J) and ``T_expr`` (expression, J).
+    """
+    for _ in range(MAX_TRIES):
+        variant = _draw(rng)
+        if variant is not None:
+            return variant
+    raise RuntimeError(f"{NAME}: no well-posed draw in {MAX_TRIES} tries")  # pragma: no cover

@@ -1,0 +1,191 @@
+"""Euler angles: the rotation matrix, a vector transformed body ↔ inertial, ω from the rates.
+
+The convention is ``physics.md``'s (R11): ``R = R_γ R_β R_α`` (α about the inertial z, β about
+the new y', γ about the body ê3; β from the upward vertical), and ``V' = R V`` maps inertial
+components to body components. The statement spells it out, with the three elementary matrices.
+
+A spinning top in the lab or a quadcopter drone, at one instant: Euler angles (rad) and their
+rates (rad/s). Answers:
+
+- ``R``: the whole matrix, as a flat list of its 9 entries row by row (R11);
+- either the lab components of a marker on the body, from its body coordinates (``Rᵀ r'``), or
+  the body components of a force given in lab components (``R F``) (R11);
+- ``omega_body``: the body components of ω from the Euler-angle rates (R12).
+
+Known mistakes: Rᵀ for R (inertial ↔ body confused), the product in the wrong order
+(``R_α R_β R_γ``), a calculator in degree mode (the radian values read as degrees), the rates
+taken as the components of ω, and ω given in lab components.
+
+Tolerance: ``rtol = 1e-3`` on the norm of each vector. Angles have 3 significant figures but
+are exact inputs; entries of R are O(1) and a student computing with numpy is exact to 1e-15.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from problems.answers import Answer, Mistake
+from problems.rounding import format_sig, latex_sig, round_sig
+from problems.variant import Variant
+from solver.euler_angles import omega_body, rotation_matrix, to_body, to_inertial
+
+NAME = "euler_rotation"
+TITLE = "Euler angles: rotation matrix and angular velocity"
+SUMMARY = "rotation matrix from Euler angles, a vector body ↔ lab, ω (body) from Euler-angle rates"
+RESULTS = ("R11", "R12")
+
+RTOL = 1e-3
+SEPARATION = 5.0  # key and mistakes at least this many tolerances apart
+MAX_TRIES = 200
+
+# Bodies: (β range rad, α̇ range, β̇ range, γ̇ range in rad/s).
+BODIES = {
+    "a toy top spinning on a table": ((0.1, 1.4), (1.0, 6.0), (-1.5, 1.5), (60.0, 150.0)),
+    "a quadcopter drone in a turn": ((0.05, 0.6), (-1.5, 1.5), (-1.0, 1.0), (-2.0, 2.0)),
+}
+
+_CONVENTION = r"""Conventions (as in the lecture): the body frame is obtained from the lab frame by
+turning through $\alpha$ about the lab $z$ axis, then through $\beta$ about the new $y'$ axis,
+then through $\gamma$ about the body axis $\hat e_3$; $\beta$ is measured from the upward
+vertical. A vector with lab components $V$ has body components $V' = R\,V$ with
+$R = R_\gamma R_\beta R_\alpha$,
+
+$$R_\alpha = \begin{pmatrix} \cos\alpha & \sin\alpha & 0 \\ -\sin\alpha & \cos\alpha & 0 \\
+0 & 0 & 1 \end{pmatrix},\quad
+R_\beta = \begin{pmatrix} \cos\beta & 0 & -\sin\beta \\ 0 & 1 & 0 \\
+\sin\beta & 0 & \cos\beta \end{pmatrix},\quad
+R_\gamma = \begin{pmatrix} \cos\gamma & \sin\gamma & 0 \\ -\sin\gamma & \cos\gamma & 0 \\
+0 & 0 & 1 \end{pmatrix}.$$
+
+Angles are in radians, rates in rad/s."""
+
+_TOLERANCE_NOTE = (
+    "Answers are graded to a relative tolerance of $10^{-3}$ on the length of each vector."
+)
+_DEGREE_MODE = (
+    "The angles are in radians, but this value comes from reading them as degrees (a calculator "
+    "in degree mode, or numpy.deg2rad applied to radians)."
+)
+_TRANSPOSE = (
+    "R maps lab components to body components, V' = R V; the inverse is the transpose, "
+    "V = Rᵀ V' (R11). This answer uses the wrong one of the two."
+)
+
+
+def _answer(name, key, mistakes, unit, description) -> Answer | None:
+    """A vector answer, or None if a mistake is within SEPARATION tolerances of the key or of
+    another mistake (the draw is then rejected)."""
+    values = [np.ravel(np.asarray(v, float)) for v in (key, *(m[1] for m in mistakes))]
+    tol = SEPARATION * RTOL * np.linalg.norm(values[0])
+    if any(np.linalg.norm(a - b) <= tol for i, a in enumerate(values) for b in values[i + 1:]):
+        return None
+    return Answer(
+        name, "vector", values[0].tolist(), unit=unit, rtol=RTOL, description=description,
+        mistakes=tuple(Mistake(n, v.tolist(), f) for (n, _, f), v in zip(mistakes, values[1:],
+                                                                          strict=True)),
+    )
+
+
+def _matrix_answer(alpha, beta, gamma) -> Answer | None:
+    R = rotation_matrix(alpha, beta, gamma)
+    reversed_order = rotation_matrix(gamma, beta, alpha)  # R_α R_β R_γ: α and γ trade places
+    return _answer("R", R, [
+        ("transpose", R.T, "This is Rᵀ, which maps body components to lab components. "
+         "R = R_γ R_β R_α maps lab components V to body components V' = R V (R11)."),
+        ("reversed_order", reversed_order, "The product is in the wrong order: the first "
+         "rotation (α) acts first on V, so it stands rightmost, R = R_γ R_β R_α."),
+        ("degree_mode", rotation_matrix(*np.radians([alpha, beta, gamma])), _DEGREE_MODE),
+    ], "", "R, its 9 entries row by row: [R11, R12, R13, R21, …, R33]")
+
+
+def _vector_answer(rng, alpha, beta, gamma) -> tuple[Answer | None, dict, dict, str]:
+    """Either a marker body → lab, or a force lab → body: answer, params, units, text."""
+    R = rotation_matrix(alpha, beta, gamma)
+    R_deg = rotation_matrix(*np.radians([alpha, beta, gamma]))
+    if rng.integers(2):
+        r_body = round_sig(rng.uniform(-0.08, 0.08, size=3), 2)
+        r_lab = to_inertial(R, r_body)
+        answer = _answer("r_lab", r_lab, [
+            ("transpose", to_body(R, r_body), _TRANSPOSE),
+            ("degree_mode", to_inertial(R_deg, r_body), _DEGREE_MODE),
+        ], "m", "lab components of the marker's position")
+        text = ("A marker painted on the body sits at body coordinates "
+                f"$\\mathbf r' = ({', '.join(format_sig(x, 2) for x in r_body)})$ m (`r_body`) "
+                "relative to the origin (the fixed tip or centre). Find its lab coordinates "
+                "$\\mathbf r$.")
+        return answer, {"r_body": r_body.tolist()}, {"r_body": "m"}, text
+    F_lab = round_sig(rng.uniform(-5.0, 5.0, size=3), 3)
+    F_body = to_body(R, F_lab)
+    answer = _answer("F_body", F_body, [
+        ("transpose", to_inertial(R, F_lab), _TRANSPOSE),
+        ("degree_mode", to_body(R_deg, F_lab), _DEGREE_MODE),
+    ], "N", "body components of the force")
+    text = ("A force with lab components "
+            f"$\\mathbf F = ({', '.join(format_sig(x, 3) for x in F_lab)})$ N (`F_lab`) acts on "
+            "the body. Find its body components $\\mathbf F'$.")
+    return answer, {"F_lab": F_lab.tolist()}, {"F_lab": "N"}, text
+
+
+def _omega_answer(alpha, beta, gamma, rates) -> Answer | None:
+    w = omega_body(beta, gamma, *rates)
+    return _answer("omega_body", w, [
+        ("rates_as_components", rates, "The Euler-angle rates are not the components of ω: "
+         "ω = α̇ ẑ + β̇ ê'₂ + γ̇ ê₃ is a sum along three axes that are not orthogonal (R12)."),
+        ("lab_components", to_inertial(rotation_matrix(alpha, beta, gamma), w),
+         "These are the lab components of ω; the question asks for its body components "
+         "(ω₁, ω₂, ω₃) along ê₁, ê₂, ê₃ (R12)."),
+        ("degree_mode", omega_body(*np.radians([beta, gamma]), *rates), _DEGREE_MODE),
+    ], "rad/s", "body components (ω1, ω2, ω3) of the angular velocity")
+
+
+def _draw(rng: np.random.Generator) -> Variant | None:
+    body = list(BODIES)[int(rng.integers(len(BODIES)))]
+    beta_range, *rate_ranges = BODIES[body]
+    alpha, gamma = round_sig(rng.uniform(0.1, 2 * np.pi - 0.1, size=2), 3)
+    beta = round_sig(rng.uniform(*beta_range), 3)
+    rates = np.array([round_sig(rng.uniform(*r), 3) for r in rate_ranges])
+    vector, vector_params, vector_units, vector_text = _vector_answer(rng, alpha, beta, gamma)
+    answers = (_matrix_answer(alpha, beta, gamma), vector,
+               _omega_answer(alpha, beta, gamma, rates))
+    if None in answers:
+        return None
+    names = ("alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot")
+    params = dict(zip(names, map(float, (alpha, beta, gamma, *rates)), strict=True))
+    params |= vector_params
+    units = {n: ("rad" if i < 3 else "rad/s") for i, n in enumerate(names)} | vector_units
+    symbols = (r"\alpha", r"\beta", r"\gamma", r"\dot\alpha", r"\dot\beta", r"\dot\gamma")
+    shown = ", ".join(
+        f"${s} = {latex_sig(params[n], 3)}$ {units[n]} (`{n}`)"
+        for s, n in zip(symbols, names, strict=True)
+    )
+    statement = (
+        f"The orientation of {body} is described by Euler angles. At one instant: {shown}.\n\n"
+        f"{_CONVENTION}\n\n"
+        "1. Find the rotation matrix $R$; give its nine entries row by row, "
+        "$[R_{11}, R_{12}, R_{13}, R_{21}, \\dots, R_{33}]$ (e.g. `R.ravel()`).\n"
+        f"2. {vector_text}\n"
+        "3. Find the body components $(\\omega_1, \\omega_2, \\omega_3)$ of the angular "
+        "velocity.\n\n"
+        f"{_TOLERANCE_NOTE}"
+    )
+    return Variant(NAME, f"Euler angles of {body}", params, units, statement, answers)
+
+
+def generate(rng: np.random.Generator) -> Variant:
+    """One variant, redrawn until every mistake is distinguishable from the key (R11, R12).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The only source of randomness.
+
+    Returns
+    -------
+    Variant
+        Answers ``R`` (9 entries), ``r_lab`` (m) or ``F_body`` (N), and ``omega_body`` (rad/s).
+    """
+    for _ in range(MAX_TRIES):
+        variant = _draw(rng)
+        if variant is not None:
+            return variant
+    raise RuntimeError(f"{NAME}: no well-posed draw in {MAX_TRIES} tries")  # pragma: no cover

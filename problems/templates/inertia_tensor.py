@@ -1,0 +1,242 @@
+"""Inertia tensor of point masses or of a uniform box about a corner; principal moments and axes.
+
+Two scenes, drawn at random:
+
+``point_masses``
+    Three or four small weights (20–250 g) fixed on a light rigid frame, at positions on a
+    1 cm grid within 15 cm of the pivot O. Tensor about O by R2's sum.
+``box_corner``
+    A uniform book, smartphone or satellite solar panel (edges ``a, b, c`` along x, y, z) turning
+    about one of its corners: the box's tensor about its centre of mass (R2's closed form)
+    shifted to the corner by the parallel-axis theorem (R2).
+
+Answers: the diagonal ``(I_xx, I_yy, I_zz)`` and the products ``(I_xy, I_xz, I_yz)`` of the
+tensor, the principal moments in ascending order (R4), and the unit principal axis of the
+largest moment (R4). An eigenvector is defined only up to sign, so the question fixes the sign:
+the axis is asked *with a positive z component*, and draws whose axis lies within ~12° of the xy
+plane are rejected (there the sign convention would hinge on a small, rounding-sensitive
+number). Draws with the two largest moments within 5 % are rejected too: the axis of a nearly
+degenerate pair is ill-conditioned (it turns by ~δI/(I3 − I2) under a change δI).
+
+Tolerance: ``rtol = 1e-3`` on every answer (vectors by norm, see :mod:`problems.answers`). The
+parameters have 2–3 significant figures but are *exact* inputs (the key is computed from the
+displayed values), so a student who keeps 4 or more figures in the working lands within 1e-3;
+one who rounds intermediate results to 3 figures may not, and the statement says so.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from problems.answers import Answer, Mistake
+from problems.rounding import format_sig, latex_sig, round_sig
+from problems.variant import Variant
+from solver.inertia import parallel_axis, point_mass_tensor, principal_axes, shape_tensor
+
+NAME = "inertia_tensor"
+TITLE = "Inertia tensor and principal axes"
+SUMMARY = "inertia tensor of point masses or of a box about its corner; principal moments and axis"
+RESULTS = ("R2", "R4")
+
+RTOL = 1e-3
+MIN_GAP = 0.05  # reject (I3 − I2)/I3 below this: the largest axis would be ill-conditioned
+MIN_AXIS_Z = 0.2  # reject |n_z| below this: the sign convention n_z > 0 would be fragile
+SEPARATION = 5.0  # key and mistakes at least this many tolerances apart (no overlapping balls)
+MAX_TRIES = 200
+
+# Uniform boxes (a, b, c ranges in m, mass range in kg): real objects' sizes.
+BOXES = {
+    "book": ((0.20, 0.30), (0.13, 0.21), (0.015, 0.05), (0.4, 1.5)),
+    "smartphone": ((0.14, 0.17), (0.065, 0.08), (0.007, 0.01), (0.14, 0.22)),
+    "solar panel": ((1.5, 2.5), (0.8, 1.2), (0.02, 0.04), (8.0, 20.0)),
+}
+
+_AXIS_NOTE = (
+    "An eigenvector is defined only up to its sign: give the **unit** vector with a **positive "
+    "$z$ component**."
+)
+_TOLERANCE_NOTE = (
+    "Answers are graded to a relative tolerance of $10^{-3}$ (vectors: on their length); keep "
+    "at least four significant figures in your working."
+)
+
+
+def _positive_z(v: np.ndarray) -> np.ndarray:
+    """The sign convention of the question: the unit vector ``±v`` with a positive z component."""
+    return v if v[2] > 0 else -v
+
+
+def _separated(values: list[np.ndarray], tol: float) -> bool:
+    """Every pair of ``values`` (key first, then mistakes) further apart than ``tol``."""
+    return all(
+        np.linalg.norm(np.subtract(a, b)) > tol
+        for i, a in enumerate(values)
+        for b in values[i + 1:]
+    )
+
+
+def _vector_answer(name, key, mistakes, unit, description) -> Answer | None:
+    """A vector answer, or None when a mistake is within SEPARATION tolerances of the key or of
+    another mistake (the draw is then rejected: every listed mistake must be recognisable)."""
+    key = np.asarray(key, dtype=float)
+    values = [key, *(np.asarray(v, dtype=float) for _, v, _ in mistakes)]
+    if not _separated(values, SEPARATION * RTOL * np.linalg.norm(key)):
+        return None
+    return Answer(
+        name, "vector", key.tolist(), unit=unit, rtol=RTOL, description=description,
+        mistakes=tuple(Mistake(n, np.asarray(v, float).tolist(), f) for n, v, f in mistakes),
+    )
+
+
+def _tensor_answers(tensor: np.ndarray, mistaken: dict[str, np.ndarray]) -> list[Answer | None]:
+    """Diagonal, products of inertia, principal moments and largest axis, with their mistakes.
+
+    ``mistaken`` maps a mistake name to the tensor a student with that mistake gets; the
+    mistakes of each answer are derived from it by the same (correct) later steps.
+    """
+    iu = (np.array([0, 0, 1]), np.array([1, 2, 2]))  # (xy, xz, yz)
+    moments, axes = principal_axes(tensor)
+    diag_mistakes = [(n, np.diag(t), f) for n, (t, f) in mistaken.items() if n != "product_sign"]
+    off_mistakes = [(n, t[iu], f) for n, (t, f) in mistaken.items() if n != "axis_distance"]
+    moment_mistakes = [(n, principal_axes(t)[0], f) for n, (t, f) in mistaken.items()
+                       if n != "product_sign"]
+    moment_mistakes.append((
+        "diagonal_entries", np.sort(np.diag(tensor)),
+        "These are the diagonal entries of the tensor. The principal moments are its "
+        "eigenvalues (R4); they equal the diagonal entries only when the products of inertia "
+        "vanish.",
+    ))
+    axis = _positive_z(axes[:, 2])
+    axis_mistakes = [
+        ("sign_convention", -axis, "Right axis, wrong sign: the question asks for the unit "
+         "vector with a positive z component."),
+        ("smallest_axis", _positive_z(axes[:, 0]), "This is the axis of the *smallest* principal "
+         "moment. numpy.linalg.eigh returns the eigenvalues in ascending order, so the largest "
+         "moment's axis is the *last column* of the eigenvector matrix."),
+    ]
+    return [
+        _vector_answer("I_diag", np.diag(tensor), diag_mistakes, "kg m^2",
+                       "diagonal (I_xx, I_yy, I_zz) of the inertia tensor about O"),
+        _vector_answer("I_offdiag", tensor[iu], off_mistakes, "kg m^2",
+                       "products of inertia (I_xy, I_xz, I_yz) about O"),
+        _vector_answer("moments", moments, moment_mistakes, "kg m^2",
+                       "principal moments about O, ascending"),
+        _vector_answer("axis_max", axis, axis_mistakes, "",
+                       "unit principal axis of the largest moment, z component > 0"),
+    ]
+
+
+def _well_posed(tensor: np.ndarray) -> bool:
+    moments, axes = principal_axes(tensor)
+    gap = (moments[2] - moments[1]) / moments[2]
+    return moments[0] > 0 and gap > MIN_GAP and abs(axes[2, 2]) > MIN_AXIS_Z
+
+
+_PRODUCT_SIGN = (
+    "Check the sign of the products of inertia: I_ij = −Σ m x_i x_j for i ≠ j (R2), with a "
+    "minus sign."
+)
+
+
+def _point_masses(rng: np.random.Generator) -> Variant | None:
+    n = int(rng.integers(3, 5))
+    masses = round_sig(rng.uniform(0.02, 0.25, size=n), 3)
+    positions = round_sig(rng.integers(-15, 16, size=(n, 3)) / 100.0, 2)
+    radii = np.linalg.norm(positions, axis=1)
+    if np.min(radii) < 0.03 or len(np.unique(positions, axis=0)) < n:
+        return None  # a weight at the pivot, or two weights in one place
+    tensor = point_mass_tensor(masses, positions)
+    if not _well_posed(tensor):
+        return None
+    mistaken = {
+        "product_sign": (2 * np.diag(np.diag(tensor)) - tensor, _PRODUCT_SIGN),
+        "axis_distance": (
+            np.diag(np.einsum("p,pi->i", masses, positions**2)) + tensor - np.diag(np.diag(tensor)),
+            "I_xx is Σ m (y² + z²), the squared distance *from* the x axis (R2), not Σ m x².",
+        ),
+    }
+    answers = _tensor_answers(tensor, mistaken)
+    if None in answers:
+        return None
+    params = {f"m{k}": float(m) for k, m in enumerate(masses, 1)}
+    params |= {f"r{k}": r.tolist() for k, r in enumerate(positions, 1)}
+    units = {name: ("kg" if name.startswith("m") else "m") for name in params}
+    rows = "\n".join(
+        f"| {k} | $m_{k} = {latex_sig(m, 3)}$ kg (`m{k}`) | "
+        f"$\\mathbf r_{k} = ({', '.join(format_sig(x, 2) for x in r)})$ m (`r{k}`) |"
+        for k, (m, r) in enumerate(zip(masses, positions, strict=True), 1)
+    )
+    statement = (
+        f"{n} small weights, which may be treated as point masses, are fixed on a light rigid "
+        "frame that turns about a pivot $O$. Their masses and their positions relative to $O$ "
+        "(components along the frame's axes $x, y, z$) are:\n\n"
+        "| weight | mass | position |\n| --- | --- | --- |\n"
+        f"{rows}\n\n"
+        "Find the inertia tensor of the weights about $O$ in the frame's axes: its diagonal "
+        "$(I_{xx}, I_{yy}, I_{zz})$ and its products of inertia $(I_{xy}, I_{xz}, I_{yz})$. "
+        "Then find the principal moments about $O$, in ascending order, and the principal axis "
+        f"of the largest one. {_AXIS_NOTE}\n\n{_TOLERANCE_NOTE}"
+    )
+    return Variant(NAME, "Inertia tensor of point masses", params, units, statement,
+                   tuple(answers))
+
+
+def _box_corner(rng: np.random.Generator) -> Variant | None:
+    kind = list(BOXES)[int(rng.integers(len(BOXES)))]
+    *edges, mass_range = BOXES[kind]
+    a, b, c = (round_sig(rng.uniform(*r), 3) for r in edges)
+    M = round_sig(rng.uniform(*mass_range), 3)
+    tensor_cm = shape_tensor("box", M, a=a, b=b, c=c)
+    tensor = parallel_axis(tensor_cm, M, [a / 2, b / 2, c / 2])
+    if not _well_posed(tensor):
+        return None
+    mistaken = {
+        "parallel_axis_forgotten": (
+            tensor_cm,
+            "This is the tensor about the centre of mass. About the corner, add the "
+            "parallel-axis term M (d² δ_ij − d_i d_j), d = (a/2, b/2, c/2) (R2).",
+        ),
+        "product_sign": (2 * np.diag(np.diag(tensor)) - tensor, _PRODUCT_SIGN),
+    }
+    answers = _tensor_answers(tensor, mistaken)
+    if None in answers:
+        return None
+    params = {"M": M, "a": a, "b": b, "c": c}
+    units = {"M": "kg", "a": "m", "b": "m", "c": "m"}
+    statement = (
+        f"A {kind} is modelled as a uniform rectangular box of mass $M = {latex_sig(M, 3)}$ kg "
+        f"(`M`) with edges $a = {latex_sig(a, 3)}$ m (`a`), $b = {latex_sig(b, 3)}$ m (`b`) and "
+        f"$c = {latex_sig(c, 3)}$ m (`c`). It turns about one of its corners, $O$. Take axes "
+        "$x, y, z$ from $O$ along the edges $a, b, c$, so that the box fills "
+        "$0 \\le x \\le a$, $0 \\le y \\le b$, $0 \\le z \\le c$.\n\n"
+        "Find the inertia tensor of the box about $O$ in these axes: its diagonal "
+        "$(I_{xx}, I_{yy}, I_{zz})$ and its products of inertia $(I_{xy}, I_{xz}, I_{yz})$. "
+        "Then find the principal moments about $O$, in ascending order, and the principal axis "
+        f"of the largest one. {_AXIS_NOTE}\n\n{_TOLERANCE_NOTE}"
+    )
+    return Variant(NAME, f"Inertia tensor of a {kind} about a corner", params, units, statement,
+                   tuple(answers))
+
+
+SCENES = (_point_masses, _box_corner)
+
+
+def generate(rng: np.random.Generator) -> Variant:
+    """One variant: a scene drawn from :data:`SCENES`, redrawn until it is well posed (R2, R4).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The only source of randomness (the variant is a pure function of its state).
+
+    Returns
+    -------
+    Variant
+        Answers ``I_diag``, ``I_offdiag``, ``moments`` (kg m²) and ``axis_max`` (unit vector).
+    """
+    scene = SCENES[int(rng.integers(len(SCENES)))]
+    for _ in range(MAX_TRIES):
+        variant = scene(rng)
+        if variant is not None:
+            return variant
+    raise RuntimeError(f"{NAME}: no well-posed draw in {MAX_TRIES} tries")  # pragma: no cover

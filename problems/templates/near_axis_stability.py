@@ -1,0 +1,322 @@
+"""Spin of an asymmetric body near a principal axis (R9): the tennis-racket theorem.
+
+A phone, a book, a brick, a tennis racket or a T-handle is tossed spinning about one of its
+principal axes with a small wobble. Asked: for each principal axis, whether steady spin about
+it is stable (booleans), and for the axis actually spun about the linear (R9) rate: the angular
+frequency ``√(Ω1Ω2)`` of the small oscillation if stable, the growth rate ``√(−Ω1Ω2)`` if not.
+
+The moments are labelled by named body axes, *not* necessarily in increasing order, so a student
+must find the intermediate one. They come from :mod:`solver.inertia`: uniform boxes, and for
+the racket (a solid-cylinder handle and a disc head) and the T-handle (two solid cylinders)
+composite bodies combined with the parallel-axis theorem. :func:`draw_body` is shared with
+:mod:`problems.templates.asymmetric_free_top`.
+
+Rejected draws (resampled): nearly degenerate moments (two within ``MIN_GAP`` of each other,
+where stability hangs on the rounding and rates are tiny); for a stable spin, a wobble large
+enough that the exact (R10) period differs from the linear one by more than ``LINEAR_RTOL``;
+known mistakes within five tolerances of the key or of one another.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from problems.answers import Answer, Mistake, grade
+from problems.rounding import latex_sig, round_sig
+from problems.variant import Variant
+from solver.asymmetric_top import asymmetric_top_period
+from solver.inertia import parallel_axis, shape_tensor
+from solver.parameters import ParameterError
+from solver.torque_free import near_axis_stability
+
+NAME = "near_axis_stability"
+TITLE = "Spin about a principal axis: which axes are stable?"
+SUMMARY = "asymmetric top near a principal axis: stability of each axis, wobble frequency or growth"
+RESULTS = ("R7", "R9")
+
+SIG = 3
+"""Significant figures of ω(0) and of the body's dimensions."""
+SIG_MOMENTS = 4
+"""Moments get one more: a phone is nearly a flat plate, whose largest moment is within 0.5 % of
+the sum of the other two (the triangle inequality's edge), which 3-figure rounding can cross."""
+RTOL = 1e-3
+"""The rate is one square root of 3-figure data: any careful computation agrees to ~1e-12."""
+MARGIN = 5.0
+"""Known mistakes must lie this many tolerances from the key and from each other."""
+MIN_GAP = 0.08
+"""Least relative difference |Ii − Ij|/max(I) between any two moments."""
+WOBBLE = (0.005, 0.03)
+"""Transverse components of ω(0), as fractions of the spin."""
+LINEAR_RTOL = 0.01
+"""A stable wobble must be small enough that R9's frequency is within 1 % of the exact one."""
+MAX_ATTEMPTS = 1000
+
+
+@dataclass(frozen=True)
+class Body:
+    """A body and its three principal axes, ``axes[i]`` naming the axis whose moment is
+    ``moments[i]`` (kg m², about the centre of mass)."""
+
+    noun: str
+    description: str
+    axes: tuple[str, str, str]
+    moments: tuple[float, float, float]
+    spin: tuple[float, float]  # rad/s
+
+
+def _u(rng: np.random.Generator, low: float, high: float) -> float:
+    return round_sig(rng.uniform(low, high), SIG)
+
+
+def _box(rng: np.random.Generator, noun: str, mass: tuple[float, float],
+         edges: tuple[tuple[float, float], ...], spin: tuple[float, float]) -> Body:
+    """A uniform box (R2); ``edges`` are the ranges of length, width and thickness (m)."""
+    m = _u(rng, *mass)
+    a, b, c = (_u(rng, *e) for e in edges)
+    tensor = shape_tensor("box", m, a=a, b=b, c=c)
+    description = (f"a uniform box of mass ${latex_sig(m, SIG)}$ kg, "
+                   f"${latex_sig(a, SIG)} \\times {latex_sig(b, SIG)} \\times "
+                   f"{latex_sig(c, SIG)}$ m")
+    axes = ("along its length", "along its width", "perpendicular to its largest face")
+    return Body(noun, description, axes, tuple(np.diag(tensor).tolist()), spin)
+
+
+def _racket(rng: np.random.Generator) -> Body:
+    """Handle and shaft (a solid cylinder along x) and head (a disc in the xy plane, the plane
+    of the strings), joined end to rim; moments about the common centre of mass (R2)."""
+    m_h, r_h, l_h = _u(rng, 0.09, 0.12), _u(rng, 0.013, 0.016), _u(rng, 0.30, 0.36)
+    m_d, r_d = _u(rng, 0.16, 0.20), _u(rng, 0.12, 0.14)
+    along_x = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])  # z ↔ x
+    handle = along_x @ shape_tensor("solid_cylinder", m_h, radius=r_h, height=l_h) @ along_x
+    head = shape_tensor("disc", m_d, radius=r_d)
+    x_h, x_d = l_h / 2, l_h + r_d
+    x_cm = (m_h * x_h + m_d * x_d) / (m_h + m_d)
+    tensor = (parallel_axis(handle, m_h, [x_h - x_cm, 0.0, 0.0])
+              + parallel_axis(head, m_d, [x_d - x_cm, 0.0, 0.0]))
+    description = (f"a handle of mass ${latex_sig(m_h, SIG)}$ kg and length "
+                   f"${latex_sig(l_h, SIG)}$ m ending in a round head of mass "
+                   f"${latex_sig(m_d, SIG)}$ kg and radius ${latex_sig(r_d, SIG)}$ m")
+    axes = ("along the handle", "in the plane of the strings, across the handle",
+            "perpendicular to the strings")
+    return Body("a tennis racket", description, axes, tuple(np.diag(tensor).tolist()),
+                (4.0, 12.0))
+
+
+def _t_handle(rng: np.random.Generator) -> Body:
+    """A T-handle like Dzhanibekov's wing nut: a crossbar (solid cylinder along x) with a stem
+    (solid cylinder along y) fixed to its middle; moments about the common centre of mass."""
+    m_c, r_c, l_c = _u(rng, 0.03, 0.06), _u(rng, 0.006, 0.01), _u(rng, 0.08, 0.12)
+    m_s, r_s, l_s = _u(rng, 0.015, 0.035), _u(rng, 0.005, 0.008), _u(rng, 0.04, 0.07)
+    z_to_x = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
+    z_to_y = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]])
+    bar = z_to_x @ shape_tensor("solid_cylinder", m_c, radius=r_c, height=l_c) @ z_to_x
+    stem = z_to_y @ shape_tensor("solid_cylinder", m_s, radius=r_s, height=l_s) @ z_to_y
+    y_s = r_c + l_s / 2  # the stem starts at the crossbar's surface
+    y_cm = m_s * y_s / (m_c + m_s)
+    tensor = (parallel_axis(bar, m_c, [0.0, -y_cm, 0.0])
+              + parallel_axis(stem, m_s, [0.0, y_s - y_cm, 0.0]))
+    description = (f"a crossbar of mass ${latex_sig(m_c, SIG)}$ kg, length "
+                   f"${latex_sig(l_c, SIG)}$ m and radius ${latex_sig(r_c, SIG)}$ m with a stem "
+                   f"of mass ${latex_sig(m_s, SIG)}$ kg, length ${latex_sig(l_s, SIG)}$ m and "
+                   f"radius ${latex_sig(r_s, SIG)}$ m fixed to its middle")
+    axes = ("along the crossbar", "along the stem", "perpendicular to crossbar and stem")
+    return Body("a T-handle", description, axes, tuple(np.diag(tensor).tolist()), (5.0, 20.0))
+
+
+def draw_body(rng: np.random.Generator) -> Body:
+    """A random everyday asymmetric body: smartphone, book, brick, tennis racket or T-handle.
+
+    Dimensions and masses are drawn from real objects' ranges and rounded to ``SIG`` figures;
+    the moments (unrounded) are computed from the rounded dimensions by :mod:`solver.inertia`.
+    """
+    kind = rng.integers(5)
+    if kind == 0:
+        return _box(rng, "a smartphone", (0.14, 0.22),
+                    ((0.14, 0.165), (0.065, 0.078), (0.007, 0.009)), (5.0, 20.0))
+    if kind == 1:
+        return _box(rng, "a book", (0.3, 1.2), ((0.20, 0.28), (0.13, 0.20), (0.015, 0.05)),
+                    (3.0, 12.0))
+    if kind == 2:
+        return _box(rng, "a brick", (2.0, 3.0), ((0.20, 0.23), (0.09, 0.11), (0.05, 0.075)),
+                    (3.0, 10.0))
+    if kind == 3:
+        return _racket(rng)
+    return _t_handle(rng)
+
+
+@dataclass(frozen=True)
+class Draw:
+    """Displayed (rounded) values: axis ``i + 1`` is ``body.axes[order[i]]``."""
+
+    body: Body
+    order: tuple[int, int, int]
+    moments: tuple[float, float, float]  # I1, I2, I3
+    spin_axis: int  # 1, 2 or 3
+    omega0: tuple[float, float, float]
+
+
+def _draw(rng: np.random.Generator) -> Draw:
+    body = draw_body(rng)
+    order = tuple(int(i) for i in rng.permutation(3))
+    moments = tuple(round_sig([body.moments[i] for i in order], SIG_MOMENTS).tolist())
+    spin_axis = int(rng.integers(1, 4))
+    wobble = rng.uniform(*WOBBLE, size=3) * rng.choice([-1.0, 1.0], size=3)
+    spin = rng.uniform(*body.spin)
+    omega = spin * wobble
+    omega[spin_axis - 1] = spin
+    return Draw(body, order, moments, spin_axis, tuple(round_sig(omega, SIG).tolist()))
+
+
+def _well_posed(d: Draw) -> bool:
+    """A rigid body's moments, far from degenerate; a stable wobble within R9's linear regime."""
+    moments = np.array(d.moments)
+    if 2 * moments.max() > moments.sum():  # triangle inequality crossed by the rounding
+        return False
+    gaps = np.abs(moments[:, None] - moments[None, :])[np.triu_indices(3, 1)]
+    if gaps.min() < MIN_GAP * moments.max():
+        return False
+    r9 = near_axis_stability(*d.moments, d.omega0[d.spin_axis - 1], axis=d.spin_axis)
+    if not r9["stable"]:
+        return True  # the growth rate describes the start of the flip, however it ends
+    exact = asymmetric_top_period(*d.moments, d.omega0)
+    return abs(float(exact) * float(r9["rate"]) / (2 * math.pi) - 1) < LINEAR_RTOL
+
+
+def _stability_answers(d: Draw) -> list[Answer]:
+    answers = []
+    for axis in (1, 2, 3):
+        stable = bool(near_axis_stability(*d.moments, 1.0, axis=axis)["stable"])
+        if stable:
+            why = (f"Spin about ê{axis} is stable: its moment is the largest or the smallest, so "
+                   "Ω1Ω2 > 0 in R9 (small deviations oscillate).")
+        else:
+            why = (f"Spin about ê{axis} is unstable: its moment is the intermediate one, so "
+                   "Ω1Ω2 < 0 in R9 (small deviations grow exponentially).")
+        answers.append(Answer(
+            f"stable{axis}", "boolean", stable, points=0.5,
+            mistakes=(Mistake("wrong_stability", not stable, why),),
+            description=f"is steady spin about ê{axis} stable?",
+        ))
+    return answers
+
+
+def _rate_answer(d: Draw) -> Answer:
+    s = d.spin_axis
+    spin = d.omega0[s - 1]
+    r9 = near_axis_stability(*d.moments, spin, axis=s)
+    rate, stable = float(r9["rate"]), bool(r9["stable"])
+    O1, O2 = abs(float(r9["Omega1"])), abs(float(r9["Omega2"]))
+    mistakes = [
+        Mistake("hz", rate / (2 * math.pi), "That is the rate divided by 2π; give it in rad/s "
+                "(an angular frequency)." if stable else "A growth rate has no factor 2π: "
+                "perturbations grow as exp(√(−Ω1Ω2) t)."),
+        Mistake("period", 2 * math.pi / rate, "That is the period 2π/√(Ω1Ω2); the angular "
+                "frequency is asked.") if stable else
+        Mistake("e_folding_time", 1 / rate, "That is the e-folding time 1/√(−Ω1Ω2); the "
+                "growth rate (1/s) is asked."),
+        Mistake("Omega1_only", O1, "R9's rate is the geometric mean √|Ω1Ω2| of both "
+                "coefficients, not one of them."),
+        Mistake("Omega2_only", O2, "R9's rate is the geometric mean √|Ω1Ω2| of both "
+                "coefficients, not one of them."),
+    ]
+    if s != 3:
+        wrong = float(near_axis_stability(*d.moments, spin, axis=3)["rate"])
+        mistakes.append(Mistake("axis3_formula", wrong, f"The spin is about ê{s}, not ê3: "
+                                "relabel R9's axes cyclically so that the spin axis plays "
+                                "the role of ê3."))
+    unit = "rad/s" if stable else "1/s"
+    what = "angular frequency of the wobble" if stable else "growth rate of the deviation"
+    return Answer("rate", "scalar", rate, unit=unit, rtol=RTOL, mistakes=tuple(mistakes),
+                  description=f"{what} for the spin about ê{s} (linear, R9)")
+
+
+def _distinct(answer: Answer) -> bool:
+    """Every mistake lies ``MARGIN`` tolerances from the key and from every other mistake."""
+    try:
+        wide = replace(answer, rtol=MARGIN * answer.rtol, atol=MARGIN * answer.atol)
+    except ParameterError:  # a mistake within the widened tolerance of the key
+        return False
+    return all(grade(wide, m.value).mistake == m.name for m in wide.mistakes)
+
+
+def _statement(d: Draw) -> str:
+    b, s = d.body, d.spin_axis
+    axes = "; ".join(
+        f"$\\hat e_{i}$ {b.axes[d.order[i - 1]]}, "
+        f"$I_{i} = {latex_sig(d.moments[i - 1], SIG_MOMENTS)}$"
+        f" kg m²" for i in (1, 2, 3)
+    )
+    w = ",\\ ".join(latex_sig(x, SIG) for x in d.omega0)
+    return (
+        f"{b.noun[0].upper()}{b.noun[1:]} ({b.description}) is tossed into the air spinning "
+        "about one of its principal axes; no torque acts about its centre of mass (ignore "
+        f"air). Its principal axes and moments about the centre of mass are: {axes} "
+        "(`I1`, `I2`, `I3`; use them as given). The labels follow the body's axes: the "
+        "moments are **not** necessarily in increasing order. The frame "
+        "$(\\hat e_1, \\hat e_2, \\hat e_3)$ is right-handed.\n\n"
+        f"It is spun mainly about $\\hat e_{s}$: at $t = 0$ the body-frame components of the "
+        f"angular velocity are $(\\omega_1, \\omega_2, \\omega_3) = ({w})$ rad/s (`omega0`).\n\n"
+        "1. `stable1`, `stable2`, `stable3`: for each principal axis $\\hat e_k$, is a steady "
+        "spin about $\\hat e_k$ stable against small perturbations (`True`) or unstable "
+        "(`False`)?\n"
+        f"2. `rate`: for the spin about $\\hat e_{s}$ given here, in the linear "
+        "(small-perturbation) approximation of Euler's equations: if the spin is stable, the "
+        "angular frequency (rad/s) at which the small components of $\\boldsymbol\\omega$ "
+        "oscillate; if it is unstable, the rate $\\gamma$ (1/s, positive) at which they grow, "
+        "as $e^{\\gamma t}$."
+    )
+
+
+def _variant(d: Draw) -> Variant | None:
+    if not _well_posed(d):
+        return None
+    try:
+        answers = (*_stability_answers(d), _rate_answer(d))
+    except ParameterError as err:
+        if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
+            raise
+        return None  # a mistake indistinguishable from the key
+    if not all(_distinct(a) for a in answers):
+        return None
+    I1, I2, I3 = d.moments
+    return Variant(
+        family=NAME,
+        title=TITLE,
+        params={"I1": I1, "I2": I2, "I3": I3, "omega0": list(d.omega0)},
+        param_units={"I1": "kg m^2", "I2": "kg m^2", "I3": "kg m^2", "omega0": "rad/s"},
+        statement=_statement(d),
+        answers=answers,
+    )
+
+
+def generate(rng: np.random.Generator) -> Variant:
+    """One variant of spin near a principal axis (R9), from ``rng`` only.
+
+    Parameters are rounded to the figures shown and every answer is computed from the rounded
+    values by :mod:`solver.torque_free` (the linear-regime check uses the exact R10 period of
+    :mod:`solver.asymmetric_top`). Ill-posed draws are resampled.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The only source of randomness; the same generator state gives the same variant.
+
+    Returns
+    -------
+    Variant
+        Parameters (SI), statement and answers of one student's question.
+
+    Raises
+    ------
+    RuntimeError
+        No acceptable draw in ``MAX_ATTEMPTS`` (a template bug: about one draw in a few is
+        rejected).
+    """
+    for _ in range(MAX_ATTEMPTS):
+        variant = _variant(_draw(rng))
+        if variant is not None:
+            return variant
+    raise RuntimeError(f"{NAME}: no acceptable draw in {MAX_ATTEMPTS} attempts")

@@ -1,0 +1,289 @@
+"""Torque-free symmetric top (R8): a coin, a plate, a puck, a can or a rolling pin in free flight.
+
+The body (``I1 = I2`` transverse, ``I3`` about the symmetry axis ``ê3``) is tossed with ω
+mostly along ``ê3`` and a wobble. Asked: the body-frame precession rate
+``Ω = ω3 (I3 − I1)/I1`` (signed) and its period ``2π/|Ω|``, ω(t) in the body frame at a
+given time, the space-frame precession rate of the symmetry axis about L, ``L/I1``, and the
+half-angle θ of the cone ``ê3`` sweeps around L (``tan θ = I1 |ω⊥| / (I3 ω3)``).
+
+Oblate bodies (coin, plate, puck: ``I3 > I1``, Ω > 0) and prolate ones (can, rolling pin:
+``I3 < I1``, Ω < 0) are both drawn. Moments come from :func:`solver.inertia.shape_tensor` of a
+uniform solid cylinder with real objects' sizes; ω3 from real tossing spin rates.
+
+Rejected draws (resampled): a known mistake within five tolerances of the key or of another
+mistake (e.g. ``sin Ωt ≈ 0``, where turning ω the wrong way round gives the same vector).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from problems.answers import Answer, Mistake, grade
+from problems.rounding import latex_sig, round_sig
+from problems.variant import Variant
+from solver.inertia import shape_tensor
+from solver.parameters import ParameterError
+from solver.torque_free import (
+    body_precession_rate,
+    invariants,
+    space_precession_rate,
+    symmetric_top_omega,
+)
+
+NAME = "symmetric_free_top"
+TITLE = "A tossed symmetric body: precession in the body frame and in space"
+SUMMARY = "torque-free symmetric top: body rate Ω and its period, ω(t), space rate L/I1, cone angle"
+RESULTS = ("R7", "R8")
+
+SIG = 3
+"""Significant figures of ω(0), t and the body's dimensions."""
+SIG_MOMENTS = 4
+"""Moments get one more: a thin coin has I3 within 1 % of 2 I1 (the triangle inequality's edge),
+which 3-figure rounding could cross."""
+RTOL = 1e-3
+"""Hand or numpy computation from 3–4 figure data reproduces the key to ~1e-12; 1e-3 leaves
+room for a student who carries 4 figures through, and is far from every known mistake."""
+MARGIN = 5.0
+"""Known mistakes must lie this many tolerances from the key and from each other."""
+MAX_ATTEMPTS = 1000
+
+
+@dataclass(frozen=True)
+class Body:
+    """A uniform solid cylinder from everyday life, and how it is thrown (SI ranges)."""
+
+    noun: str
+    story: str
+    mass: tuple[float, float]  # kg
+    radius: tuple[float, float]  # m
+    height: tuple[float, float]  # m (thickness of a coin, length of a rolling pin)
+    spin: tuple[float, float]  # ω3, rad/s
+
+
+BODIES: tuple[Body, ...] = (
+    Body("a coin", "is flipped into the air", (3e-3, 10e-3), (9.5e-3, 15e-3), (1.5e-3, 2.5e-3),
+         (100.0, 250.0)),
+    Body("a dinner plate", "is tossed up spinning", (0.4, 0.7), (0.11, 0.14), (0.015, 0.025),
+         (5.0, 15.0)),
+    Body("an ice-hockey puck", "slides off the ice and tumbles through the air", (0.156, 0.170),
+         (0.037, 0.039), (0.024, 0.026), (20.0, 60.0)),
+    Body("a can of soup", "is thrown like a spiral pass", (0.30, 0.45), (0.033, 0.042),
+         (0.10, 0.12), (10.0, 30.0)),
+    Body("a rolling pin", "is thrown spinning about its long axis", (0.6, 1.0), (0.025, 0.03),
+         (0.38, 0.45), (5.0, 15.0)),
+)
+
+TILT = (math.radians(5.0), math.radians(30.0))
+"""Angle between ω(0) and ê3: a visible wobble, not a tumble."""
+PHASE_TIME = (0.15, 1.6)
+"""t in units of the body-frame period 2π/|Ω|."""
+
+
+@dataclass(frozen=True)
+class Draw:
+    """Displayed (rounded) values of one variant, SI."""
+
+    body: Body
+    mass: float
+    radius: float
+    height: float
+    I1: float
+    I3: float
+    omega0: tuple[float, float, float]
+    t: float
+
+
+def _draw(rng: np.random.Generator) -> Draw | None:
+    """A draw, or None if the rounding pushed ``I3`` past ``2 I1`` (no rigid body)."""
+    body = BODIES[rng.integers(len(BODIES))]
+    mass, radius, height = (round_sig(rng.uniform(*r), SIG)
+                            for r in (body.mass, body.radius, body.height))
+    moments = np.diag(shape_tensor("solid_cylinder", mass, radius=radius, height=height))
+    I1, I3 = (round_sig(moments[i], SIG_MOMENTS) for i in (0, 2))
+    if I3 > 2 * I1:
+        return None
+    omega3 = rng.uniform(*body.spin)
+    wobble = omega3 * math.tan(rng.uniform(*TILT))
+    phi = rng.uniform(0.0, 2.0 * math.pi)
+    omega0 = tuple(round_sig([wobble * math.cos(phi), wobble * math.sin(phi), omega3], SIG))
+    period = 2.0 * math.pi / abs(float(body_precession_rate(I1, I3, omega0[2])))
+    t = round_sig(rng.uniform(*PHASE_TIME) * period, SIG)
+    return Draw(body, mass, radius, height, I1, I3, omega0, t)
+
+
+def _turned(omega0: tuple[float, ...], rate: float, t: float) -> list[float]:
+    """ω(0) turned about ê3 by ``rate·t``: ω(t) of a student who uses a wrong rate."""
+    return Rotation.from_rotvec([0.0, 0.0, rate * t]).apply(omega0).tolist()
+
+
+def _swapped_rate(d: Draw) -> float | None:
+    """Ω with I1 and I3 exchanged, ``ω3 (I1 − I3)/I3``; None where the exchanged moments are no
+    rigid body's (a slender rolling pin: I1 > 2 I3), so the solver refuses them."""
+    try:
+        return float(body_precession_rate(d.I3, d.I1, d.omega0[2]))
+    except ParameterError:
+        return None
+
+
+def _answers(d: Draw) -> tuple[Answer, ...]:
+    Omega = float(body_precession_rate(d.I1, d.I3, d.omega0[2]))
+    alpha_dot = float(space_precession_rate(d.I1, d.I3, d.omega0))
+    _, L2 = invariants(d.I1, d.I1, d.I3, d.omega0)
+    L_perp = d.I1 * math.hypot(d.omega0[0], d.omega0[1])
+    theta = math.atan2(L_perp, d.I3 * d.omega0[2])  # cos θ = I3 ω3 / L
+    omega_tilt = math.atan2(math.hypot(d.omega0[0], d.omega0[1]), d.omega0[2])
+    swapped = _swapped_rate(d)
+    period = 2.0 * math.pi / abs(Omega)
+    two_pi = 2.0 * math.pi
+
+    omega_m = [
+        Mistake("hz", Omega / two_pi, "That is in revolutions per second (Hz); Ω is asked in "
+                "rad/s — multiply by 2π."),
+        Mistake("sign", -Omega, "Check the sign: Ω = ω3 (I3 − I1)/I1 is positive for an oblate "
+                "body (I3 > I1) and negative for a prolate one (I3 < I1)."),
+        Mistake("space_rate", alpha_dot, "That is L/I1, the precession rate of the symmetry axis "
+                "about L seen from the inertial frame; Ω is the rate at which ω circles ê3 in "
+                "the body frame (R8)."),
+    ]
+    period_m = [
+        Mistake("angular_frequency", abs(Omega), "That is the angular frequency |Ω| (rad/s); "
+                "the period is 2π/|Ω|."),
+        Mistake("missing_2pi", 1.0 / abs(Omega), "A factor 2π is missing: the period is 2π/|Ω|."),
+        Mistake("space_period", two_pi / alpha_dot, "That is the period of the precession of the "
+                "symmetry axis about L in space (2π I1/L); the body-frame period is 2π/|Ω|."),
+    ]
+    if swapped is not None:
+        omega_m.append(Mistake("I1_I3_swapped", swapped, "I1 and I3 are exchanged: "
+                               "Ω = ω3 (I3 − I1)/I1, with I3 the moment about the symmetry axis."))
+        period_m.append(Mistake("I1_I3_swapped", two_pi / abs(swapped), "I1 and I3 are "
+                                "exchanged: Ω = ω3 (I3 − I1)/I1, I3 about the symmetry axis."))
+    vector_m = [
+        Mistake("wrong_sense", _turned(d.omega0, -Omega, d.t), "(ω1, ω2) turns the wrong way "
+                "round: ω1 + iω2 = (ω1(0) + iω2(0)) e^{iΩt} with Ω = ω3 (I3 − I1)/I1."),
+        Mistake("hz", _turned(d.omega0, Omega / two_pi, d.t), "The phase is Ωt in radians with "
+                "Ω in rad/s; it looks as if Ω was taken in Hz."),
+        Mistake("space_rate", _turned(d.omega0, alpha_dot, d.t), "In the body frame ω turns at "
+                "Ω = ω3 (I3 − I1)/I1, not at the space-frame rate L/I1."),
+    ]
+    alpha_m = [
+        Mistake("body_rate", Omega, "That is Ω, the body-frame rate; seen from the inertial "
+                "frame the symmetry axis precesses about L at L/I1."),
+        Mistake("hz", alpha_dot / two_pi, "That is in Hz; the rate is asked in rad/s."),
+        Mistake("I3", float(np.sqrt(L2)) / d.I3, "Divide L by the transverse moment I1, not I3."),
+    ]
+    theta_m = [
+        Mistake("degrees", math.degrees(theta), "That looks like degrees; give θ in radians."),
+        Mistake("complement", math.pi / 2 - theta, "That is the angle between L and the plane "
+                "of ê1, ê2; θ is measured from ê3 (cos θ = I3 ω3 / L)."),
+        Mistake("omega_angle", omega_tilt, "That is the angle between ω and ê3; the cone of "
+                "the symmetry axis is around L, at cos θ = I3 ω3 / L."),
+    ]
+    return (
+        Answer("Omega", "scalar", Omega, unit="rad/s", rtol=RTOL, mistakes=tuple(omega_m),
+               description="Ω, body-frame precession rate of ω about ê3 (signed)"),
+        Answer("T_body", "scalar", period, unit="s", rtol=RTOL, mistakes=tuple(period_m),
+               description="period of the body-frame precession"),
+        Answer("omega_t", "vector", symmetric_top_omega(d.I1, d.I3, d.omega0, d.t).tolist(),
+               unit="rad/s", rtol=RTOL, mistakes=tuple(vector_m),
+               description="[ω1, ω2, ω3] at time t, body frame"),
+        Answer("alpha_dot", "scalar", alpha_dot, unit="rad/s", rtol=RTOL,
+               mistakes=tuple(alpha_m), description="precession rate of ê3 about L, space frame"),
+        Answer("theta", "angle", theta, unit="rad", rtol=RTOL, mistakes=tuple(theta_m),
+               description="half-angle of the cone ê3 sweeps around L"),
+    )
+
+
+def _distinct(answer: Answer) -> bool:
+    """Every mistake lies ``MARGIN`` tolerances from the key and from every other mistake."""
+    try:
+        wide = replace(answer, rtol=MARGIN * answer.rtol, atol=MARGIN * answer.atol)
+    except ParameterError:  # a mistake within the widened tolerance of the key
+        return False
+    return all(grade(wide, m.value).mistake == m.name for m in wide.mistakes)
+
+
+def _statement(d: Draw) -> str:
+    b = d.body
+    w1, w2, w3 = (latex_sig(w, SIG) for w in d.omega0)
+    shape = "oblate" if d.I3 > d.I1 else "prolate"
+    return (
+        f"{b.noun[0].upper()}{b.noun[1:]} (a uniform cylinder of mass "
+        f"${latex_sig(d.mass, SIG)}$ kg, "
+        f"radius ${latex_sig(d.radius, SIG)}$ m and height (along its axis) "
+        f"${latex_sig(d.height, SIG)}$ m) {b.story}. In flight no torque acts about its centre "
+        "of mass (ignore air). It is a symmetric top, here "
+        f"{shape}: its principal moments about the centre of mass are "
+        f"$I_1 = I_2 = {latex_sig(d.I1, SIG_MOMENTS)}$ kg m² (any axis perpendicular to the "
+        f"symmetry axis) and $I_3 = {latex_sig(d.I3, SIG_MOMENTS)}$ kg m² (the symmetry axis "
+        "$\\hat e_3$). Use these moments as given (`I1`, `I3`).\n\n"
+        "At $t = 0$ the components of the angular velocity in the right-handed principal body "
+        f"frame $(\\hat e_1, \\hat e_2, \\hat e_3)$ are $\\boldsymbol\\omega(0) = "
+        f"(\\omega_1, \\omega_2, \\omega_3) = ({w1},\\ {w2},\\ {w3})$ rad/s (`omega0`).\n\n"
+        "1. `Omega`: the rate $\\Omega$ (rad/s) at which $\\boldsymbol\\omega$ precesses about "
+        "$\\hat e_3$ *in the body frame*, with its sign: $\\Omega > 0$ when "
+        "$(\\omega_1, \\omega_2)$ turns from $\\hat e_1$ towards $\\hat e_2$ (counter-clockwise "
+        "seen from the tip of $\\hat e_3$).\n"
+        "2. `T_body`: the period (s) of this body-frame precession.\n"
+        f"3. `omega_t`: the body-frame components $[\\omega_1, \\omega_2, \\omega_3]$ (rad/s) "
+        f"at $t = {latex_sig(d.t, SIG)}$ s (`t`).\n"
+        "4. `alpha_dot`: the rate (rad/s, positive) at which the symmetry axis $\\hat e_3$ "
+        "precesses about the fixed angular momentum $\\mathbf L$, *seen from the inertial "
+        "frame*.\n"
+        "5. `theta`: the half-angle $\\theta$ (rad) of the cone that $\\hat e_3$ sweeps around "
+        "$\\mathbf L$, i.e. the angle between $\\hat e_3$ and $\\mathbf L$."
+    )
+
+
+def _variant(d: Draw | None) -> Variant | None:
+    if d is None:
+        return None
+    try:
+        answers = _answers(d)
+    except ParameterError as err:
+        if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
+            raise
+        return None  # a mistake indistinguishable from the key
+    if not all(_distinct(a) for a in answers):
+        return None
+    return Variant(
+        family=NAME,
+        title=TITLE,
+        params={"I1": d.I1, "I3": d.I3, "omega0": list(d.omega0), "t": d.t},
+        param_units={"I1": "kg m^2", "I3": "kg m^2", "omega0": "rad/s", "t": "s"},
+        statement=_statement(d),
+        answers=answers,
+    )
+
+
+def generate(rng: np.random.Generator) -> Variant:
+    """One variant of a torque-free symmetric top (R8), from ``rng`` only.
+
+    Parameters are rounded to the figures shown and every answer is computed from the rounded
+    values by :mod:`solver.torque_free`. Draws whose known mistakes are not well separated from
+    the key are resampled.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The only source of randomness; the same generator state gives the same variant.
+
+    Returns
+    -------
+    Variant
+        Parameters (SI), statement and answers of one student's question.
+
+    Raises
+    ------
+    RuntimeError
+        No acceptable draw in ``MAX_ATTEMPTS`` (a template bug: about one draw in a few is
+        rejected).
+    """
+    for _ in range(MAX_ATTEMPTS):
+        variant = _variant(_draw(rng))
+        if variant is not None:
+            return variant
+    raise RuntimeError(f"{NAME}: no acceptable draw in {MAX_ATTEMPTS} attempts")

@@ -1,0 +1,301 @@
+"""The generator: seeding, determinism, independence, rerolls, existing folders, atomicity."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+from problems.answers import Answer
+from problems.generate import (
+    GenerateError,
+    TemplateError,
+    generate_assignment,
+    json_text,
+    key_hash,
+    reroll_students,
+    resolve_problems,
+    student_answers,
+    variant_seed,
+)
+from problems.roster import read_roster
+
+from .conftest import ROSTER, make_rod_family
+
+PROBLEMS = ("rod", "rod2", "rod")
+
+
+@pytest.fixture
+def make_hw(tmp_path, families, write_roster):
+    """``make_hw(name, roster_text=ROSTER, **kw) -> Path``: generate into ``tmp_path/name``."""
+
+    def make(name="HW", roster_text=ROSTER, **kw):
+        kw = {"problems": PROBLEMS, "seed": 7, "title": "HW 1", **kw}
+        roster = read_roster(write_roster(roster_text, f"{name}.csv"))
+        generate_assignment(roster, tmp_path / name, families, **kw)
+        return tmp_path / name
+
+    return make
+
+
+def load(hw, name):
+    return json.loads((hw / name).read_text(encoding="utf-8"))
+
+
+def student_files(tree, sid):
+    return {p: b for p, b in tree.items() if p.endswith(f"/{sid}.ipynb")}
+
+
+def test_variant_seed_is_the_documented_sha256():
+    # Guards the recipe itself: changing it would silently give every student a new problem.
+    payload = '["eulertop-variant",1,7,"alice",2,"rod",0]'
+    expected = int.from_bytes(hashlib.sha256(payload.encode()).digest(), "big")
+    assert variant_seed(7, "alice", 2, "rod") == expected
+
+
+def test_variant_seed_does_not_depend_on_the_interpreter_run():
+    code = "from problems.generate import variant_seed; print(variant_seed(7, 'bø', 2, 'rod', 1))"
+    outputs = {
+        subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                       env={**os.environ, "PYTHONHASHSEED": h}).stdout
+        for h in ("1", "2")
+    }
+    assert outputs == {f"{variant_seed(7, 'bø', 2, 'rod', 1)}\n"}
+
+
+@pytest.mark.parametrize(
+    "change",
+    [dict(seed=8), dict(student_id="bob"), dict(question=3), dict(family="rod2"), dict(reroll=1)],
+)
+def test_every_seed_input_matters(change):
+    base = dict(seed=7, student_id="alice", question=2, family="rod", reroll=0)
+    assert variant_seed(**base) != variant_seed(**{**base, **change})
+
+
+def test_layout(make_hw, read_tree):
+    tree = read_tree(make_hw())
+    assert set(tree) == {"assignment.json", "key.json"} | {
+        f"{d}/{s}.ipynb" for d in ("release", "solutions") for s in ("alice", "bob", "carol")
+    }
+
+
+def test_same_inputs_give_identical_bytes(make_hw, read_tree):
+    assert read_tree(make_hw("A")) == read_tree(make_hw("B"))
+
+
+def test_another_seed_changes_every_notebook(make_hw, read_tree):
+    a, b = read_tree(make_hw("A", seed=1)), read_tree(make_hw("B", seed=2))
+    assert all(a[p] != b[p] for p in a if p.endswith(".ipynb"))
+
+
+def test_independent_of_roster_order_and_of_classmates(make_hw, read_tree):
+    reordered = "id,name,email\ncarol,Carol Dee,carol@uni.example\nalice,Alice Ng,alice@uni." \
+                "example\nbob,Bob Roy,bob@uni.example\ndan,Dan,dan@uni.example\n"
+    base, other = make_hw("A"), make_hw("B", roster_text=reordered)
+    tree_a, tree_b = read_tree(base), read_tree(other)
+    for sid in ("alice", "bob", "carol"):
+        assert student_files(tree_a, sid) == student_files(tree_b, sid)
+        for name in ("assignment.json", "key.json"):
+            assert load(base, name)["students"][sid] == load(other, name)["students"][sid]
+
+
+def test_manifest_holds_resolved_questions_but_no_answers(make_hw):
+    hw = make_hw()
+    manifest = load(hw, "assignment.json")
+    assert manifest["title"] == "HW 1" and manifest["seed"] == 7
+    assert manifest["problems"] == list(PROBLEMS)
+    assert manifest["roster"]["columns"] == ["id", "name", "email"]
+    assert manifest["roster"]["rows"][0] == {"id": "alice", "name": "Alice Ng",
+                                             "email": "alice@uni.example"}
+    assert manifest["generator"]["name"] == "eulertop" and manifest["generator"]["version"]
+    key = load(hw, "key.json")
+    for sid, entry in manifest["students"].items():
+        assert entry["reroll"] == 0
+        assert [q["family"] for q in entry["questions"]] == list(PROBLEMS)
+        for q, kq in zip(entry["questions"], key["students"][sid]["questions"], strict=True):
+            assert set(q["params"]) == {"m", "L", "θ"}
+            assert f"$m = {q['params']['m']}$" in q["statement"]
+            assert "value" not in json.dumps(q) and "mistakes" not in json.dumps(q)
+            assert [a["name"] for a in q["answers"]] == [a["name"] for a in kq["answers"]]
+
+
+def test_key_entries_round_trip_and_hash(make_hw):
+    key = load(make_hw(), "key.json")
+    assert set(key["students"]) == {"alice", "bob", "carol"}
+    for sid, entry in key["students"].items():
+        assert entry["hash"] == key_hash(entry["questions"])
+        answers = student_answers(key, sid)
+        assert list(answers)[:2] == ["q1_I_c", "q1_I_tilt"] and "q3_I_expr" in answers
+        for q in entry["questions"]:
+            for a in q["answers"]:
+                assert Answer.from_dict(a).to_dict() == a
+    hashes = [e["hash"] for e in key["students"].values()]
+    assert len(set(hashes)) == len(hashes)
+
+
+def test_the_key_is_private_to_its_owner(make_hw):
+    assert (make_hw() / "key.json").stat().st_mode & 0o077 == 0
+
+
+def test_reroll_changes_one_student_only(make_hw, read_tree):
+    hw = make_hw()
+    before, manifest0, key0 = read_tree(hw), load(hw, "assignment.json"), load(hw, "key.json")
+    (hw / "graded").mkdir()
+    (hw / "graded" / "grades.csv").write_text("id,points\n")
+    summary = reroll_students(hw, ["bob"], make_families())
+    after, manifest1, key1 = read_tree(hw), load(hw, "assignment.json"), load(hw, "key.json")
+    assert summary.students == ("bob",)
+    assert after.pop("graded/grades.csv") == b"id,points\n"
+    for sid in ("alice", "carol"):
+        assert student_files(after, sid) == student_files(before, sid)
+        assert manifest1["students"][sid] == manifest0["students"][sid]
+        assert key1["students"][sid] == key0["students"][sid]
+    assert all(after[p] != before[p] for p in student_files(before, "bob"))
+    assert manifest1["students"]["bob"]["reroll"] == 1
+    assert key1["students"]["bob"]["hash"] != key0["students"]["bob"]["hash"]
+    reroll_students(hw, ["bob"], make_families())
+    assert load(hw, "assignment.json")["students"]["bob"]["reroll"] == 2
+
+
+@pytest.mark.parametrize("name", ["assignment.json", "key.json"])
+def test_a_reroll_changes_one_line_of_each_json_file(make_hw, read_tree, name):
+    hw = make_hw()
+    before = (hw / name).read_text().splitlines()
+    reroll_students(hw, ["carol"], make_families())
+    after = (hw / name).read_text().splitlines()
+    changed = [(a, b) for a, b in zip(before, after, strict=True) if a != b]
+    assert len(changed) == 1 and changed[0][1].startswith('  "carol": {')
+
+
+@pytest.mark.parametrize(
+    "document",
+    [{"b": [0.1, 1e-300], "a": "θ", "students": {"z": {"x": 1.5}, "a": {}}}, {"students": {}},
+     {"title": "x"}],
+)
+def test_json_text_is_canonical_json(document):
+    text = json_text(document)
+    assert json.loads(text) == document
+    assert text == json_text(json.loads(text))  # reading and rewriting changes no byte
+    if document.get("students"):
+        assert text.splitlines()[-4:] == ['  "a": {},', '  "z": {"x": 1.5}', " }", "}"]
+
+
+def make_families(**failing):
+    return {name: make_rod_family(name, **failing) for name in ("rod", "rod2")}
+
+
+@pytest.mark.parametrize(
+    ("ids", "fragment"), [(["zoe"], "not in the assignment's roster: zoe")],
+)
+def test_reroll_of_unknown_student(make_hw, read_tree, ids, fragment):
+    hw = make_hw()
+    before = read_tree(hw)
+    with pytest.raises(GenerateError, match=fragment):
+        reroll_students(hw, ids, make_families())
+    assert read_tree(hw) == before
+
+
+def test_reroll_needs_an_assignment(tmp_path):
+    with pytest.raises(GenerateError, match="not a generated assignment"):
+        reroll_students(tmp_path, ["bob"], make_families())
+
+
+def test_existing_folder_is_refused_without_force(make_hw, read_tree):
+    hw = make_hw()
+    before = read_tree(hw)
+    with pytest.raises(GenerateError, match="already exists; pass --force"):
+        make_hw()
+    assert read_tree(hw) == before
+
+
+def test_force_keeps_seed_and_rerolls_so_a_late_student_changes_nobody(make_hw, read_tree):
+    hw = make_hw()
+    reroll_students(hw, ["bob"], make_families())
+    before = read_tree(hw)
+    late = ROSTER + "dan,Dan,dan@uni.example\n"
+    make_hw(roster_text=late, force=True, seed=None)
+    after = read_tree(hw)
+    for sid in ("alice", "bob", "carol"):
+        assert student_files(after, sid) == student_files(before, sid)
+    assert load(hw, "assignment.json")["seed"] == 7
+    assert load(hw, "assignment.json")["students"]["bob"]["reroll"] == 1
+    assert "release/dan.ipynb" in after
+
+
+def test_force_refuses_a_folder_with_foreign_files(make_hw, read_tree):
+    hw = make_hw()
+    (hw / "graded").mkdir()
+    before = read_tree(hw)
+    with pytest.raises(GenerateError, match="also holds graded"):
+        make_hw(force=True)
+    assert read_tree(hw) == before
+
+
+def test_a_failing_template_leaves_nothing(tmp_path, write_roster):
+    roster = read_roster(write_roster(ROSTER))
+    before = sorted(os.listdir(tmp_path))
+    # "rod" is questions 1 and 3, so its 4th call is bob's question 3: half-way through
+    with pytest.raises(TemplateError, match="'rod', student 'bob', question 3 failed"):
+        generate_assignment(roster, tmp_path / "HW", make_families(fail_on_call=4),
+                            problems=PROBLEMS, seed=7)
+    assert sorted(os.listdir(tmp_path)) == before
+
+
+def test_a_failing_replacement_keeps_the_old_assignment(make_hw, read_tree, tmp_path):
+    hw = make_hw()
+    before, listing = read_tree(hw), sorted(os.listdir(tmp_path))
+    with pytest.raises(TemplateError):
+        generate_assignment(read_roster(tmp_path / "input" / "HW.csv"), hw,
+                            make_families(fail_on_call=5), problems=PROBLEMS, seed=9, force=True)
+    assert read_tree(hw) == before and sorted(os.listdir(tmp_path)) == listing
+
+
+def test_template_returning_garbage_is_a_template_error(tmp_path, write_roster):
+    families = {"rod": make_rod_family("rod2")}  # generate() claims another family
+    with pytest.raises(TemplateError, match="must return a Variant of family 'rod'"):
+        generate_assignment(read_roster(write_roster(ROSTER)), tmp_path / "HW", families,
+                            seed=1)
+    assert not (tmp_path / "HW").exists()
+
+
+@pytest.mark.parametrize(
+    ("names", "expected"),
+    [(None, ("rod", "rod2")), (["rod2"], ("rod2",)), ([" rod", "rod"], ("rod", "rod"))],
+)
+def test_resolve_problems(names, expected):
+    assert resolve_problems(names, make_families()) == expected
+
+
+@pytest.mark.parametrize(
+    ("names", "families", "fragment"),
+    [
+        (["rod", "top"], make_families(), "unknown problem 'top'; known: rod, rod2"),
+        (["rod", ""], make_families(), "empty problem name"),
+        (None, {}, "no problem families are registered"),
+    ],
+)
+def test_resolve_problems_refuses(names, families, fragment):
+    with pytest.raises(GenerateError, match=fragment):
+        resolve_problems(names, families)
+
+
+def test_a_failed_swap_puts_the_old_assignment_back(make_hw, read_tree, tmp_path, monkeypatch):
+    hw = make_hw()
+    before, listing = read_tree(hw), sorted(os.listdir(tmp_path))
+    real_rename, calls = os.rename, []
+
+    def rename(src, dst):
+        calls.append((src, dst))
+        if len(calls) == 2:  # old moved aside; now the new one fails to take its place
+            raise OSError("disk pulled out")
+        real_rename(src, dst)
+
+    monkeypatch.setattr(os, "rename", rename)
+    with pytest.raises(OSError, match="disk pulled out"):
+        make_hw(force=True, seed=99)
+    monkeypatch.undo()
+    assert read_tree(hw) == before and sorted(os.listdir(tmp_path)) == listing

@@ -1,0 +1,156 @@
+"""Student notebooks: valid nbformat v4, layout, no secrets, solutions that reproduce the key."""
+
+from __future__ import annotations
+
+import ast
+import json
+import math
+
+import nbformat
+import pytest
+
+from problems.generate import generate_assignment, student_answers
+from problems.notebook import answer_line, python_literal
+from problems.roster import read_roster
+
+PROBLEMS = ("rod", "rod2")
+
+
+@pytest.fixture
+def hw(tmp_path, families, roster_path):
+    out = tmp_path / "HW"
+    generate_assignment(read_roster(roster_path), out, families, problems=PROBLEMS, seed=11,
+                        title="Tops, week 3")
+    return out
+
+
+def read(hw, kind, sid="alice"):
+    return nbformat.read(hw / kind / f"{sid}.ipynb", as_version=nbformat.NO_CONVERT)
+
+
+@pytest.mark.parametrize("kind", ["release", "solutions"])
+def test_valid_nbformat_v4_with_python_kernel(hw, kind):
+    for sid in ("alice", "bob", "carol"):
+        nb = read(hw, kind, sid)
+        nbformat.validate(nb)
+        assert nb.nbformat == 4
+        assert nb.metadata.kernelspec.name == "python3"
+        assert nb.metadata.eulertop.notebook == kind
+
+
+def test_cell_layout_and_read_only_marks(hw):
+    nb = read(hw, "release")
+    ids = [c.id for c in nb.cells]
+    assert ids == ["title", "rules", "parameters", "q1-statement", "q1-answer", "q2-statement",
+                   "q2-answer"]
+    for cell in nb.cells:
+        answer = cell.id.endswith("answer")
+        assert cell.metadata.get("editable", True) is answer
+        assert cell.metadata.deletable is False
+    assert nb.cells[0].source == "# Tops, week 3"
+    rules = nb.cells[1].source
+    assert "`alice` (Alice Ng)" in rules and "eulertop check alice.ipynb" in rules
+    assert "| `q2_I_expr` | an expression in m, L, theta |" in rules
+
+
+def test_answer_cells_have_one_line_per_answer(hw):
+    nb, key = read(hw, "release"), json.loads((hw / "key.json").read_text())
+    lines = nb.cells[4].source.splitlines()
+    names = [a["name"] for a in key["students"]["alice"]["questions"][0]["answers"]]
+    assert [line.split(" = ")[0] for line in lines] == [f"q1_{n}" for n in names]
+    assert lines[0] == "q1_I_c = None  # kg m^2 — moment about the centre"
+    assert lines[5] == ('q1_bigger = None  # one of "centre", "end" — '
+                        "which axis has the larger moment")
+
+
+def test_parameter_cell_defines_the_displayed_values(hw):
+    nb = read(hw, "release")
+    manifest = json.loads((hw / "assignment.json").read_text())
+    namespace: dict = {}
+    exec(nb.cells[2].source, namespace)  # our own generated cell
+    for q in manifest["students"]["alice"]["questions"]:
+        for name, value in q["params"].items():
+            assert namespace[f"q{q['question']}_{name}"] == value
+
+
+def _secret_strings(key_entry):
+    """Text forms of the key's answers and known mistakes that must not leak."""
+    for q in key_entry["questions"]:
+        for a in q["answers"]:
+            # choice and boolean values are necessarily among the public options
+            if a["kind"] in ("choice", "boolean"):
+                continue
+            values = [a["value"], *(m["value"] for m in a["mistakes"])]
+            for v in values:
+                for x in v if isinstance(v, list) else [v]:
+                    if isinstance(x, str):
+                        yield x
+                    elif x not in (0.0,):
+                        yield repr(x)
+                        yield f"{x:.4g}"
+
+
+def test_release_notebooks_hold_no_answer_or_mistake_values(hw):
+    key = json.loads((hw / "key.json").read_text())
+    for sid, entry in key["students"].items():
+        text = (hw / "release" / f"{sid}.ipynb").read_text()
+        leaked = [s for s in _secret_strings(entry) if s in text]
+        assert leaked == []
+        meta = json.dumps(read(hw, "release", sid).metadata.eulertop)
+        assert '"value"' not in meta and '"mistakes"' not in meta
+
+
+def test_public_spec_in_metadata(hw):
+    meta = read(hw, "release").metadata.eulertop
+    assert meta.student == "alice" and meta.assignment == "Tops, week 3"
+    assert [q.family for q in meta.questions] == list(PROBLEMS)
+    spec = {a.name: a for a in meta.questions[0].answers}
+    assert spec["r_cm"].length == 3 and spec["r_cm"].unit == "m"
+    assert spec["bigger"].options == ["centre", "end"]
+    assert spec["I_expr"].symbols == ["m", "L", "theta"]
+    assert spec["theta"].period == pytest.approx(2 * math.pi, rel=1e-15)
+
+
+@pytest.mark.parametrize(
+    "value", [None, True, 0.1, 1e-300, -2.5e17, 3, [0.1, [2.0, -0.0]], "m*g*l*cos(beta)", "it's"]
+)
+def test_python_literals_read_back_exactly(value):
+    assert ast.literal_eval(python_literal(value)) == value
+
+
+@pytest.mark.parametrize("bad", [float("nan"), float("inf"), {"a": 1}, object()])
+def test_python_literal_refuses_what_is_not_plain_json(bad):
+    with pytest.raises((ValueError, TypeError)):
+        python_literal(bad)
+
+
+def test_answer_line_for_a_dimensionless_vector():
+    spec = {"variable": "q1_n", "kind": "vector", "length": 3, "unit": "", "description": ""}
+    assert answer_line(spec, [0.0, 1.0, 0.0]) == "q1_n = [0.0, 1.0, 0.0]  # a list of 3 numbers"
+
+
+READ_BACK = """\
+import json as _json
+print(_json.dumps({name: globals()[name] for name in %r}))
+"""
+
+
+def _execute_and_extract(path, variables):
+    """Run a notebook in a fresh kernel; return its answer variables as plain JSON."""
+    from nbclient import NotebookClient
+
+    nb = nbformat.read(path, as_version=4)
+    nb.cells.append(nbformat.v4.new_code_cell(READ_BACK % (variables,), id="read-back"))
+    NotebookClient(nb, timeout=60, kernel_name="python3").execute()
+    return json.loads(nb.cells[-1].outputs[0]["text"])
+
+
+@pytest.mark.parametrize("kind", ["solutions", "release"])
+def test_executed_notebook_yields_the_key_or_nothing(hw, kind):
+    key = json.loads((hw / "key.json").read_text())
+    expected = {var: a.value for var, a in student_answers(key, "bob").items()}
+    got = _execute_and_extract(hw / kind / "bob.ipynb", sorted(expected))
+    if kind == "solutions":
+        assert got == expected  # exact: floats are written by repr
+    else:
+        assert got == dict.fromkeys(expected)
