@@ -53,7 +53,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.special import ellipkm1, elliprf
 
 from solver.jacobi import jacobi_sncndn
-from solver.parameters import as_real, principal_moments
+from solver.parameters import as_real, positive, principal_moments
 from solver.torque_free import _gyroscopic_torque, invariants, near_axis_stability
 
 __all__ = [
@@ -158,10 +158,17 @@ def _elliptic_motion(moments: NDArray[np.float64], w0: NDArray[np.float64]) -> _
 
 
 def _motion_from_inputs(
-    I1: ArrayLike, I2: ArrayLike, I3: ArrayLike, omega0: ArrayLike, extra_shape: tuple = ()
+    I1: ArrayLike, I2: ArrayLike, I3: ArrayLike, omega0: ArrayLike, extra_shape: tuple = (),
+    rigid_body: bool = True,
 ) -> _EllipticMotion:
     """Validate, broadcast (with ``extra_shape``, e.g. the time grid's) and solve R10."""
-    moments = np.stack(principal_moments(I1, I2, I3), axis=-1)
+    if rigid_body:
+        moments = np.stack(principal_moments(I1, I2, I3), axis=-1)
+    else:  # Euler's equations as an ODE: any positive coefficients (see asymmetric_top_omega)
+        moments = np.stack(
+            np.broadcast_arrays(positive("I1", I1), positive("I2", I2), positive("I3", I3)),
+            axis=-1,
+        )
     w0 = as_real("omega0", omega0, shape_tail=(3,))
     shape = np.broadcast_shapes(moments.shape[:-1], w0.shape[:-1], extra_shape)
     return _elliptic_motion(
@@ -170,7 +177,8 @@ def _motion_from_inputs(
 
 
 def asymmetric_top_omega(
-    I1: ArrayLike, I2: ArrayLike, I3: ArrayLike, omega0: ArrayLike, t: ArrayLike
+    I1: ArrayLike, I2: ArrayLike, I3: ArrayLike, omega0: ArrayLike, t: ArrayLike,
+    *, rigid_body: bool = True,
 ) -> NDArray[np.float64]:
     """Exact ω(t) of the torque-free rigid body, in Jacobi elliptic functions (R10).
 
@@ -186,6 +194,11 @@ def asymmetric_top_omega(
         Body components of ω at ``t = 0`` (rad/s).
     t : array_like
         Times (s).
+    rigid_body : bool, keyword-only
+        ``True`` (default): the moments must be those of a rigid body (triangle inequality).
+        ``False``: any positive moments — Euler's equations taken as an ODE, as in numerical
+        analysts' test problems (Hairer, Lubich & Wanner's free rigid body has
+        ``I = (2, 1, 2/3)``, which no body has); the solution is the same formula.
 
     Returns
     -------
@@ -199,21 +212,22 @@ def asymmetric_top_omega(
     [[0.0, 1.0, 0.0], [0.0, 1.0, 0.0]]
     """
     time = as_real("t", t)
-    motion = _motion_from_inputs(I1, I2, I3, omega0, time.shape)
+    motion = _motion_from_inputs(I1, I2, I3, omega0, time.shape, rigid_body)
     return motion.omega(time)
 
 
 def asymmetric_top_period(
-    I1: ArrayLike, I2: ArrayLike, I3: ArrayLike, omega0: ArrayLike
+    I1: ArrayLike, I2: ArrayLike, I3: ArrayLike, omega0: ArrayLike, *, rigid_body: bool = True
 ) -> NDArray[np.float64]:
     """Period of ω(t), ``4K(k)/λ`` (R10), in s.
 
     ``inf`` on the separatrix ``L² = 2T I_mid`` (k = 1) and for steady rotation (ω along a
     principal axis, spherical top, ω in a symmetric top's degenerate plane), where ω(t) is
     constant or never returns. For a symmetric top it equals ``2π/|Ω|`` of R8.
-    Shape: broadcast of the moments and ``omega0[..., 0]``.
+    Shape: broadcast of the moments and ``omega0[..., 0]``. ``rigid_body`` as in
+    :func:`asymmetric_top_omega`.
     """
-    return _motion_from_inputs(I1, I2, I3, omega0).period
+    return _motion_from_inputs(I1, I2, I3, omega0, rigid_body=rigid_body).period
 
 
 def flip_time(
