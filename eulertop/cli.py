@@ -17,6 +17,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "generate": ("problems.cli", "generate an assignment: one notebook per student, and the key"),
     "check": ("grader.cli", "run a notebook as the grader would: are its answers well formed?"),
     "grade": ("grader.cli", "grade every submission against the key: gradebook, feedback, summary"),
+    "bench": ("solver.work_precision", "work-precision charts and the stability battery"),
 }
 
 
