@@ -22,6 +22,13 @@ CATALOGUE: tuple[str, ...] = (
     "asymmetric_free_top",
     "euler_rotation",
     "euler_kinetic_energy",
+    "heavy_top_constants",
+    "turning_points",
+    "motion_type",
+    "sleeping_top",
+    "nutation_precession",
+    "steady_precession",
+    "symbolic_derivation",
 )
 
 _REQUIRED = ("NAME", "TITLE", "SUMMARY", "RESULTS", "generate")

@@ -1,0 +1,483 @@
+"""Heavy symmetric top: the constants of motion p_γ, p_α and E' from the initial state (R14–R16).
+
+Three real tops, drawn at random (shared with :mod:`problems.templates.turning_points` and
+:mod:`problems.templates.motion_type`, which import :func:`draw_top` and :func:`draw_state`):
+
+``toy_top``
+    A thin brass disc (radius 2–4 cm, 3–6 mm thick) on a light axle, its centre 2.5–6 cm from
+    the axle's tip, which spins in a dimple of a table. The statement gives ``M, R, l``: the
+    student finds ``I1 = M R²/4 + M l²`` (about the tip, R2's parallel-axis theorem) and
+    ``I3 = M R²/2``. The disc's rim would touch the table at ``tan β = l/R``; draws whose axis
+    nods down that far are rejected.
+``gyroscope``
+    A brass rotor on a steel axle (a thin rod, R2) resting in a cup on a post. Its moments
+    about the pivot (computed with :mod:`solver.inertia`, shown to 3 figures) are given, with
+    ``M`` and the pivot-to-centre-of-mass distance ``l``.
+``hanging``
+    A brass disc on a light rod hanging from a ball joint, below it (``β > π/2``): the same
+    body as the toy top, but the fixed point is above the centre of mass.
+
+Spins are tens to a few hundred rad/s; the precession rate is drawn as a multiple of the
+fast-top rate ``Mgl/(I3 γ̇0)`` (R21), either sense, and the nodding rate ``β̇0`` as a fraction
+of the nutation frequency ``p_γ/I1``. Every shown number is rounded to 3 figures (``g = 9.81``
+m/s²) and the answers are computed from the shown values.
+
+Asked (R15, R16): ``p_gamma = I3 (α̇ cos β + γ̇)``, ``p_alpha = I1 α̇ sin²β + p_γ cos β`` and
+``E_prime = E − p_γ²/(2 I3)``, with the potential energy ``Mgl cos β`` (zero at the tip).
+
+Known mistakes. The one each answer is about, always listed: ``ω3 = γ̇`` for ``p_γ`` (the
+precession's share of the spin forgotten), ``p_α`` without ``p_γ cos β``, ``E`` for ``E'``.
+Propagated ones, listed where they move the answer by more than five tolerances (see
+:func:`select_mistakes`): a calculator in degree mode and ``I1`` about the centre of mass
+(parallel-axis term forgotten; scenes where the student computes ``I1``), both from
+:func:`solver.heavy_top.constants_of_motion` with the mistaken input, and ``I1``, ``I3``
+swapped (R15 written out, :func:`_swapped_constants`: the solver refuses the swapped moments of
+most tops as no rigid body's).
+
+Tolerance: ``rtol = 1e-3``. The inputs are exact 3-figure numbers and each answer is a few
+products of them, so any careful computation agrees to ~1e-15; a student carrying 4 figures
+(e.g. ``I1`` rounded) stays within 1e-3. Rejected draws (resampled): answers that are a small
+difference of large terms (``|p_α|`` or ``|E'|`` below a fifth of the sum of its terms' sizes,
+where 1e-3 relative would demand more digits than the data carry), motions outside the scene's
+limits (see :func:`motion_within_limits`), and a primary mistake within five tolerances of the
+key or of another mistake.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import astuple, dataclass
+
+import numpy as np
+
+from problems.answers import Answer, Mistake
+from problems.rounding import latex_sig, round_sig
+from problems.variant import Variant
+from solver.heavy_top import constants_of_motion, turning_points
+from solver.inertia import centre_of_mass_offset, parallel_axis, shape_tensor
+
+NAME = "heavy_top_constants"
+TITLE = "Heavy symmetric top: constants of motion"
+SUMMARY = "heavy symmetric top: p_γ, p_α and E' from the initial conditions"
+RESULTS = ("R14", "R15", "R16")
+
+SIG = 3
+"""Significant figures of every shown number."""
+RTOL = 1e-3
+"""Relative tolerance of every answer (see the module docstring)."""
+MARGIN = 5.0
+"""Known mistakes must lie this many tolerances from the key and from each other."""
+G = 9.81
+"""Gravitational acceleration shown in the statements, m/s²."""
+BRASS, STEEL = 8500.0, 7850.0
+"""Densities, kg/m³."""
+POLE_MARGIN = 0.05
+"""Least distance (rad) of a turning point from a pole: near ``β = 0`` the top nearly sleeps
+and ``α̇`` at the turning point is ill-conditioned."""
+TABLE_MARGIN = 0.05
+"""Least clearance (rad) between the largest tilt and the tilt at which the rim touches."""
+MIN_NUTATION = 0.02
+"""Least ``β2 − β1`` (rad): nearly coinciding turning points are steady precession."""
+MIN_CONDITION = 0.2
+"""An answer must be at least this fraction of the sum of its terms' magnitudes."""
+MAX_ATTEMPTS = 500
+
+STATE_NAMES = ("beta0", "alpha_dot0", "beta_dot0", "gamma_dot0")
+STATE_UNITS = {"beta0": "rad", "alpha_dot0": "rad/s", "beta_dot0": "rad/s", "gamma_dot0": "rad/s"}
+_STATE_SYMBOLS = (r"\beta_0", r"\dot\alpha_0", r"\dot\beta_0", r"\dot\gamma_0")
+
+CONVENTIONS = (
+    "Conventions (as in the lecture): the symmetry axis $\\hat e_3$ points from the fixed point "
+    "to the centre of mass; Euler angles with $\\beta$ the tilt of $\\hat e_3$ from the "
+    "**upward** vertical, $\\alpha$ the azimuth of the axis about the vertical (precession, "
+    "positive counter-clockwise seen from above) and $\\gamma$ the spin angle about "
+    "$\\hat e_3$ (right-handed); $I_1$ is the moment of inertia about an axis through the "
+    "**fixed point** perpendicular to the symmetry axis, $I_3$ the moment about the symmetry "
+    "axis; the potential energy is $Mgl\\cos\\beta$ (zero at the height of the fixed point). "
+    "SI units, angles in radians."
+)
+
+FEEDBACK = {
+    "I1_about_cm": (
+        "I1 must be the moment about the fixed point, not about the centre of mass: add M l² "
+        "(parallel-axis theorem, R2), so I1 = M R²/4 + M l² for the disc."
+    ),
+    "I1_I3_swapped": (
+        "I1 and I3 are swapped: I3 is the moment about the symmetry axis (it multiplies the "
+        "spin ω3), I1 the transverse moment about the fixed point."
+    ),
+    "degree_mode": (
+        "The angles are in radians, but this value comes from reading them as degrees (a "
+        "calculator in degree mode, or numpy.deg2rad applied to radians)."
+    ),
+    "omega3_is_gamma_dot": (
+        "ω3 = α̇ cos β + γ̇ (R12): the spin rate γ̇ alone is not the angular velocity about the "
+        "symmetry axis; the precession adds α̇ cos β."
+    ),
+    "missing_p_gamma_term": (
+        "p_α = ∂L/∂α̇ = I1 α̇ sin²β + I3 (α̇ cos β + γ̇) cos β (R15): the second term, "
+        "p_γ cos β, is missing."
+    ),
+    "E_not_E_prime": (
+        "That is the total energy E; E' = E − p_γ²/(2 I3) (R16) leaves out the constant spin "
+        "energy."
+    ),
+}
+
+
+# --------------------------------------------------------------------------------------------
+# A real top and its initial state (shared with turning_points and motion_type)
+
+
+@dataclass(frozen=True)
+class Top:
+    """A heavy symmetric top: what the statement shows, and its moments from the shown values.
+
+    Attributes
+    ----------
+    scene : str
+        ``"toy_top"``, ``"gyroscope"`` or ``"hanging"``.
+    title : str
+        Question title.
+    text : str
+        Markdown describing the body; names every entry of ``params`` in backticks.
+    params, units : dict
+        Shown (rounded) parameters, SI, and their units.
+    I1, I3, Mgl : float
+        Moments about the fixed point (kg m²) and weight × lever arm (J), from ``params``.
+    I1_cm : float or None
+        Transverse moment about the centre of mass, when the student must shift it to the tip.
+    tilt : tuple of float
+        Range of the initial tilt ``β0`` (rad).
+    limits : tuple of float
+        Allowed ``[β1, β2]`` range of the motion (rad).
+    spin : tuple of float
+        Range of ``|γ̇0|`` (rad/s).
+    """
+
+    scene: str
+    title: str
+    text: str
+    params: dict[str, float]
+    units: dict[str, str]
+    I1: float
+    I3: float
+    Mgl: float
+    I1_cm: float | None
+    tilt: tuple[float, float]
+    limits: tuple[float, float]
+    spin: tuple[float, float]
+
+
+@dataclass(frozen=True)
+class State:
+    """Shown initial state: ``β0`` (rad) and the Euler-angle rates (rad/s, R11/R12)."""
+
+    beta0: float
+    alpha_dot0: float
+    beta_dot0: float
+    gamma_dot0: float
+
+
+def _r(x: float) -> float:
+    return round_sig(x, SIG)
+
+
+def _disc_body(rng: np.random.Generator, lever: tuple[float, float]):
+    """Shown ``M, R, l`` of a thin brass disc on a light axle, and its moments about the tip."""
+    R, thickness = _r(rng.uniform(0.02, 0.04)), rng.uniform(0.003, 0.006)
+    M, arm = _r(BRASS * math.pi * R**2 * thickness), _r(rng.uniform(*lever))
+    params = {"M": M, "R": R, "l": arm, "g": G}
+    units = {"M": "kg", "R": "m", "l": "m", "g": "m/s^2"}
+    I1_cm = M * R**2 / 4  # R2: thin disc about a diameter
+    return params, units, I1_cm + M * arm**2, M * R**2 / 2, M * G * arm, I1_cm
+
+
+def _shown(p: dict[str, float], name: str, symbol: str, unit: str) -> str:
+    return f"${symbol} = {latex_sig(p[name], SIG)}$ {unit} (`{name}`)"
+
+
+def _toy_top(rng: np.random.Generator) -> Top:
+    params, units, I1, I3, Mgl, I1_cm = _disc_body(rng, (0.025, 0.06))
+    touch = math.atan2(params["l"], params["R"])  # the rim reaches the table
+    text = (
+        f"A toy top is a thin brass disc of mass {_shown(params, 'M', 'M', 'kg')} and radius "
+        f"{_shown(params, 'R', 'R', 'm')}, fixed at its centre on a light axle perpendicular to "
+        f"it. The disc's centre is {_shown(params, 'l', 'l', 'm')} from the axle's lower tip, "
+        "which spins in a small dimple in the table: a fixed point. Treat the disc as thin and "
+        f"the axle as massless; {_shown(params, 'g', 'g', 'm/s²')}."
+    )
+    return Top("toy_top", "A toy top on a table", text, params, units, I1, I3, Mgl, I1_cm,
+               (0.15, touch - 0.1), (POLE_MARGIN, touch - TABLE_MARGIN), (100.0, 300.0))
+
+
+def _hanging(rng: np.random.Generator) -> Top:
+    params, units, I1, I3, Mgl, I1_cm = _disc_body(rng, (0.03, 0.07))
+    text = (
+        f"A thin brass disc of mass {_shown(params, 'M', 'M', 'kg')} and radius "
+        f"{_shown(params, 'R', 'R', 'm')} is fixed at its centre on a light rod perpendicular "
+        "to it. The rod's upper end hangs from a ball joint (a fixed point), the disc's centre "
+        f"{_shown(params, 'l', 'l', 'm')} below it along the rod, so that the symmetry axis "
+        "from the joint to the disc points below the horizontal ($\\beta > \\pi/2$). Treat the "
+        f"disc as thin and the rod as massless; {_shown(params, 'g', 'g', 'm/s²')}."
+    )
+    return Top("hanging", "A spinning disc hanging from a ball joint", text, params, units,
+               I1, I3, Mgl, I1_cm, (1.9, 2.85), (math.pi / 2, math.pi - POLE_MARGIN),
+               (60.0, 250.0))
+
+
+def _gyroscope(rng: np.random.Generator) -> Top:
+    """Brass rotor (thin disc) at ``d`` on a steel axle (thin rod from the pivot), R2."""
+    R, d = rng.uniform(0.025, 0.04), rng.uniform(0.04, 0.07)
+    m_rotor = BRASS * math.pi * R**2 * rng.uniform(0.004, 0.008)
+    length, radius = d + rng.uniform(0.01, 0.02), 0.002
+    m_axle = STEEL * math.pi * radius**2 * length
+    rod_cm = float(centre_of_mass_offset("thin_rod", length=length))
+    tensor = (parallel_axis(shape_tensor("disc", m_rotor, radius=R), m_rotor, [0.0, 0.0, d])
+              + parallel_axis(shape_tensor("thin_rod", m_axle, length=length), m_axle,
+                              [0.0, 0.0, rod_cm]))
+    M = m_rotor + m_axle
+    params = {"M": _r(M), "l": _r((m_rotor * d + m_axle * rod_cm) / M),
+              "I1": _r(tensor[0, 0]), "I3": _r(tensor[2, 2]), "g": G}
+    units = {"M": "kg", "l": "m", "I1": "kg m^2", "I3": "kg m^2", "g": "m/s^2"}
+    text = (
+        "A gyroscope (a brass rotor on a steel axle) spins with the lower end of its axle "
+        "resting in a cup on top of a tall post: a fixed point. Its mass is "
+        f"{_shown(params, 'M', 'M', 'kg')}, its centre of mass lies on the axle "
+        f"{_shown(params, 'l', 'l', 'm')} from the pivot, and its moments of inertia are "
+        f"{_shown(params, 'I1', 'I_1', 'kg m²')} about any axis through the pivot "
+        f"perpendicular to the axle and {_shown(params, 'I3', 'I_3', 'kg m²')} about the axle; "
+        f"{_shown(params, 'g', 'g', 'm/s²')}."
+    )
+    p = params
+    return Top("gyroscope", "A gyroscope on a post", text, params, units, p["I1"], p["I3"],
+               p["M"] * G * p["l"], None, (0.2, 1.6), (POLE_MARGIN, math.pi / 2 + 0.4),
+               (100.0, 400.0))
+
+
+SCENES: tuple[Callable[[np.random.Generator], Top], ...] = (_toy_top, _gyroscope, _hanging)
+
+
+def draw_top(rng: np.random.Generator) -> Top:
+    """A random real top (toy top, gyroscope or hanging disc), moments from the shown values."""
+    return SCENES[int(rng.integers(len(SCENES)))](rng)
+
+
+def draw_state(rng: np.random.Generator, top: Top, precession: float, nod: float) -> State:
+    """An initial state of ``top``, rounded to ``SIG`` figures.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Draws ``β0`` in ``top.tilt``, ``|γ̇0|`` in ``top.spin`` and the spin's sense (one
+        time in four clockwise seen from above).
+    top : Top
+        The body.
+    precession : float
+        ``α̇0`` as a multiple of the fast-top precession rate ``Mgl/(I3 γ̇0)`` (R21); 0 gives
+        exactly ``α̇0 = 0``.
+    nod : float
+        ``β̇0`` as a multiple of the nutation frequency ``I3 |γ̇0|/I1`` (R21); 0 gives exactly
+        ``β̇0 = 0``.
+    """
+    beta0 = _r(rng.uniform(*top.tilt))
+    gamma_dot0 = _r(rng.choice([1.0, 1.0, 1.0, -1.0]) * rng.uniform(*top.spin))
+    alpha_dot0 = _r(precession * top.Mgl / (top.I3 * gamma_dot0)) if precession else 0.0
+    beta_dot0 = _r(nod * top.I3 * abs(gamma_dot0) / top.I1) if nod else 0.0
+    return State(beta0, alpha_dot0, beta_dot0, gamma_dot0)
+
+
+def state_args(top: Top, state: State) -> tuple[float, ...]:
+    """``(I1, I3, Mgl, beta0, alpha_dot0, beta_dot0, gamma_dot0)`` for :mod:`solver.heavy_top`."""
+    return (top.I1, top.I3, top.Mgl, *astuple(state))
+
+
+def state_text(state: State) -> str:
+    """The sentence giving the initial state, naming each value's Python name."""
+    shown = ", ".join(
+        f"${s} = {latex_sig(v, SIG)}$ {STATE_UNITS[n]} (`{n}`)"
+        for s, n, v in zip(_STATE_SYMBOLS, STATE_NAMES, astuple(state), strict=True)
+    )
+    return f"At $t = 0$ the Euler angles' values and rates are {shown}."
+
+
+def variant_params(top: Top, state: State, **extra: float) -> tuple[dict, dict]:
+    """Shown parameters and their units: the body's, the state's, then ``extra`` (rad)."""
+    params = {**top.params, **dict(zip(STATE_NAMES, astuple(state), strict=True)), **extra}
+    units = {**top.units, **STATE_UNITS, **dict.fromkeys(extra, "rad")}
+    return {k: float(v) for k, v in params.items()}, units
+
+
+def mistaken_states(top: Top, state: State) -> dict[str, tuple[float, ...]]:
+    """Solver arguments of the moment and angle mistakes that apply to this top.
+
+    ``I1_about_cm`` (scenes where the student shifts ``I1``), ``I1_I3_swapped`` (only if the
+    swapped moments are still a rigid body's about its tip, ``I1 ≤ 2 I3``, which the solver
+    requires; for the constants of motion :func:`_swapped_constants` writes the swap out) and
+    ``degree_mode`` (``β0`` read as degrees).
+    """
+    args = state_args(top, state)
+    mistaken = {}
+    if top.I1_cm is not None:
+        mistaken["I1_about_cm"] = (top.I1_cm, *args[1:])
+    if top.I1 <= 2 * top.I3:
+        mistaken["I1_I3_swapped"] = (top.I3, top.I1, *args[2:])
+    mistaken["degree_mode"] = (*args[:3], math.radians(state.beta0), *args[4:])
+    return mistaken
+
+
+def motion_within_limits(top: Top, beta1: float, beta2: float) -> bool:
+    """Turning points inside the scene's limits (clear of the poles, the table, the horizontal
+    for the hanging disc) and at least ``MIN_NUTATION`` apart."""
+    low, high = top.limits
+    return low <= beta1 and beta2 <= high and beta2 - beta1 >= MIN_NUTATION
+
+
+def well_conditioned(value: float, *terms: float) -> bool:
+    """``value`` is not a small difference of the larger ``terms`` it is the sum of."""
+    return abs(value) >= MIN_CONDITION * sum(abs(t) for t in terms)
+
+
+def select_mistakes(
+    key: float, primary: dict[str, float], secondary: dict[str, float], *,
+    rtol: float = RTOL, atol: float = 0.0, feedback: dict[str, str] | None = None,
+) -> tuple[Mistake, ...] | None:
+    """The known mistakes of one answer, or None if the draw must be rejected.
+
+    ``primary`` mistakes are the ones the answer is about (``p_α`` without ``p_γ cos β``, β1
+    and β2 exchanged …): each must lie ``MARGIN`` tolerances from the key and from the others,
+    else the draw is rejected (None). ``secondary`` ones propagate from an earlier step (a
+    moment or an angle mistake): each is kept, in order, only if it lies ``MARGIN`` tolerances
+    from the key and from every mistake kept so far; otherwise it hardly changes *this* answer
+    in this variant (e.g. ``I1`` about the centre of mass barely moves ``E'`` of a fast top,
+    whose energy is mostly potential) and the grader could not name it reliably. Feedback from
+    ``feedback`` (default :data:`FEEDBACK`).
+
+    "Apart" means ``|x − y| > MARGIN (atol + rtol max(|x|, |y|))``: wider than the grader's
+    test ``|x − m| ≤ atol + rtol |m|`` around either value, so each kept mistake is named by
+    the grader even with the tolerances widened ``MARGIN`` times.
+    """
+    feedback = FEEDBACK if feedback is None else feedback
+
+    def apart(x: float, kept: list[tuple[str, float]]) -> bool:
+        return all(abs(x - y) > MARGIN * (atol + rtol * max(abs(x), abs(y)))
+                   for y in (key, *(v for _, v in kept)))
+
+    kept: list[tuple[str, float]] = []
+    for name, value in primary.items():
+        if not apart(float(value), kept):
+            return None
+        kept.append((name, float(value)))
+    for name, value in secondary.items():
+        if apart(float(value), kept):
+            kept.append((name, float(value)))
+    return tuple(Mistake(name, value, feedback[name]) for name, value in kept)
+
+
+# --------------------------------------------------------------------------------------------
+# This family: p_γ, p_α, E'
+
+
+def _swapped_constants(top: Top, state: State) -> tuple[float, float, float]:
+    """R15/R16 with ``I1`` and ``I3`` exchanged: what a student who swaps them computes.
+
+    Written out rather than asked of the solver: ``constants_of_motion`` rightly refuses
+    ``I3 > 2 I1`` (no rigid body has it about its tip), which is what the swap gives for most
+    tops, yet the student's formulas still return these numbers.
+    """
+    beta0, alpha_dot0, beta_dot0, gamma_dot0 = astuple(state)
+    u, s2 = math.cos(beta0), math.sin(beta0) ** 2
+    p_gamma = top.I1 * (alpha_dot0 * u + gamma_dot0)
+    p_alpha = top.I3 * alpha_dot0 * s2 + p_gamma * u
+    e_prime = 0.5 * top.I3 * (beta_dot0**2 + alpha_dot0**2 * s2) + top.Mgl * u
+    return p_alpha, p_gamma, e_prime
+
+
+def _answers(top: Top, state: State) -> tuple[Answer, ...] | None:
+    mistaken = mistaken_states(top, state)
+    mistaken.pop("I1_I3_swapped", None)  # see _swapped_constants
+    stacked = np.array([state_args(top, state), *mistaken.values()])
+    p_alpha, p_gamma, e_prime = (np.atleast_1d(x) for x in constants_of_motion(*stacked.T))
+    pa, pg, e = float(p_alpha[0]), float(p_gamma[0]), float(e_prime[0])
+    beta0, alpha_dot0, beta_dot0, gamma_dot0 = astuple(state)
+    transverse = top.I1 * alpha_dot0 * math.sin(beta0) ** 2
+    kinetic = 0.5 * top.I1 * (beta_dot0**2 + alpha_dot0**2 * math.sin(beta0) ** 2)
+    if not (well_conditioned(pa, transverse, pg * math.cos(beta0))
+            and well_conditioned(e, kinetic, top.Mgl * math.cos(beta0))):
+        return None
+    pa_swap, pg_swap, e_swap = _swapped_constants(top, state)
+    pa_wrong = {k: p_alpha[i] for i, k in enumerate(mistaken, 1)}
+    e_wrong = {k: e_prime[i] for i, k in enumerate(mistaken, 1)}
+    mistakes = (
+        # p_γ does not involve I1; its degree-mode error is second order in α̇0/γ̇0
+        select_mistakes(pg, {"omega3_is_gamma_dot": top.I3 * gamma_dot0},
+                        {"I1_I3_swapped": pg_swap}),
+        select_mistakes(pa, {"missing_p_gamma_term": transverse},
+                        {"I1_I3_swapped": pa_swap, **pa_wrong}),
+        select_mistakes(e, {"E_not_E_prime": e + pg**2 / (2 * top.I3)},
+                        {"I1_I3_swapped": e_swap, **e_wrong}),
+    )
+    if any(m is None for m in mistakes):
+        return None
+    answers = (
+        Answer("p_gamma", "scalar", pg, unit="kg m^2/s", rtol=RTOL, mistakes=mistakes[0],
+               description="p_γ, the momentum conjugate to γ"),
+        Answer("p_alpha", "scalar", pa, unit="kg m^2/s", rtol=RTOL, mistakes=mistakes[1],
+               description="p_α, the momentum conjugate to α"),
+        Answer("E_prime", "scalar", e, unit="J", rtol=RTOL, mistakes=mistakes[2],
+               description="E' = E − p_γ²/(2 I3)"),
+    )
+    return answers
+
+
+def _statement(top: Top, state: State) -> str:
+    return (
+        f"{top.text}\n\n{state_text(state)}\n\n{CONVENTIONS}\n\n"
+        "Find the constants of the motion (relative tolerance $10^{-3}$):\n\n"
+        "1. `p_gamma`: the momentum $p_\\gamma$ conjugate to $\\gamma$, in kg m²/s;\n"
+        "2. `p_alpha`: the momentum $p_\\alpha$ conjugate to $\\alpha$, in kg m²/s;\n"
+        "3. `E_prime`: the reduced energy $E' = E - p_\\gamma^2/(2 I_3)$, in J."
+    )
+
+
+def _variant(rng: np.random.Generator) -> Variant | None:
+    top = draw_top(rng)
+    sense = rng.choice([1.0, 1.0, -1.0])
+    nod = rng.choice([0.0, 1.0, -1.0]) * rng.uniform(0.02, 0.15)
+    state = draw_state(rng, top, sense * rng.uniform(0.3, 2.5), nod)
+    beta1, beta2 = turning_points(*state_args(top, state))
+    if not motion_within_limits(top, float(beta1), float(beta2)):
+        return None  # a top that would hit the table, sleep or flop over: not this scene
+    answers = _answers(top, state)
+    if answers is None:
+        return None
+    params, units = variant_params(top, state)
+    return Variant(NAME, f"{top.title}: constants of motion", params, units,
+                   _statement(top, state), answers)
+
+
+def generate(rng: np.random.Generator) -> Variant:
+    """One variant of the heavy top's constants of motion (R15, R16), from ``rng`` only.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The only source of randomness; the same generator state gives the same variant.
+
+    Returns
+    -------
+    Variant
+        Answers ``p_gamma``, ``p_alpha`` (kg m²/s) and ``E_prime`` (J), computed by
+        :func:`solver.heavy_top.constants_of_motion` from the shown (rounded) parameters.
+
+    Raises
+    ------
+    RuntimeError
+        No acceptable draw in ``MAX_ATTEMPTS`` (a template bug: most draws are accepted).
+    """
+    for _ in range(MAX_ATTEMPTS):
+        variant = _variant(rng)
+        if variant is not None:
+            return variant
+    raise RuntimeError(f"{NAME}: no acceptable draw in {MAX_ATTEMPTS} attempts")

@@ -1,0 +1,217 @@
+"""Heavy symmetric top: the precession rate at the turning points, and the figure the axis traces
+(R18).
+
+The tops are those of :mod:`problems.templates.heavy_top_constants` (a toy top on a table, a
+gyroscope on a post, a disc hanging from a ball joint). The figure is chosen first, each of the
+three equally often, and the initial state drawn to produce it (``Ω = Mgl/(I3 γ̇0)``, the
+fast-top precession rate of R21):
+
+``cusps``
+    released with ``α̇0 = β̇0 = 0`` (the classroom case): then ``p_α = p_γ cos β0`` and
+    ``α̇ = 0`` *exactly* at ``β1 = β0``;
+``waves``
+    ``α̇0`` in the sense of ``Ω``, 0.3–0.8 or 1.2–1.7 times it, ``β̇0 = 0``;
+``loops``
+    ``α̇0`` against ``Ω`` (0.3–1.5 times it), or beyond twice ``Ω``, or ``α̇0 = 0`` with a nod
+    ``β̇0 ≠ 0``.
+
+Asked: ``alpha_dot1``, ``alpha_dot2``, the precession rate ``α̇ = (p_α − p_γ cos β)/(I1 sin²β)``
+at the turning points ``β1 ≤ β2`` (R17, R18), and ``motion``, one of ``"waves"``, ``"loops"``,
+``"cusps"``. Answers from :func:`solver.heavy_top.solve_heavy_top` on the shown values.
+
+Robustness: the solver's classification is kept only if it is unambiguous. A cusp must be the
+exact released case; otherwise both rates must be at least ``MIN_RATE_RATIO`` of the larger in
+size, so that no student's rounding of a turning point can turn waves or loops into cusps.
+Also rejected: steady and sleeping tops, turning points closer than ``MIN_NUTATION`` and motions
+outside the scene's limits (as in :mod:`~problems.templates.turning_points`).
+
+Known mistakes for the rates: ``α̇(β1)`` and ``α̇(β2)`` exchanged and the sign flipped (not for
+the cusp's exact zero), always listed (a draw where they are confusable is rejected); ``I1``
+about the centre of mass and ``I1``, ``I3`` swapped (when the solver accepts the swapped moments,
+``I1 ≤ 2 I3``), listed where they move the rate by more than five tolerances. For the figure,
+each wrong option, with the reason it is wrong.
+
+Tolerance: ``rtol = 1e-3`` and ``atol = 1e-3`` of the larger ``|α̇|`` (a cusp's rate is exactly
+zero, and a student's turning point carried to 1e-8 leaves a residue there far below that).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from problems.answers import Answer, Mistake
+from problems.templates.heavy_top_constants import (
+    CONVENTIONS,
+    FEEDBACK,
+    RTOL,
+    State,
+    Top,
+    draw_state,
+    draw_top,
+    mistaken_states,
+    motion_within_limits,
+    select_mistakes,
+    state_args,
+    state_text,
+    variant_params,
+)
+from problems.variant import Variant
+from solver.heavy_top import constants_of_motion, precession_rate, solve_heavy_top, turning_points
+
+NAME = "motion_type"
+TITLE = "Heavy symmetric top: waves, loops or cusps?"
+SUMMARY = "heavy symmetric top: α̇ at the turning points and the figure (waves, loops, cusps)"
+RESULTS = ("R17", "R18")
+
+OPTIONS = ("waves", "loops", "cusps")
+MIN_RATE_RATIO = 0.05
+"""Outside the exact cusp, ``min |α̇(βi)| ≥ MIN_RATE_RATIO · max |α̇(βi)|``."""
+MAX_ATTEMPTS = 500
+
+_FEEDBACK = {
+    **FEEDBACK,
+    "turning_points_exchanged": (
+        "The rates at β1 and β2 are exchanged: β1 ≤ β2 is the smaller tilt (the axis at its "
+        "highest)."
+    ),
+    "sign_flipped": (
+        "The sign is flipped: α̇ = (p_α − p_γ cos β)/(I1 sin²β) (R18), positive when the axis "
+        "precesses counter-clockwise seen from above."
+    ),
+}
+
+_FIGURE_FEEDBACK = {
+    ("waves", "loops"): "α̇ has the same sign at both turning points (R18), so the axis never "
+                        "moves backwards: waves, not loops.",
+    ("waves", "cusps"): "α̇ vanishes at neither turning point (R18): the axis never stops, so "
+                        "the figure is waves, not cusps.",
+    ("loops", "waves"): "α̇ has opposite signs at the two turning points (R18): the axis moves "
+                        "backwards near one of them and traces loops.",
+    ("loops", "cusps"): "α̇ is not zero at a turning point; it changes sign between them (R18): "
+                        "loops, not cusps.",
+    ("cusps", "waves"): "α̇ = 0 at the upper turning point (R18: released with α̇0 = β̇0 = 0, "
+                        "p_α = p_γ cos β0): the axis stops there and traces cusps.",
+    ("cusps", "loops"): "α̇ vanishes at the upper turning point but never changes sign (R18): "
+                        "the axis stops there without moving backwards — cusps, not loops.",
+}
+
+
+def _draw_state(rng: np.random.Generator, top: Top, figure: str) -> State:
+    """An initial state meant to give ``figure`` (the solver has the last word)."""
+    if figure == "cusps":
+        return draw_state(rng, top, 0.0, 0.0)
+    if figure == "waves":
+        return draw_state(rng, top, rng.choice([0.3, 1.2]) + rng.uniform(0.0, 0.5), 0.0)
+    kind = int(rng.integers(3))
+    if kind == 0:
+        return draw_state(rng, top, -rng.uniform(0.3, 1.5), 0.0)
+    if kind == 1:
+        return draw_state(rng, top, rng.uniform(2.3, 3.0), 0.0)
+    return draw_state(rng, top, 0.0, rng.choice([1.0, -1.0]) * rng.uniform(0.03, 0.15))
+
+
+def _robust(state: State, figure: str, rates: tuple[float, float]) -> bool:
+    if figure == "cusps":  # only the exact case: released from rest in α and β
+        return state.alpha_dot0 == 0 and state.beta_dot0 == 0
+    sizes = sorted(abs(r) for r in rates)
+    return figure in OPTIONS and sizes[0] >= MIN_RATE_RATIO * sizes[1]
+
+
+def _moment_mistakes(top: Top, state: State):
+    """The moment mistakes' solver arguments, and their turning points ``(β1, β2)`` after the
+    key's (index 0): one vectorised pass, done first since it is the cheap rejection test."""
+    mistaken = {k: v for k, v in mistaken_states(top, state).items() if k != "degree_mode"}
+    rows = np.array([state_args(top, state), *mistaken.values()]).T
+    beta1, beta2 = (np.atleast_1d(b) for b in turning_points(*rows))
+    return mistaken, rows, beta1, beta2
+
+
+def _rate_answers(rates: tuple[float, float], names: tuple[str, ...], rows: np.ndarray,
+                  beta1: np.ndarray, beta2: np.ndarray):
+    """``alpha_dot1``, ``alpha_dot2`` with their mistakes (None if confusable). ``rows``,
+    ``beta1``, ``beta2``: solver arguments and turning points, the key's first, then those of
+    the moment mistakes ``names`` (their rates from the solver on the mistaken moments)."""
+    p_alpha, p_gamma, _ = constants_of_motion(*rows)
+    wrong = [np.atleast_1d(precession_rate(b, rows[0], p_alpha, p_gamma))[1:]
+             for b in (beta1, beta2)]
+    scale = max(abs(r) for r in rates)
+    answers = []
+    for i, name in enumerate(("alpha_dot1", "alpha_dot2")):
+        key = rates[i]
+        primary = {"turning_points_exchanged": rates[1 - i]}
+        if key != 0:  # the cusp's exact zero has no sign to flip
+            primary["sign_flipped"] = -key
+        mistakes = select_mistakes(key, primary, dict(zip(names, wrong[i], strict=True)),
+                                   atol=RTOL * scale, feedback=_FEEDBACK)
+        if mistakes is None:
+            return None
+        answers.append(Answer(name, "scalar", key, unit="rad/s", rtol=RTOL, atol=RTOL * scale,
+                              mistakes=mistakes,
+                              description=f"precession rate α̇ at the turning point β{i + 1}"))
+    return answers
+
+
+def _figure_answer(figure: str) -> Answer:
+    mistakes = tuple(Mistake(f"said_{other}", other, _FIGURE_FEEDBACK[figure, other])
+                     for other in OPTIONS if other != figure)
+    return Answer("motion", "choice", figure, options=OPTIONS, mistakes=mistakes,
+                  description='the figure the axis traces: "waves", "loops" or "cusps"')
+
+
+def _statement(top: Top, state: State) -> str:
+    return (
+        f"{top.text}\n\n{state_text(state)}\n\n{CONVENTIONS}\n\n"
+        "The axis nods (nutates) between the turning points $\\beta_1 \\le \\beta_2$ while it "
+        "precesses. Find:\n\n"
+        "1. `alpha_dot1`, `alpha_dot2`: the precession rate $\\dot\\alpha$, in rad/s, at the "
+        "instants when the tilt is $\\beta_1$ and $\\beta_2$ respectively (tolerance "
+        "$10^{-3}$ relative, or $10^{-3}$ of the larger $|\\dot\\alpha|$);\n"
+        "2. `motion`: the figure that the symmetry axis traces on a sphere centred on the "
+        'fixed point, one of `"waves"`, `"loops"` or `"cusps"`.'
+    )
+
+
+def _variant(rng: np.random.Generator) -> Variant | None:
+    top = draw_top(rng)
+    state = _draw_state(rng, top, OPTIONS[int(rng.integers(len(OPTIONS)))])
+    mistaken, rows, beta1, beta2 = _moment_mistakes(top, state)
+    if not motion_within_limits(top, float(beta1[0]), float(beta2[0])):
+        return None
+    # the key from the solver's one-state summary: exact α̇ = 0 at a cusp, and the figure
+    solution = solve_heavy_top(*state_args(top, state))
+    rates = (solution["alpha_dot_beta1"], solution["alpha_dot_beta2"])
+    figure = solution["motion"]
+    if None in rates or not _robust(state, figure, rates):
+        return None
+    answers = _rate_answers(rates, tuple(mistaken), rows, beta1, beta2)
+    if answers is None:
+        return None
+    params, units = variant_params(top, state)
+    return Variant(NAME, f"{top.title}: waves, loops or cusps?", params, units,
+                   _statement(top, state), (*answers, _figure_answer(figure)))
+
+
+def generate(rng: np.random.Generator) -> Variant:
+    """One variant of the precession rates at the turning points and the figure (R18).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The only source of randomness; the same generator state gives the same variant.
+
+    Returns
+    -------
+    Variant
+        Answers ``alpha_dot1``, ``alpha_dot2`` (rad/s) and ``motion`` (choice), computed by
+        :func:`solver.heavy_top.solve_heavy_top` from the shown (rounded) parameters.
+
+    Raises
+    ------
+    RuntimeError
+        No acceptable draw in ``MAX_ATTEMPTS`` (a template bug: most draws are accepted).
+    """
+    for _ in range(MAX_ATTEMPTS):
+        variant = _variant(rng)
+        if variant is not None:
+            return variant
+    raise RuntimeError(f"{NAME}: no acceptable draw in {MAX_ATTEMPTS} attempts")

@@ -1,0 +1,230 @@
+"""Nutation period and mean precession rate of a heavy symmetric top (R15–R17, R20).
+
+A real top (:func:`~problems.templates.sleeping_top.draw_top`: a disc or rotor on a light axle,
+or a wooden cone) stands on a fixed tip with its moments ``I1`` (about the tip) and ``I3`` and
+its ``M g l`` given to 3 figures. It is let go at the tilt ``β0`` with ``β̇ = 0``, spinning at
+``ω3`` (1.2 to 5 times the sleeping top's critical spin), either with no precession
+(``α̇0 = 0``: the axis traces cusps) or with a push ``α̇0`` (waves or loops). Asked:
+
+``T_nut``
+    The nutation period ``T = 4 K(k)/√(B (u3 − u1))`` (R20), s.
+``mean_rate``
+    The mean precession rate over one nutation period, ``⟨α̇⟩ = Δα / T`` (R20), rad/s.
+
+The key comes from :func:`solver.heavy_top.nutation` (Carlson ``R_F``/``R_J``, exact); a student
+uses ``numpy.roots`` for the cubic of R17, ``scipy.special.ellipk`` for ``K`` and
+``scipy.integrate.quad`` for ``Δα`` — the statement says so.
+
+Known mistakes (each computed by the solver from the mistaken physics): for ``T_nut`` the
+small-oscillation period ``2π I1/p_γ`` of a fast top (R21), half the period (one sweep
+``β1 → β2``), ``ellipk`` called with ``k`` instead of its parameter ``m = k²``, ``β0`` read as
+degrees, ``I1`` and ``I3`` swapped; for ``mean_rate`` the fast top's slow precession
+``Mgl/p_γ`` (R21), the rate in Hz (÷ 2π), ``Δα`` over one sweep only (the factor 2 of R20
+missing), ``β0`` read as degrees, ``I1`` and ``I3`` swapped (when that swap is still a body,
+``I1 ≤ 2 I3``).
+
+Rejected draws (resampled): turning points closer than ``MIN_AMPLITUDE`` (nearly steady: the
+fast-top values are then within tolerance), ``k² > MAX_K2`` (near the separatrix of an unstable
+upright top, where the period diverges logarithmically and 3-figure data decide too much), an
+axis swinging below ``MAX_BETA2`` from the vertical, and known mistakes within ``MARGIN``
+tolerances of the key or of each other.
+
+Tolerance ``rtol = 1e-3``: the data are exact 3-figure numbers; ``numpy.roots`` gives the roots
+of this well-separated cubic to ~1e-13, ``ellipk`` is accurate to ~1e-15, and ``quad`` of the
+``Δα`` integrand (inverse-square-root end singularities, which QUADPACK's extrapolation handles)
+to ~1e-8 — or better after the substitution ``u = u1 + (u2 − u1) sin²θ``. So a correct method
+lands far inside 1e-3, and every known mistake is at least 5e-3 away.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.special import ellipk
+
+from problems.answers import Answer, Mistake
+from problems.rounding import latex_sig, round_sig
+from problems.templates.sleeping_top import distinguishable, draw_top
+from problems.variant import Variant
+from solver.heavy_top import constants_of_motion, critical_spin, cubic_roots, nutation
+from solver.parameters import ParameterError
+
+NAME = "nutation_precession"
+TITLE = "Nutation period and mean precession rate of a heavy top"
+SUMMARY = "heavy top let go at a tilt: exact nutation period and mean precession rate (elliptic)"
+RESULTS = ("R15", "R17", "R20")
+
+SIG = 3
+"""Significant figures of every displayed parameter."""
+RTOL = 1e-3
+MARGIN = 5.0
+"""Known mistakes must lie this many tolerances from the key and from each other."""
+SPIN_RATIO = (1.2, 5.0)
+"""ω3 as a multiple of the sleeping top's critical spin 2√(Mgl I1)/I3 (R19)."""
+TILT = (0.2, 1.2)
+"""β0, rad."""
+PUSH = (-1.5, 3.0)
+"""α̇0 of a pushed top, as a multiple of the fast top's slow precession Mgl/p_γ."""
+MIN_AMPLITUDE = 0.02
+"""Least β2 − β1, rad."""
+MAX_K2 = 0.9
+"""Largest k² = (u2 − u1)/(u3 − u1)."""
+MAX_BETA2 = 2.5
+"""Largest β2, rad."""
+MAX_ATTEMPTS = 1000
+
+_TOOLS = (
+    "You may use `numpy.roots` for the cubic $f(u)$ of $u = \\cos\\beta$, "
+    "`scipy.special.ellipk` (note: its argument is the parameter $m = k^2$) and "
+    "`scipy.integrate.quad` (the precession integrand has inverse-square-root singularities at "
+    "the turning points; the substitution $u = u_1 + (u_2 - u_1)\\sin^2\\theta$ removes them)."
+)
+
+
+def _state(I1, I3, Mgl, beta0, omega3, alpha_dot0):
+    """The solver's initial state; ``γ̇0 = ω3 − α̇0 cos β0`` (R12) from the displayed values."""
+    return (I1, I3, Mgl, beta0, alpha_dot0, 0.0, omega3 - alpha_dot0 * math.cos(beta0))
+
+
+def _well_posed(state) -> bool:
+    u1, u2, u3 = (float(x) for x in cubic_roots(*state))
+    n = nutation(*state)
+    amplitude = float(n["beta2"]) - float(n["beta1"])
+    return (amplitude >= MIN_AMPLITUDE and (u2 - u1) / (u3 - u1) <= MAX_K2
+            and float(n["beta2"]) <= MAX_BETA2 and math.isfinite(n["nutation_period"]))
+
+
+def _values(states: dict[str, tuple]) -> dict[str, tuple[float, float]]:
+    """``{label: (T_nut, mean_rate)}`` for each state, in one vectorised solver call."""
+    columns = np.array(list(states.values()), dtype=float).T
+    n = nutation(*columns)
+    return {k: (float(n["nutation_period"][i]), float(n["mean_precession_rate"][i]))
+            for i, k in enumerate(states)}
+
+
+def _answers(I1, I3, Mgl, beta0, omega3, alpha_dot0) -> tuple[Answer, Answer]:
+    state = _state(I1, I3, Mgl, beta0, omega3, alpha_dot0)
+    states = {"key": state, "degrees": _state(I1, I3, Mgl, math.radians(beta0), omega3,
+                                              alpha_dot0)}
+    if I1 <= 2 * I3:  # the swapped moments still describe a body (R4)
+        states["swapped"] = _state(I3, I1, Mgl, beta0, omega3, alpha_dot0)
+    values = _values(states)
+    T, mean = values["key"]
+    _, p_gamma, _ = constants_of_motion(*state)
+    u1, u2, u3 = (float(x) for x in cubic_roots(*state))
+    scale = 4.0 / math.sqrt(2.0 * Mgl / I1 * (u3 - u1))
+    k = math.sqrt((u2 - u1) / (u3 - u1))
+
+    degrees = "β0 is in radians; this value comes from reading it as degrees."
+    swapped = ("I1 and I3 are swapped: p_γ = I3 ω3 uses the moment about the symmetry axis, "
+               "I1 the transverse moment about the tip.")
+    t_mistakes = [
+        Mistake("small_oscillation", 2 * math.pi * I1 / float(p_gamma),
+                "That is the fast top's small-nutation period 2π I1/p_γ (R21); the exact period "
+                "4K(k)/√(B(u3 − u1)) of R20 is asked."),
+        Mistake("half_period", T / 2, "That is one sweep from β1 to β2; a full nutation period "
+                "goes there and back: T = 2K(k)/λ (R20)."),
+        Mistake("ellipk_of_k", scale * float(ellipk(k)), "scipy.special.ellipk takes the "
+                "parameter m = k², not the modulus k: use ellipk(k**2)."),
+        Mistake("degrees", values["degrees"][0], degrees),
+    ]
+    r_mistakes = [
+        Mistake("fast_top", Mgl / float(p_gamma), "That is the fast-top slow precession "
+                "Mgl/p_γ (R21), an approximation; the exact mean Δα/T_nut of R20 is asked."),
+        Mistake("hz", mean / (2 * math.pi), "That is the rate in revolutions per second "
+                "(divided by 2π); give it in rad/s."),
+        Mistake("missing_factor_2", mean / 2, "Δα over a full nutation period is twice the "
+                "integral from u1 to u2 (there and back): Δα = 2∫(b − au)/((1 − u²)√f) du (R20)."),
+        Mistake("degrees", values["degrees"][1], degrees),
+    ]
+    if "swapped" in values:
+        t_mistakes.append(Mistake("I1_I3_swapped", values["swapped"][0], swapped))
+        r_mistakes.append(Mistake("I1_I3_swapped", values["swapped"][1], swapped))
+    t_mistakes = [m for m in t_mistakes if math.isfinite(m.value)]
+    r_mistakes = [m for m in r_mistakes if math.isfinite(m.value)]
+    return (
+        Answer("T_nut", "scalar", T, unit="s", rtol=RTOL, mistakes=tuple(t_mistakes),
+               description="nutation period (exact)"),
+        Answer("mean_rate", "scalar", mean, unit="rad/s", rtol=RTOL,
+               mistakes=tuple(r_mistakes), description="mean precession rate over one period"),
+    )
+
+
+def _statement(noun: str, p: dict[str, float]) -> str:
+    def show(name: str, symbol: str, unit: str) -> str:
+        return f"${symbol} = {latex_sig(p[name], SIG)}$ {unit} (`{name}`)"
+
+    beta0 = show("beta0", r"\beta_0", "rad")
+    omega3 = show("omega3", r"\omega_3", "rad/s")
+    alpha_dot0 = show("alpha_dot0", r"\dot\alpha_0", "rad/s")
+    how = ("without any precession: " if p["alpha_dot0"] == 0.0
+           else "with a sideways push that sets the axis precessing: ")
+    return (
+        f"A top, {noun}, spins on a fixed frictionless tip. Its moments of inertia are "
+        f"{show('I1', 'I_1', 'kg m²')} about any axis through the tip perpendicular to the "
+        f"symmetry axis and {show('I3', 'I_3', 'kg m²')} about the symmetry axis; its weight "
+        f"times the distance from the tip to its centre of mass is "
+        f"{show('Mgl', 'Mgl', 'J')}. The axis's tilt $\\beta$ is measured from the upward "
+        "vertical and $\\alpha$ is the azimuth of the axis about the vertical (Euler angles "
+        "of the lecture).\n\n"
+        f"The top is let go at the tilt {beta0} with $\\dot\\beta = 0$, spinning at "
+        f"{omega3} about its symmetry axis, {how}{alpha_dot0}"
+        ". The tilt then oscillates (nutates) between two turning angles $\\beta_1$ and "
+        "$\\beta_2$. Find, exactly (not in the fast-top approximation; relative tolerance "
+        "$10^{-3}$):\n\n"
+        "1. `T_nut`: the nutation period (s), the time for $\\beta$ to go from $\\beta_1$ to "
+        "$\\beta_2$ and back;\n"
+        "2. `mean_rate`: the mean precession rate $\\langle\\dot\\alpha\\rangle$ over one "
+        "nutation period (rad/s), the change of $\\alpha$ during one period divided by "
+        "the period.\n\n"
+        f"{_TOOLS}"
+    )
+
+
+def _variant(rng: np.random.Generator) -> Variant | None:
+    top = draw_top(rng)
+    I1, I3, Mgl = (round_sig(x, SIG) for x in (top.I1, top.I3, top.Mgl))
+    if I3 > 2 * I1:  # pragma: no cover - rounding cannot cross this for real tops
+        return None
+    omega3 = round_sig(float(critical_spin(I1, I3, Mgl)) * rng.uniform(*SPIN_RATIO), SIG)
+    beta0 = round_sig(rng.uniform(*TILT), SIG)
+    alpha_dot0 = 0.0
+    if rng.random() < 0.5:
+        alpha_dot0 = round_sig(rng.uniform(*PUSH) * Mgl / (I3 * omega3), SIG)
+    if not _well_posed(_state(I1, I3, Mgl, beta0, omega3, alpha_dot0)):
+        return None
+    try:
+        answers = _answers(I1, I3, Mgl, beta0, omega3, alpha_dot0)
+    except ParameterError as err:
+        if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
+            raise
+        return None
+    if not all(distinguishable(a, MARGIN) for a in answers):
+        return None
+    params = {"I1": I1, "I3": I3, "Mgl": Mgl, "beta0": beta0, "omega3": omega3,
+              "alpha_dot0": alpha_dot0}
+    units = {"I1": "kg m^2", "I3": "kg m^2", "Mgl": "J", "beta0": "rad", "omega3": "rad/s",
+             "alpha_dot0": "rad/s"}
+    return Variant(NAME, TITLE, params, units, _statement(top.kind.noun, params), answers)
+
+
+def generate(rng: np.random.Generator) -> Variant:
+    """One variant: a top let go at a tilt; its nutation period and mean precession (R20).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The only source of randomness.
+
+    Returns
+    -------
+    Variant
+        Answers ``T_nut`` (s) and ``mean_rate`` (rad/s), computed by
+        :func:`solver.heavy_top.nutation` from the displayed (3-figure) parameters.
+    """
+    for _ in range(MAX_ATTEMPTS):
+        variant = _variant(rng)
+        if variant is not None:
+            return variant
+    raise RuntimeError(f"{NAME}: no acceptable draw in {MAX_ATTEMPTS} attempts")  # pragma: no cover

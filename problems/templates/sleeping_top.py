@@ -1,0 +1,268 @@
+"""The sleeping top (R19): the least spin for which a vertical top is stable, and a given spin.
+
+A real top is drawn (:func:`draw_top`): a brass or steel disc on a light axle, a thick steel
+rotor (solid cylinder) on a light axle, or a wooden toy top (solid cone spinning on its apex),
+with real sizes: radius 2–5 cm, mass 30–500 g, centre of mass 2–6 cm from the tip. The statement
+gives the body (mass ``M``, radius ``R``, thickness or height ``h``, tip-to-centre distance ``l``
+for the axle tops, ``g``); the student finds ``I1`` about the tip (R2 and the parallel-axis
+theorem), ``I3`` and ``M g l``. Asked:
+
+``omega3_c``
+    The critical spin ``ω3_c = 2 √(M g l I1) / I3`` (R19), rad/s.
+``stable``
+    Whether a vertical spin at the given ``ω3`` sleeps (``ω3 ≥ ω3_c``), a boolean.
+
+Known mistakes of ``omega3_c`` (each computed by :func:`solver.heavy_top.critical_spin` from the
+mistaken inputs): ``I1`` about the centre of mass instead of about the tip, ``I1`` and ``I3``
+swapped, the factor 2 missing, the answer in Hz (divided by 2π).
+
+Rejected draws (resampled): a given spin within ``THRESHOLD_MARGIN`` (3 %) of the critical spin
+(the boolean would hang on the rounding of the data), and known mistakes within ``MARGIN``
+tolerances of the key or of each other.
+
+Tolerance: ``omega3_c`` has ``rtol = 1e-3``: it is one square root of products of 3-figure
+data, which any careful computation reproduces to ~1e-15; the known mistakes differ by factors
+of order one.
+
+:func:`draw_top` and :func:`distinguishable` are shared with the other heavy-top templates
+(:mod:`~problems.templates.nutation_precession`, :mod:`~problems.templates.steady_precession`,
+:mod:`~problems.templates.symbolic_derivation`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from problems.answers import Answer, Mistake, grade
+from problems.rounding import latex_sig, round_sig
+from problems.variant import Variant
+from solver.heavy_top import critical_spin, sleeping_top_stable
+from solver.inertia import centre_of_mass_offset, parallel_axis, shape_tensor
+from solver.parameters import ParameterError
+
+NAME = "sleeping_top"
+TITLE = "The sleeping top: how fast must it spin?"
+SUMMARY = "sleeping top: least spin for a stable upright top; stable or not at a given spin"
+RESULTS = ("R2", "R19")
+
+SIG = 3
+"""Significant figures of every displayed parameter."""
+G = 9.81
+"""Gravitational acceleration shown to students, m/s²."""
+RTOL = 1e-3
+MARGIN = 5.0
+"""Known mistakes must lie this many tolerances from the key and from each other."""
+SPIN_RATIO = (0.5, 2.0)
+"""The given spin, as a multiple of the critical spin."""
+THRESHOLD_MARGIN = 0.03
+"""Least relative distance of the given spin from the critical one."""
+MAX_ATTEMPTS = 1000
+
+
+# --------------------------------------------------------------------------------------------
+# A real top (shared with the other heavy-top templates)
+
+
+@dataclass(frozen=True)
+class TopKind:
+    """A kind of real top: its solver shape, materials and size ranges (SI)."""
+
+    noun: str
+    shape: str  # a shape of solver.inertia.SHAPES
+    mass: tuple[float, float]  # kg
+    radius: tuple[float, float]  # m
+    height: tuple[float, float] | None  # m; None for a thin disc
+    arm_range: tuple[float, float] | None  # tip-to-centre distance l, m; None: the cone's own
+
+
+TOP_KINDS: tuple[TopKind, ...] = (
+    TopKind("a brass disc on a light axle", "disc", (0.05, 0.5), (0.02, 0.05), None,
+            (0.02, 0.06)),
+    TopKind("a steel rotor (a solid cylinder) on a light axle", "solid_cylinder", (0.1, 0.5),
+            (0.02, 0.04), (0.008, 0.025), (0.03, 0.06)),
+    TopKind("a wooden toy top (a solid cone spinning on its apex)", "solid_cone", (0.03, 0.12),
+            (0.02, 0.04), (0.03, 0.06), None),
+)
+
+
+@dataclass(frozen=True)
+class Top:
+    """A symmetric top on a fixed tip, from displayed (rounded) dimensions (SI units).
+
+    ``h`` is the thickness (solid cylinder) or height (cone), ``None`` for a thin disc; ``arm`` is
+    ``l``, the distance from the tip to the centre of mass (``3h/4`` for a cone on its apex).
+    """
+
+    kind: TopKind
+    M: float
+    R: float
+    h: float | None
+    arm: float  # l
+    g: float = G
+
+    def _dims(self) -> dict[str, float]:
+        return {"radius": self.R} | ({} if self.h is None else {"height": self.h})
+
+    @property
+    def I_cm(self) -> float:
+        """Transverse moment about the centre of mass, kg m² (R2)."""
+        return float(shape_tensor(self.kind.shape, self.M, **self._dims())[0, 0])
+
+    @property
+    def I1(self) -> float:
+        """Transverse moment about the tip, kg m² (parallel-axis theorem, R2)."""
+        tensor = shape_tensor(self.kind.shape, self.M, **self._dims())
+        return float(parallel_axis(tensor, self.M, [0.0, 0.0, self.arm])[0, 0])
+
+    @property
+    def I3(self) -> float:
+        """Moment about the symmetry axis, kg m²."""
+        return float(shape_tensor(self.kind.shape, self.M, **self._dims())[2, 2])
+
+    @property
+    def Mgl(self) -> float:
+        """Weight times tip-to-centre distance, J."""
+        return self.M * self.g * self.arm
+
+
+def draw_top(rng: np.random.Generator, sig: int = SIG) -> Top:
+    """A real top with dimensions drawn from :data:`TOP_KINDS` and rounded to ``sig`` figures.
+
+    For a cone the tip is the apex, ``l = 3h/4`` (:func:`solver.inertia.centre_of_mass_offset`);
+    it is computed from the rounded ``h`` and not rounded itself.
+    """
+    kind = TOP_KINDS[int(rng.integers(len(TOP_KINDS)))]
+
+    def u(bounds: tuple[float, float]) -> float:
+        return round_sig(rng.uniform(*bounds), sig)
+
+    M, R = u(kind.mass), u(kind.radius)
+    h = None if kind.height is None else u(kind.height)
+    if kind.arm_range is None:
+        arm = float(centre_of_mass_offset(kind.shape, radius=R, height=h))
+    else:
+        # the axle must leave the rotor clear of the tip: l ≥ h/2 + 1 cm
+        low = max(kind.arm_range[0], (h or 0.0) / 2 + 0.01)
+        arm = u((low, kind.arm_range[1]))
+    return Top(kind, M, R, h, arm)
+
+
+def distinguishable(answer: Answer, margin: float = MARGIN) -> bool:
+    """Every known mistake of ``answer`` lies ``margin`` tolerances from the key and from every
+    other mistake (graded with the widened tolerance, each is still recognised by its name)."""
+    try:
+        wide = replace(answer, rtol=margin * answer.rtol, atol=margin * answer.atol)
+    except ParameterError:  # a mistake within the widened tolerance of the key
+        return False
+    return all(grade(wide, m.value).mistake == m.name for m in wide.mistakes)
+
+
+# --------------------------------------------------------------------------------------------
+# The question
+
+
+_HZ = ("That is the critical spin in revolutions per second (divided by 2π); give the angular "
+       "velocity in rad/s.")
+_I1_CM = ("I1 must be the transverse moment about the fixed tip, not about the centre of mass: "
+          "add M l² (parallel-axis theorem, R2).")
+_SWAPPED = ("I1 and I3 are swapped: p_γ = I3 ω3 involves the moment about the symmetry axis, "
+            "and the gravity term M g l I1 the transverse moment about the tip (R19).")
+_FACTOR_2 = ("A factor 2 is missing: the condition is p_γ² ≥ 4 M g l I1, so "
+             "ω3 ≥ 2 √(M g l I1)/I3 (R19).")
+
+
+def _spin_answer(top: Top) -> Answer:
+    w = float(critical_spin(top.I1, top.I3, top.Mgl))
+    mistakes = (
+        Mistake("I1_about_cm", float(critical_spin(top.I_cm, top.I3, top.Mgl)), _I1_CM),
+        Mistake("I1_I3_swapped", float(critical_spin(top.I3, top.I1, top.Mgl)), _SWAPPED),
+        Mistake("missing_factor_2", w / 2, _FACTOR_2),
+        Mistake("hz", w / (2 * math.pi), _HZ),
+    )
+    return Answer("omega3_c", "scalar", w, unit="rad/s", rtol=RTOL, mistakes=mistakes,
+                  description="least spin for which the vertical top is stable")
+
+
+def _stable_answer(top: Top, omega3: float) -> Answer:
+    stable = bool(sleeping_top_stable(top.I1, top.I3, top.Mgl, omega3))
+    why = ("The vertical spin is stable exactly when ω3 is at least the critical spin "
+           "2 √(M g l I1)/I3 (R19, with I1 about the tip): compare the given spin with it.")
+    return Answer("stable", "boolean", stable, points=0.5,
+                  mistakes=(Mistake("wrong_side", not stable, why),),
+                  description="does the top sleep (stay vertical) at the given spin?")
+
+
+def _statement(top: Top, omega3: float) -> str:
+    R, M, g = latex_sig(top.R, SIG), latex_sig(top.M, SIG), latex_sig(top.g, SIG)
+    if top.kind.shape == "disc":
+        body = (f"a thin uniform disc of mass $M = {M}$ kg (`M`) and radius $R = {R}$ m (`R`) "
+                f"whose centre is $l = {latex_sig(top.arm, SIG)}$ m (`l`) from the tip along "
+                "the massless axle")
+    elif top.kind.shape == "solid_cylinder":
+        body = (f"a uniform solid cylinder of mass $M = {M}$ kg (`M`), radius $R = {R}$ m "
+                f"(`R`) and thickness $h = {latex_sig(top.h, SIG)}$ m (`h`) whose centre is "
+                f"$l = {latex_sig(top.arm, SIG)}$ m (`l`) from the tip along the massless axle")
+    else:
+        body = (f"a uniform solid cone of mass $M = {M}$ kg (`M`), base radius $R = {R}$ m "
+                f"(`R`) and height $h = {latex_sig(top.h, SIG)}$ m (`h`) spinning on its apex (its "
+                "centre of mass is $3h/4$ from the apex)")
+    return (
+        f"A top, {top.kind.noun}, spins on a fixed frictionless tip: {body}. Take "
+        f"$g = {g}$ m/s² (`g`). The angle $\\beta$ of the symmetry axis is measured from the "
+        "upward vertical; $\\beta = 0$ is the top standing upright (sleeping).\n\n"
+        "1. `omega3_c`: the least spin $\\omega_3$ about the symmetry axis (rad/s) for which "
+        "the upright spinning top is stable against small tilts (relative tolerance "
+        "$10^{-3}$).\n"
+        f"2. `stable`: the top is set spinning upright at $\\omega_3 = "
+        f"{latex_sig(omega3, SIG)}$ rad/s (`omega3`). Does it keep sleeping (`True`) or does a "
+        "small disturbance make it wobble away from the vertical (`False`)?"
+    )
+
+
+def _variant(rng: np.random.Generator) -> Variant | None:
+    top = draw_top(rng)
+    critical = float(critical_spin(top.I1, top.I3, top.Mgl))
+    omega3 = round_sig(critical * rng.uniform(*SPIN_RATIO), SIG)
+    if abs(omega3 / critical - 1.0) < THRESHOLD_MARGIN:
+        return None
+    try:
+        answers = (_spin_answer(top), _stable_answer(top, omega3))
+    except ParameterError as err:
+        if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
+            raise
+        return None
+    if not all(distinguishable(a) for a in answers):
+        return None
+    params = {"M": top.M, "R": top.R} | ({} if top.h is None else {"h": top.h})
+    if top.kind.arm_range is not None:
+        params["l"] = top.arm
+    params |= {"g": top.g, "omega3": omega3}
+    units = {"M": "kg", "R": "m", "h": "m", "l": "m", "g": "m/s^2", "omega3": "rad/s"}
+    return Variant(NAME, TITLE, params, {k: units[k] for k in params}, _statement(top, omega3),
+                   answers)
+
+
+def generate(rng: np.random.Generator) -> Variant:
+    """One sleeping-top variant (R2, R19), from ``rng`` only.
+
+    The body's dimensions are rounded to ``SIG`` figures and the answers computed from them by
+    :mod:`solver.inertia` and :mod:`solver.heavy_top`; ill-posed draws are resampled.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The only source of randomness.
+
+    Returns
+    -------
+    Variant
+        Answers ``omega3_c`` (rad/s) and ``stable`` (boolean).
+    """
+    for _ in range(MAX_ATTEMPTS):
+        variant = _variant(rng)
+        if variant is not None:
+            return variant
+    raise RuntimeError(f"{NAME}: no acceptable draw in {MAX_ATTEMPTS} attempts")  # pragma: no cover

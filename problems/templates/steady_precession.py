@@ -1,0 +1,208 @@
+"""Steady precession of a gyroscope: the slow and fast rates and the fast-top approximation (R21).
+
+A real top (:func:`~problems.templates.sleeping_top.draw_top`) is described by its data sheet:
+mass ``M``, distance ``l`` from the pivot to the centre of mass, transverse moment ``Icm`` about
+the centre of mass, axial moment ``I3``, and ``g``; it spins at ``ω3`` with its axis at the tilt
+``β0`` (above the horizontal). The student forms ``I1 = Icm + M l²`` (about the pivot, R2) and
+``p_γ = I3 ω3`` (R15). Asked:
+
+``slow``, ``fast``
+    The two steady-precession rates ``[p_γ ∓ √(p_γ² − 4 I1 Mgl cos β0)]/(2 I1 cos β0)`` (R21).
+``slow_approx``, ``fast_approx``
+    Their fast-top approximations ``Mgl/p_γ`` and ``p_γ/(I1 cos β0)`` (R21).
+``slow_error``
+    The relative error of the slow approximation, ``(slow_approx − slow)/slow`` (negative).
+
+The key comes from :func:`solver.heavy_top.steady_precession_rates` (cancellation-free) and
+:func:`solver.heavy_top.fast_top_rates`.
+
+Known mistakes (computed by those functions from the mistaken inputs): ``I1`` about the centre
+of mass, ``I1`` and ``I3`` swapped, ``β0`` read as degrees, Hz for rad/s, slow and fast
+exchanged, the fast-top approximation where the exact rate was asked (and the exact rate where
+the approximation was asked), the 2 of the quadratic formula's denominator dropped; for the
+relative error: the opposite sign, the error relative to the approximation, a percentage.
+
+Sampling: ``s = p_γ²/(4 I1 Mgl cos β0)`` in ``STIFFNESS`` (1.25 to 30): both roots real with a
+margin (``s ≥ 1.25``: the discriminant is at least a fifth of ``p_γ²``), and a top slow enough
+that the fast-top approximation is off by ≳ 1/(4s) ≥ 0.8 % — distinguishable from the exact
+rate at the tolerance. ``β0`` in (0.25, 1.35) rad keeps ``cos β0`` well away from 0.
+
+Tolerances: the rates and approximations have ``rtol = 1e-3`` (closed forms of 3-figure
+data; the textbook form of the slow root loses ``log10(4s)`` ≤ 2.1 digits to cancellation,
+harmless in double precision). ``slow_error`` is a difference of nearly equal numbers; its
+absolute error is the student's relative error in ``slow`` (≲ 1e-13 in floating point), so
+``rtol = 1e-3`` of a value ≥ 8e-3 in magnitude is ample.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from problems.answers import Answer, Mistake
+from problems.rounding import latex_sig, round_sig
+from problems.templates.sleeping_top import G, distinguishable, draw_top
+from problems.variant import Variant
+from solver.heavy_top import fast_top_rates, steady_precession_rates
+from solver.parameters import ParameterError
+
+NAME = "steady_precession"
+TITLE = "Steady precession of a gyroscope: exact rates and the fast-top approximation"
+SUMMARY = "steady precession: slow and fast rates, fast-top approximations and their error"
+RESULTS = ("R2", "R15", "R21")
+
+SIG = 3
+"""Significant figures of every displayed parameter."""
+RTOL = 1e-3
+MARGIN = 5.0
+"""Known mistakes must lie this many tolerances from the key and from each other."""
+STIFFNESS = (1.25, 30.0)
+"""``p_γ²/(4 I1 Mgl cos β0)``: above 1 both steady rates are real (R21)."""
+TILT = (0.25, 1.35)
+"""β0, rad."""
+MAX_ATTEMPTS = 1000
+
+_DEGREES = "β0 is in radians; this value comes from reading it as degrees."
+_HZ = ("That is the rate in revolutions per second (divided by 2π); give the angular velocity "
+       "in rad/s.")
+_I1_CM = ("I1 must be the transverse moment about the pivot, not about the centre of mass: "
+          "I1 = Icm + M l² (parallel-axis theorem, R2).")
+_SWAPPED = ("I1 and I3 are swapped: p_γ = I3 ω3 uses the moment about the symmetry axis, the "
+            "quadratic's leading coefficient I1 cos β0 the transverse moment about the pivot.")
+_FACTOR_2 = ("The quadratic formula divides by 2a: α̇ = [p_γ ± √(p_γ² − 4 I1 Mgl cos β0)] / "
+             "(2 I1 cos β0) (R21).")
+
+
+class _Rates:
+    """Exact and fast-top rates ``(slow, fast)`` for a (possibly mistaken) set of inputs."""
+
+    def __init__(self, I1: float, I3: float, Mgl: float, beta0: float, omega3: float):
+        p_gamma = I3 * omega3
+        self.exact = tuple(map(float, steady_precession_rates(I1, I3, Mgl, beta0, p_gamma)))
+        self.approx = tuple(map(float, fast_top_rates(I1, I3, Mgl, beta0, p_gamma)))
+
+
+def _finite(mistakes: list[Mistake]) -> tuple[Mistake, ...]:
+    return tuple(m for m in mistakes if math.isfinite(m.value))
+
+
+def _answers(M, arm, Icm, I3, g, beta0, omega3) -> tuple[Answer, ...]:
+    Mgl, I1 = M * g * arm, Icm + M * arm**2
+    key = _Rates(I1, I3, Mgl, beta0, omega3)
+    wrong = {
+        "I1_about_cm": (_Rates(Icm, I3, Mgl, beta0, omega3), _I1_CM),
+        "I1_I3_swapped": (_Rates(I3, I1, Mgl, beta0, omega3), _SWAPPED),
+        "degrees": (_Rates(I1, I3, Mgl, math.radians(beta0), omega3), _DEGREES),
+    }
+    answers = []
+    for i, which in enumerate(("slow", "fast")):
+        exact, approx = key.exact[i], key.approx[i]
+        mistakes = [
+            Mistake("slow_fast_exchanged", key.exact[1 - i], "Slow and fast are exchanged: the "
+                    "slow rate takes the minus sign, the fast one the plus sign (R21)."),
+            Mistake("fast_top", approx, "That is the fast-top approximation; the exact root of "
+                    "I1 cos β0 α̇² − p_γ α̇ + Mgl = 0 (R21) is asked."),
+            Mistake("hz", exact / (2 * math.pi), _HZ),
+            Mistake("missing_factor_2", 2 * exact, _FACTOR_2),
+            # the slow rate is Mgl/p_γ·(1 + O(1/s)): I1 and β0 enter only at order 1/s, so
+            # those mistakes are indistinguishable from the key or from `fast_top`
+            *(Mistake(name, rates.exact[i], text) for name, (rates, text) in wrong.items()
+              if i == 1 or name == "I1_I3_swapped"),
+        ]
+        answers.append(Answer(which, "scalar", exact, unit="rad/s", rtol=RTOL,
+                              mistakes=_finite(mistakes),
+                              description=f"{which} steady precession rate (exact)"))
+    for i, which in enumerate(("slow", "fast")):
+        mistakes = [
+            Mistake("exact", key.exact[i], "That is the exact rate; the fast-top approximation "
+                    f"({'Mgl/p_γ' if i == 0 else 'p_γ/(I1 cos β0)'}, R21) is asked."),
+            Mistake("hz", key.approx[i] / (2 * math.pi), _HZ),
+            *(Mistake(name, rates.approx[i], text) for name, (rates, text) in wrong.items()
+              if i == 1 or name == "I1_I3_swapped"),  # Mgl/p_γ has neither I1 nor β0
+        ]
+        answers.append(Answer(f"{which}_approx", "scalar", key.approx[i], unit="rad/s",
+                              rtol=RTOL, mistakes=_finite(mistakes), points=0.5,
+                              description=f"fast-top approximation of the {which} rate"))
+    error = (key.approx[0] - key.exact[0]) / key.exact[0]
+    mistakes = (
+        Mistake("sign", -error, "Relative error here means (approximation − exact)/exact: the "
+                "approximation is below the exact slow rate, so the error is negative."),
+        Mistake("relative_to_approx", (key.approx[0] - key.exact[0]) / key.approx[0],
+                "Divide by the exact value, not by the approximation."),
+        Mistake("percent", 100 * error, "Give the relative error as a plain fraction, not in "
+                "percent."),
+    )
+    answers.append(Answer("slow_error", "scalar", error, rtol=RTOL, mistakes=mistakes,
+                          description="(slow_approx − slow)/slow"))
+    return tuple(answers)
+
+
+def _statement(noun: str, p: dict[str, float]) -> str:
+    def show(name: str, symbol: str, unit: str) -> str:
+        return f"${symbol} = {latex_sig(p[name], SIG)}$ {unit} (`{name}`)"
+
+    icm = show("Icm", r"I_\mathrm{cm}", "kg m²")
+    omega3, beta0 = show("omega3", r"\omega_3", "rad/s"), show("beta0", r"\beta_0", "rad")
+    return (
+        f"A top, {noun}, spins on a fixed frictionless pivot. Its data: mass "
+        f"{show('M', 'M', 'kg')}, centre of mass {show('l', 'l', 'm')} from the pivot along the "
+        f"symmetry axis, moment of inertia {icm} about any "
+        "axis through the centre of mass perpendicular to the symmetry axis, and "
+        f"{show('I3', 'I_3', 'kg m²')} about the symmetry axis; take "
+        f"{show('g', 'g', 'm/s²')}. It spins at {omega3} about its "
+        f"symmetry axis, which is tilted at {beta0} from the upward "
+        "vertical.\n\n"
+        "With the right precession rate $\\dot\\alpha$ the axis precesses steadily at the "
+        "constant tilt $\\beta_0$, without nutation. Find (rad/s unless stated; relative "
+        "tolerance $10^{-3}$):\n\n"
+        "1. `slow` and `fast`: the exact slow and fast steady precession rates at $\\beta_0$;\n"
+        "2. `slow_approx` and `fast_approx`: their fast-top approximations;\n"
+        "3. `slow_error`: the relative error of the slow approximation, "
+        "(`slow_approx` − `slow`)/`slow` (a plain number, with its sign)."
+    )
+
+
+def _variant(rng: np.random.Generator) -> Variant | None:
+    top = draw_top(rng)
+    M, arm, Icm, I3 = (round_sig(x, SIG) for x in (top.M, top.arm, top.I_cm, top.I3))
+    beta0 = round_sig(rng.uniform(*TILT), SIG)
+    I1, Mgl = Icm + M * arm**2, M * G * arm
+    spin = 2.0 * math.sqrt(rng.uniform(*STIFFNESS) * I1 * Mgl * math.cos(beta0)) / I3
+    omega3 = round_sig(spin, SIG)
+    stiffness = (I3 * omega3) ** 2 / (4 * I1 * Mgl * math.cos(beta0))
+    if not STIFFNESS[0] <= stiffness <= STIFFNESS[1]:  # moved out by the rounding
+        return None
+    try:
+        answers = _answers(M, arm, Icm, I3, G, beta0, omega3)
+    except ParameterError as err:
+        if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
+            raise
+        return None
+    if not all(distinguishable(a, MARGIN) for a in answers):
+        return None
+    params = {"M": M, "l": arm, "Icm": Icm, "I3": I3, "g": G, "omega3": omega3, "beta0": beta0}
+    units = {"M": "kg", "l": "m", "Icm": "kg m^2", "I3": "kg m^2", "g": "m/s^2",
+             "omega3": "rad/s", "beta0": "rad"}
+    return Variant(NAME, TITLE, params, units, _statement(top.kind.noun, params), answers)
+
+
+def generate(rng: np.random.Generator) -> Variant:
+    """One steady-precession variant (R2, R15, R21), from ``rng`` only.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The only source of randomness.
+
+    Returns
+    -------
+    Variant
+        Answers ``slow``, ``fast``, ``slow_approx``, ``fast_approx`` (rad/s) and
+        ``slow_error`` (dimensionless), computed from the displayed (3-figure) parameters.
+    """
+    for _ in range(MAX_ATTEMPTS):
+        variant = _variant(rng)
+        if variant is not None:
+            return variant
+    raise RuntimeError(f"{NAME}: no acceptable draw in {MAX_ATTEMPTS} attempts")  # pragma: no cover

@@ -1,0 +1,349 @@
+"""A symbolic derivation for the heavy symmetric top (R14–R16, R18, R19), then a number.
+
+Each variant asks for one of :data:`QUANTITIES`, drawn at random, as a sympy expression in named
+symbols (graded by evaluation at random points), and then for its value for a real top
+(:func:`~problems.templates.sleeping_top.draw_top`) at a given state (graded as a scalar):
+
+``p_alpha``
+    ``∂L/∂α̇ = I1 α̇ sin²β + I3 cos β (α̇ cos β + γ̇)`` from R14's Lagrangian (R15).
+``p_gamma``
+    ``∂L/∂γ̇ = I3 (α̇ cos β + γ̇)`` (R15).
+``E_prime``
+    ``E' = E − p_γ²/(2 I3) = ½ I1 (α̇² sin²β + β̇²) + Mgl cos β`` in the velocities (R16).
+``V_eff``
+    ``(p_α − p_γ cos β)²/(2 I1 sin²β) + Mgl cos β`` (R16).
+``alpha_dot``
+    The precession rate from the momenta, ``(p_α − p_γ cos β)/(I1 sin²β)`` (R18).
+``c2``
+    The coefficient of ``β²`` in ``V_eff`` of a top at ``p_α = p_γ`` near ``β = 0``,
+    ``p_γ²/(8 I1) − Mgl/2`` (R19).
+
+Every key is *derived* by :mod:`solver.symbolic` (cached: the first call costs about a second of
+sympy, later ones nothing). Each known mistake is the derivation redone with the mistaken
+physics — a term dropped by the chain rule, ``β`` taken from the horizontal (``sin``/``cos``
+exchanged) or from the downward vertical (the sign of gravity), ``I1`` and ``I3`` swapped, the
+momenta exchanged, the factor ½ of ``1 − cos β ≈ β²/2`` lost — and the numerical answer has the
+same mistakes evaluated at the state, plus ``β`` read as degrees. The expressions and their
+``lambdify``'d functions are cached per quantity, so ``generate`` does no sympy work beyond that.
+
+Tolerances: the expression has ``rtol = 1e-6`` (a right formula agrees to rounding, ~1e-15; the
+margin absorbs decimal coefficients such as ``0.5``; every mistake changes the value by far more
+at generic points). The number has ``rtol = 1e-3``: one evaluation of a closed form with exact
+3-figure data. Draws whose numerical mistakes come within ``MARGIN`` tolerances of the key or of
+each other are resampled.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import cache
+
+import numpy as np
+import sympy as sp
+
+from problems.answers import Answer, Mistake
+from problems.rounding import latex_sig, round_sig
+from problems.templates.sleeping_top import distinguishable, draw_top
+from problems.variant import Variant
+from solver.heavy_top import constants_of_motion, critical_spin
+from solver.parameters import ParameterError
+from solver.symbolic import (
+    SYMBOLS,
+    conjugate_momenta,
+    effective_potential_expr,
+    energy_expr,
+    sleeping_top_expansion,
+)
+
+NAME = "symbolic_derivation"
+TITLE = "A heavy-top derivation in symbols"
+SUMMARY = "heavy top in symbols: p_α, p_γ, E', V_eff, α̇(β) or the sleeping-top β² coefficient"
+RESULTS = ("R14", "R15", "R16", "R18", "R19")
+
+SIG = 3
+"""Significant figures of every displayed parameter."""
+RTOL = 1e-3
+RTOL_EXPRESSION = 1e-6
+MARGIN = 5.0
+"""Numerical mistakes must lie this many tolerances from the key and from each other."""
+TILT = (0.2, 1.4)
+"""β, rad."""
+PRECESSION = (0.05, 0.4)
+"""|α̇| as a fraction of γ̇."""
+MAX_ATTEMPTS = 1000
+
+S = SYMBOLS
+_PARAM = {  # parameter name → (LaTeX symbol, unit shown, unit recorded)
+    "I1": ("I_1", "kg m²", "kg m^2"),
+    "I3": ("I_3", "kg m²", "kg m^2"),
+    "Mgl": ("Mgl", "J", "J"),
+    "beta": (r"\beta", "rad", "rad"),
+    "alpha_dot": (r"\dot\alpha", "rad/s", "rad/s"),
+    "beta_dot": (r"\dot\beta", "rad/s", "rad/s"),
+    "gamma_dot": (r"\dot\gamma", "rad/s", "rad/s"),
+    "p_alpha": (r"p_\alpha", "kg m²/s", "kg m^2/s"),
+    "p_gamma": (r"p_\gamma", "kg m²/s", "kg m^2/s"),
+}
+
+# Mistakes shared by several quantities
+_FROM_HORIZONTAL = ("sin β and cos β are exchanged: β is measured from the upward vertical "
+                    "(the component of α̇ ẑ along ê₃ is α̇ cos β, R12).")
+_GRAVITY_SIGN = ("The sign of the gravity term is wrong: with β from the upward vertical the "
+                 "centre of mass is at height l cos β, so V = +Mgl cos β (R14).")
+_SWAPPED = ("I1 and I3 are swapped: I3 is the moment about the symmetry axis ê₃ and goes with "
+            "ω₃ = α̇ cos β + γ̇; I1 is the transverse moment about the tip.")
+_MOMENTA_SWAPPED = ("p_α and p_γ are exchanged: it is p_α − p_γ cos β, from "
+                    "p_α = I1 α̇ sin²β + p_γ cos β (R15).")
+
+
+def _from_horizontal(expr: sp.Expr) -> sp.Expr:
+    return expr.subs(S["beta"], sp.pi / 2 - S["beta"])
+
+
+def _swap(expr: sp.Expr, a: str, b: str) -> sp.Expr:
+    return expr.subs({S[a]: S[b], S[b]: S[a]}, simultaneous=True)
+
+
+@cache
+def _precession_rate() -> sp.Expr:
+    """α̇ in terms of ``p_α, p_γ, β`` (R18), by inverting R15's momenta."""
+    p = conjugate_momenta()
+    eqs = [sp.Eq(S["p_alpha"], p["p_alpha"]), sp.Eq(S["p_gamma"], p["p_gamma"])]
+    (solution,) = sp.solve(eqs, [S["alpha_dot"], S["gamma_dot"]], dict=True)
+    numerator, denominator = sp.fraction(sp.factor(solution[S["alpha_dot"]]))
+    if numerator.could_extract_minus_sign():  # print p_alpha - p_gamma*cos(beta) first
+        numerator, denominator = -numerator, -denominator
+    return sp.expand(numerator) / denominator
+
+
+@cache
+def _reduced_energy() -> sp.Expr:
+    """``E' = E − p_γ²/(2 I3)`` in the velocities (R16)."""
+    E_prime = energy_expr() - conjugate_momenta()["p_gamma"] ** 2 / (2 * S["I3"])
+    kinetic, potential = sp.expand(E_prime).as_independent(S["I1"], as_Add=True)[::-1]
+    return sp.factor(kinetic) + potential
+
+
+def _p_alpha_mistakes(key: sp.Expr):
+    I1, I3, beta = S["I1"], S["I3"], S["beta"]
+    alpha_dot, gamma_dot = S["alpha_dot"], S["gamma_dot"]
+    return (
+        ("missing_spin_term", I1 * alpha_dot * sp.sin(beta) ** 2,
+         "The spin term ½ I3 (α̇ cos β + γ̇)² of L also depends on α̇: it adds "
+         "I3 cos β (α̇ cos β + γ̇) to p_α (R15)."),
+        ("missing_chain_factor", I1 * alpha_dot * sp.sin(beta) ** 2
+         + I3 * (alpha_dot * sp.cos(beta) + gamma_dot),
+         "Chain rule: ∂/∂α̇ of ½ I3 (α̇ cos β + γ̇)² is I3 (α̇ cos β + γ̇) cos β — the factor "
+         "cos β is missing."),
+        ("sin_cos_swapped", _from_horizontal(key), _FROM_HORIZONTAL),
+        ("I1_I3_swapped", _swap(key, "I1", "I3"), _SWAPPED),
+    )
+
+
+def _p_gamma_mistakes(key: sp.Expr):
+    return (
+        ("spin_only", S["I3"] * S["gamma_dot"],
+         "ω₃ = α̇ cos β + γ̇ (R12): the precession also contributes to the spin about ê₃, so "
+         "p_γ = I3 (α̇ cos β + γ̇)."),
+        ("sin_cos_swapped", _from_horizontal(key), _FROM_HORIZONTAL),
+        ("I1_I3_swapped", _swap(key, "I1", "I3"), _SWAPPED),
+    )
+
+
+def _energy_mistakes(key: sp.Expr):
+    return (
+        ("full_energy", energy_expr(),
+         "That is the whole energy E; E' = E − p_γ²/(2 I3) leaves out the constant spin part "
+         "(R16)."),
+        ("gravity_sign", key - 2 * S["Mgl"] * sp.cos(S["beta"]), _GRAVITY_SIGN),
+        ("sin_cos_swapped", _from_horizontal(key), _FROM_HORIZONTAL),
+    )
+
+
+def _potential_mistakes(key: sp.Expr):
+    return (
+        ("momenta_swapped", _swap(key, "p_alpha", "p_gamma"), _MOMENTA_SWAPPED),
+        ("gravity_sign", key - 2 * S["Mgl"] * sp.cos(S["beta"]), _GRAVITY_SIGN),
+        ("missing_half", key + (key - S["Mgl"] * sp.cos(S["beta"])),
+         "The kinetic part is ½ I1 α̇² sin²β = (p_α − p_γ cos β)²/(2 I1 sin²β): the 2 in the "
+         "denominator is missing."),
+    )
+
+
+def _rate_mistakes(key: sp.Expr):
+    return (
+        ("momenta_swapped", _swap(key, "p_alpha", "p_gamma"), _MOMENTA_SWAPPED),
+        ("sin_not_squared", key * sp.sin(S["beta"]),
+         "p_α − p_γ cos β = I1 α̇ sin²β: divide by I1 sin²β, not by I1 sin β."),
+        ("sin_cos_swapped", _from_horizontal(key), _FROM_HORIZONTAL),
+    )
+
+
+def _c2_mistakes(key: sp.Expr):
+    I1, Mgl, p_gamma = S["I1"], S["Mgl"], S["p_gamma"]
+    return (
+        ("gravity_sign", key + Mgl, "Mgl cos β ≈ Mgl (1 − β²/2): the gravity term lowers the β² "
+                                    "coefficient by Mgl/2."),
+        ("cos_expansion", p_gamma**2 / (2 * I1) - Mgl / 2,
+         "1 − cos β ≈ β²/2, so (1 − cos β)²/sin²β ≈ β²/4: the spin term is p_γ² β²/(8 I1)."),
+        ("missing_gravity", p_gamma**2 / (8 * I1),
+         "Mgl cos β also contributes to β²: −Mgl β²/2."),
+    )
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """One quantity to derive: its key, mistakes, symbols and what is shown."""
+
+    name: str
+    title: str
+    task: str  # Markdown: what to derive
+    unit: str
+    symbols: tuple[str, ...]  # allowed in the expression, and the numeric parameters
+    derive: Callable[[], sp.Expr]
+    mistakes: Callable[[sp.Expr], tuple[tuple[str, sp.Expr, str], ...]]
+
+
+QUANTITIES: tuple[Quantity, ...] = (
+    Quantity("p_alpha", "The momentum conjugate to α",
+             "the momentum $p_\\alpha = \\partial L/\\partial\\dot\\alpha$ conjugate to the "
+             "azimuth $\\alpha$, in terms of the Euler angles and their rates", "kg m^2/s",
+             ("I1", "I3", "beta", "alpha_dot", "gamma_dot"),
+             lambda: conjugate_momenta()["p_alpha"], _p_alpha_mistakes),
+    Quantity("p_gamma", "The momentum conjugate to γ",
+             "the momentum $p_\\gamma = \\partial L/\\partial\\dot\\gamma$ conjugate to the spin "
+             "angle $\\gamma$, in terms of the Euler angles and their rates", "kg m^2/s",
+             ("I1", "I3", "beta", "alpha_dot", "gamma_dot"),
+             lambda: conjugate_momenta()["p_gamma"], _p_gamma_mistakes),
+    Quantity("E_prime", "The reduced energy E'",
+             "the reduced energy $E' = E - p_\\gamma^2/(2 I_3)$, in terms of the Euler angles "
+             "and their rates (not of the momenta)", "J",
+             ("I1", "I3", "Mgl", "beta", "alpha_dot", "beta_dot", "gamma_dot"),
+             _reduced_energy, _energy_mistakes),
+    Quantity("V_eff", "The effective potential",
+             "the effective potential $V_\\mathrm{eff}(\\beta)$, defined by "
+             "$E' = \\tfrac12 I_1 \\dot\\beta^2 + V_\\mathrm{eff}(\\beta)$, in terms of the "
+             "conserved momenta $p_\\alpha$, $p_\\gamma$", "J",
+             ("I1", "Mgl", "beta", "p_alpha", "p_gamma"),
+             effective_potential_expr, _potential_mistakes),
+    Quantity("alpha_dot", "The precession rate from the momenta",
+             "the precession rate $\\dot\\alpha$ as a function of $\\beta$, in terms of the "
+             "conserved momenta $p_\\alpha$, $p_\\gamma$", "rad/s",
+             ("I1", "beta", "p_alpha", "p_gamma"), _precession_rate, _rate_mistakes),
+    Quantity("c2", "The sleeping top's β² coefficient",
+             "for a top with $p_\\alpha = p_\\gamma$ (its axis passes through the vertical), "
+             "the coefficient $c_2$ of $\\beta^2$ in the expansion "
+             "$V_\\mathrm{eff}(\\beta) = c_0 + c_2 \\beta^2 + O(\\beta^4)$ about "
+             "$\\beta = 0$ (the sleeping top is stable where $c_2 \\ge 0$)", "J",
+             ("I1", "Mgl", "p_gamma"), lambda: sleeping_top_expansion()[1], _c2_mistakes),
+)
+
+
+@dataclass(frozen=True)
+class _Compiled:
+    """A quantity's expression answer and numeric functions (built once per process)."""
+
+    expression: Answer
+    key: Callable[..., float]
+    mistakes: tuple[tuple[str, Callable[..., float], str], ...]
+
+
+@cache
+def _compiled(index: int) -> _Compiled:
+    q = QUANTITIES[index]
+    key = q.derive()
+    mistakes = q.mistakes(key)
+    args = [S[name] for name in q.symbols]
+    answer = Answer(
+        f"{q.name}_expr", "expression", str(key), unit=q.unit, rtol=RTOL_EXPRESSION,
+        symbols=q.symbols, description=f"{q.name} as an expression",
+        mistakes=tuple(Mistake(n, str(e), f) for n, e, f in mistakes),
+    )
+    numeric = tuple((n, sp.lambdify(args, e, "math"), f) for n, e, f in mistakes)
+    return _Compiled(answer, sp.lambdify(args, key, "math"), numeric)
+
+
+def _state(rng: np.random.Generator) -> dict[str, float]:
+    """Every parameter a quantity may need: a real top in a plausible state (rounded)."""
+    top = draw_top(rng)
+    I1, I3, Mgl = (round_sig(x, SIG) for x in (top.I1, top.I3, top.Mgl))
+    beta = round_sig(rng.uniform(*TILT), SIG)
+    gamma_dot = round_sig(float(critical_spin(I1, I3, Mgl)) * rng.uniform(1.5, 5.0), SIG)
+    # a knocked top: precessing at a good fraction of its spin (else α̇ cos β is lost beside γ̇
+    # and p_γ ≈ I3 γ̇ hides the mistakes), either sense, and nodding
+    alpha_dot = round_sig(rng.uniform(*PRECESSION) * gamma_dot * rng.choice([-1.0, 1.0]), SIG)
+    beta_dot = round_sig(rng.uniform(0.3, 3.0) * rng.choice([-1.0, 1.0]), SIG)
+    p_alpha, p_gamma, _ = constants_of_motion(I1, I3, Mgl, beta, alpha_dot, beta_dot, gamma_dot)
+    return {"I1": I1, "I3": I3, "Mgl": Mgl, "beta": beta, "alpha_dot": alpha_dot,
+            "beta_dot": beta_dot, "gamma_dot": gamma_dot,
+            "p_alpha": round_sig(p_alpha, SIG), "p_gamma": round_sig(p_gamma, SIG)}
+
+
+def _number_answer(q: Quantity, c: _Compiled, values: list[float]) -> Answer:
+    mistakes = [Mistake(n, float(f(*values)), text) for n, f, text in c.mistakes]
+    if "beta" in q.symbols:
+        i = q.symbols.index("beta")
+        in_degrees = [*values[:i], math.radians(values[i]), *values[i + 1:]]
+        mistakes.append(Mistake("degrees", float(c.key(*in_degrees)),
+                                "β is in radians; this value comes from reading it as degrees."))
+    return Answer(q.name, "scalar", float(c.key(*values)), unit=q.unit, rtol=RTOL,
+                  mistakes=tuple(m for m in mistakes if math.isfinite(m.value)),
+                  description=f"{q.name} for the given top and state")
+
+
+def _statement(q: Quantity, params: dict[str, float]) -> str:
+    names = ", ".join(f"`{n}`" for n in q.symbols)
+    mgl = " (`Mgl` is one symbol, the product $Mgl$)" if "Mgl" in q.symbols else ""
+    shown = ", ".join(f"${_PARAM[n][0]} = {latex_sig(v, SIG)}$ {_PARAM[n][1]} (`{n}`)"
+                      for n, v in params.items())
+    return (
+        "A heavy symmetric top spins on a fixed tip. Its Lagrangian (R14, Euler angles of the "
+        "lecture, $\\beta$ from the upward vertical, $I_1$ about the tip) is\n\n"
+        "$$L = \\tfrac12 I_1 (\\dot\\alpha^2 \\sin^2\\beta + \\dot\\beta^2) + \\tfrac12 I_3 "
+        "(\\dot\\alpha\\cos\\beta + \\dot\\gamma)^2 - Mgl\\cos\\beta .$$\n\n"
+        f"1. `{q.name}_expr`: derive {q.task}. Give a sympy expression or a string in the "
+        f"symbols {names}{mgl}; the functions `sin`, `cos`, `sqrt` and the constant `pi` "
+        "may appear, e.g. `\"I1*sin(beta)**2\"`.\n"
+        f"2. `{q.name}`: its value ({q.unit.replace('^2', '²')}) for a top with {shown} "
+        "(relative tolerance $10^{-3}$)."
+    )
+
+
+def _variant(rng: np.random.Generator) -> Variant | None:
+    index = int(rng.integers(len(QUANTITIES)))
+    q, c = QUANTITIES[index], _compiled(index)
+    state = _state(rng)
+    params = {n: state[n] for n in q.symbols}
+    try:
+        number = _number_answer(q, c, list(params.values()))
+    except ParameterError as err:
+        if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
+            raise
+        return None
+    if not distinguishable(number, MARGIN):
+        return None
+    units = {n: _PARAM[n][2] for n in params}
+    return Variant(NAME, q.title, params, units, _statement(q, params), (c.expression, number))
+
+
+def generate(rng: np.random.Generator) -> Variant:
+    """One derivation variant (R14–R16, R18, R19), from ``rng`` only.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The only source of randomness.
+
+    Returns
+    -------
+    Variant
+        Answers ``<quantity>_expr`` (expression) and ``<quantity>`` (its value, scalar), for a
+        quantity drawn from :data:`QUANTITIES`.
+    """
+    for _ in range(MAX_ATTEMPTS):
+        variant = _variant(rng)
+        if variant is not None:
+            return variant
+    raise RuntimeError(f"{NAME}: no acceptable draw in {MAX_ATTEMPTS} attempts")  # pragma: no cover

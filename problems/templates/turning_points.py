@@ -1,0 +1,208 @@
+"""Heavy symmetric top: the effective potential and the turning points of the nutation (R16, R17).
+
+The tops and initial states are those of :mod:`problems.templates.heavy_top_constants` (a toy
+top on a table, a gyroscope on a post, a disc hanging from a ball joint); one time in three the
+top is released with ``α̇0 = β̇0 = 0`` (the classroom demonstration), otherwise it is launched
+with a precession rate of either sense and a nod. Asked, as parts of one question on one top:
+
+1. ``V_eff``: ``V_eff(β) = (p_α − p_γ cos β)²/(2 I1 sin²β) + Mgl cos β`` (R16) at a given tilt
+   ``beta`` (drawn around the motion's range);
+2. ``beta1 ≤ beta2``: the roots of ``V_eff(β) = E'`` bracketing ``β0`` (R17), in radians.
+
+Answers come from :func:`solver.heavy_top.effective_potential` (with
+:func:`~solver.heavy_top.constants_of_motion`) and :func:`solver.heavy_top.turning_points`, all
+from the shown (rounded) values.
+
+Known mistakes. ``V_eff``: the spin energy ``p_γ²/(2 I3)`` included; ``p_α`` without
+``p_γ cos β``; degree mode; ``I1`` about the centre of mass; ``I1``, ``I3`` swapped. Turning
+points: ``β1`` and ``β2`` exchanged; the angle given in degrees; the total energy ``E`` used for
+``E'``; ``I1`` about the centre of mass; ``I1``, ``I3`` swapped (only when the swapped moments
+are a rigid body's, ``I1 ≤ 2 I3``, where the solver accepts them). Moment and angle mistakes
+that barely move a given answer are not listed for it (see
+:func:`~problems.templates.heavy_top_constants.select_mistakes`).
+
+Tolerance: ``rtol = 1e-3`` for all three. ``V_eff`` is a few products of exact 3-figure data.
+The turning points are the roots of a cubic (R17): ``numpy.roots`` or ``brentq`` give them to
+~1e-10, and a tilt off by 1e-3 relative is a visibly different nutation. Rejected draws: turning
+points closer than ``MIN_NUTATION`` (nearly steady precession, where the roots are
+ill-conditioned), a motion outside the scene's limits (the disc touching the table, a turning
+point within ``POLE_MARGIN`` of a pole, the hanging disc rising above its joint), a ``V_eff``
+that is a small difference of large terms, and a primary mistake (the spin energy in ``V_eff``;
+exchanged turning points, degrees) within five tolerances of the key or of another mistake.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from problems.answers import Answer
+from problems.rounding import latex_sig, round_sig
+from problems.templates.heavy_top_constants import (
+    CONVENTIONS,
+    FEEDBACK,
+    RTOL,
+    SIG,
+    State,
+    Top,
+    draw_state,
+    draw_top,
+    mistaken_states,
+    motion_within_limits,
+    select_mistakes,
+    state_args,
+    state_text,
+    variant_params,
+    well_conditioned,
+)
+from problems.variant import Variant
+from solver.heavy_top import constants_of_motion, effective_potential, turning_points
+
+NAME = "turning_points"
+TITLE = "Heavy symmetric top: effective potential and turning points"
+SUMMARY = "heavy symmetric top: V_eff at a given tilt and the nutation's turning points β1, β2"
+RESULTS = ("R15", "R16", "R17")
+
+RELEASED = 1 / 3
+"""Share of draws released from rest in α and β (``α̇0 = β̇0 = 0``)."""
+QUERY_MARGIN = 0.3
+"""``beta`` (rad) is drawn up to this far outside ``[β1, β2]``, ..."""
+QUERY_MIN = 0.1
+"""... and at least this far from a pole (rad)."""
+MAX_ATTEMPTS = 500
+
+_FEEDBACK = {
+    **FEEDBACK,
+    "spin_energy_included": (
+        "V_eff (R16) does not contain the constant spin energy p_γ²/(2 I3): it belongs to E, "
+        "and V_eff is compared with E' = E − p_γ²/(2 I3)."
+    ),
+    "turning_points_exchanged": (
+        "β1 and β2 are exchanged: β1 ≤ β2, so β1 is the smaller tilt (the axis at its "
+        "highest) and β2 the larger."
+    ),
+    "degrees": "That is the angle in degrees; give it in radians.",
+    "E_not_E_prime": (
+        "The turning points solve V_eff(β) = E' with E' = E − p_γ²/(2 I3) (R16): with the "
+        "total energy E the axis would seem to swing nearly to the vertical and back."
+    ),
+}
+
+
+def _energy_state(top: Top, state: State, p_gamma: float) -> tuple[float, ...]:
+    """A state with the same ``p_α, p_γ`` whose ``E'`` is the true ``E``: the extra
+    ``p_γ²/(2 I3)`` carried by ``½ I1 β̇²`` (turning points do not depend on the sign of β̇)."""
+    beta_dot = math.sqrt(state.beta_dot0**2 + p_gamma**2 / (top.I1 * top.I3))
+    return (top.I1, top.I3, top.Mgl, state.beta0, state.alpha_dot0, beta_dot, state.gamma_dot0)
+
+
+def _potential_answer(top: Top, state: State, beta: float, mistaken: dict,
+                      p_alpha: np.ndarray, p_gamma: np.ndarray) -> Answer | None:
+    """``V_eff(beta)`` and its mistakes (None: ill-conditioned or confusable).
+
+    ``p_alpha``, ``p_gamma``: the key's constants, then those of each ``mistaken`` state.
+    """
+    pg = float(p_gamma[0])
+    transverse = top.I1 * state.alpha_dot0 * math.sin(state.beta0) ** 2  # p_α without p_γ cos β
+    rows = ("key", *mistaken, "missing_p_gamma_term")
+    where = [math.radians(beta) if k == "degree_mode" else beta for k in rows]
+    moment = [top.I1, *(args[0] for args in mistaken.values()), top.I1]
+    values = effective_potential(where, moment, top.Mgl, [*p_alpha, transverse], [*p_gamma, pg])
+    key = float(values[0])
+    potential = top.Mgl * math.cos(beta)
+    if not well_conditioned(key, key - potential, potential):
+        return None
+    secondary = {"missing_p_gamma_term": values[-1],
+                 **{k: values[i] for i, k in enumerate(mistaken, 1)}}
+    mistakes = select_mistakes(key, {"spin_energy_included": key + pg**2 / (2 * top.I3)},
+                               secondary, feedback=_FEEDBACK)
+    if mistakes is None:
+        return None
+    return Answer("V_eff", "scalar", key, unit="J", rtol=RTOL, mistakes=mistakes,
+                  description="effective potential V_eff at the given tilt beta")
+
+
+def _turning_point_answers(names: tuple[str, ...], low: np.ndarray, high: np.ndarray):
+    """``beta1``, ``beta2`` with their mistakes (None if confusable); ``low``, ``high``: the
+    turning points of the key, then of each mistake in ``names``."""
+    beta1, beta2 = float(low[0]), float(high[0])
+    answers = []
+    for name, key, other, wrong in (("beta1", beta1, beta2, low), ("beta2", beta2, beta1, high)):
+        primary = {"turning_points_exchanged": other, "degrees": math.degrees(key)}
+        mistakes = select_mistakes(key, primary, dict(zip(names, wrong[1:], strict=True)),
+                                   feedback=_FEEDBACK)
+        if mistakes is None:
+            return None
+        which = "smaller" if name == "beta1" else "larger"
+        answers.append(Answer(name, "angle", key, unit="rad", rtol=RTOL, mistakes=mistakes,
+                              description=f"the {which} turning point of β"))
+    return tuple(answers)
+
+
+def _statement(top: Top, state: State, beta: float) -> str:
+    return (
+        f"{top.text}\n\n{state_text(state)}\n\n{CONVENTIONS}\n\n"
+        "The axis nods (nutates) between two turning points. Find (relative tolerance "
+        "$10^{-3}$):\n\n"
+        "1. `V_eff`: the effective potential $V_{\\mathrm{eff}}(\\beta)$, in J, whose value at "
+        "the turning points equals $E' = E - p_\\gamma^2/(2 I_3)$, evaluated at "
+        f"$\\beta = {latex_sig(beta, SIG)}$ rad (`beta`);\n"
+        "2. `beta1`, `beta2`: the turning points $\\beta_1 \\le \\beta_2$ of the nutation, in "
+        "rad."
+    )
+
+
+def _variant(rng: np.random.Generator) -> Variant | None:
+    top = draw_top(rng)
+    if rng.uniform() < RELEASED:
+        state = draw_state(rng, top, 0.0, 0.0)
+    else:
+        sense = rng.choice([1.0, 1.0, -1.0])
+        nod = rng.choice([0.0, 1.0, -1.0]) * rng.uniform(0.02, 0.15)
+        state = draw_state(rng, top, sense * rng.uniform(0.3, 2.5), nod)
+    # One solver pass for the key and every mistaken state (rows: key first).
+    mistaken = mistaken_states(top, state)
+    p_alpha, p_gamma, _ = constants_of_motion(*np.array([state_args(top, state),
+                                                         *mistaken.values()]).T)
+    moved = {k: v for k, v in mistaken.items() if k != "degree_mode"}  # the answer is in rad
+    moved["E_not_E_prime"] = _energy_state(top, state, float(p_gamma[0]))
+    low, high = turning_points(*np.array([state_args(top, state), *moved.values()]).T)
+    beta1, beta2 = float(low[0]), float(high[0])
+    if not motion_within_limits(top, beta1, beta2):
+        return None
+    low_q = max(QUERY_MIN, beta1 - QUERY_MARGIN)
+    beta = round_sig(rng.uniform(low_q, min(math.pi - QUERY_MIN, beta2 + QUERY_MARGIN)), SIG)
+    potential = _potential_answer(top, state, beta, mistaken, p_alpha, p_gamma)
+    points = _turning_point_answers(tuple(moved), low, high)
+    if potential is None or points is None:
+        return None
+    params, units = variant_params(top, state, beta=beta)
+    return Variant(NAME, f"{top.title}: turning points", params, units,
+                   _statement(top, state, beta), (potential, *points))
+
+
+def generate(rng: np.random.Generator) -> Variant:
+    """One variant of the effective potential and turning points (R16, R17), from ``rng`` only.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The only source of randomness; the same generator state gives the same variant.
+
+    Returns
+    -------
+    Variant
+        Answers ``V_eff`` (J), ``beta1`` and ``beta2`` (rad, ``beta1 < beta2``), computed by
+        :mod:`solver.heavy_top` from the shown (rounded) parameters.
+
+    Raises
+    ------
+    RuntimeError
+        No acceptable draw in ``MAX_ATTEMPTS`` (a template bug: most draws are accepted).
+    """
+    for _ in range(MAX_ATTEMPTS):
+        variant = _variant(rng)
+        if variant is not None:
+            return variant
+    raise RuntimeError(f"{NAME}: no acceptable draw in {MAX_ATTEMPTS} attempts")
