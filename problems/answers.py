@@ -50,7 +50,7 @@ from __future__ import annotations
 import math
 import numbers
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 from functools import lru_cache
 from typing import Any, NamedTuple
 
@@ -751,3 +751,18 @@ def _known_keys(cls: type, d: Mapping[str, Any], what: str) -> dict[str, Any]:
     if unknown:
         raise ParameterError(what, f"unknown keys {unknown}")
     return dict(d)
+
+
+def mistakes_distinguishable(answer: Answer, margin: float = 5.0) -> bool:
+    """Whether every known mistake lies ``margin`` tolerances from the key and from each other.
+
+    Graded with the tolerances widened ``margin`` times, each mistake's value must still be
+    recognised as that mistake (and the widened answer must still be valid — no mistake within
+    the widened tolerance of the key). Templates reject draws that fail this, so the grader can
+    name every listed mistake reliably even for a student whose arithmetic is slightly off.
+    """
+    try:
+        wide = replace(answer, rtol=margin * answer.rtol, atol=margin * answer.atol)
+    except ValueError:  # ParameterError: a mistake within the widened tolerance of the key
+        return False
+    return all(grade(wide, m.value).mistake == m.name for m in wide.mistakes)

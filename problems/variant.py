@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import keyword
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -167,3 +168,27 @@ def answer_spec(answer: Answer, question: int) -> dict:
         "points": answer.points,
         "description": answer.description,
     }
+
+
+def first_acceptable(
+    attempt: Callable[[np.random.Generator], Variant | None],
+    rng: np.random.Generator,
+    family: str,
+    attempts: int,
+) -> Variant:
+    """Call ``attempt(rng)`` until it returns a variant (a template's rejection sampling).
+
+    A template's ``attempt`` draws parameters and returns ``None`` for an ill-posed draw (a
+    separatrix, turning points that nearly coincide, a known mistake too close to the key).
+
+    Raises
+    ------
+    RuntimeError
+        No acceptable draw in ``attempts`` tries: a template bug, since templates are written so
+        that most draws are accepted.
+    """
+    for _ in range(attempts):
+        variant = attempt(rng)
+        if variant is not None:
+            return variant
+    raise RuntimeError(f"{family}: no acceptable draw in {attempts} attempts")

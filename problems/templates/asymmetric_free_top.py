@@ -27,15 +27,15 @@ one another (e.g. a small-amplitude R9 period indistinguishable from the exact o
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.special import ellipk
 
-from problems.answers import Answer, Mistake, grade
+from problems.answers import Answer, Mistake, mistakes_distinguishable
 from problems.rounding import latex_sig, round_sig
 from problems.templates.near_axis_stability import Body, draw_body
-from problems.variant import Variant
+from problems.variant import Variant, first_acceptable
 from solver.asymmetric_top import asymmetric_top_period, flip_time
 from solver.parameters import ParameterError
 from solver.torque_free import invariants, near_axis_stability
@@ -157,13 +157,6 @@ def _answers(d: Draw) -> tuple[Answer, ...]:
     )
 
 
-def _distinct(answer: Answer) -> bool:
-    """Every mistake lies ``MARGIN`` tolerances from the key and from every other mistake."""
-    try:
-        wide = replace(answer, rtol=MARGIN * answer.rtol, atol=MARGIN * answer.atol)
-    except ParameterError:  # a mistake within the widened tolerance of the key
-        return False
-    return all(grade(wide, m.value).mistake == m.name for m in wide.mistakes)
 
 
 def _statement(d: Draw) -> str:
@@ -206,7 +199,7 @@ def _variant(d: Draw) -> Variant | None:
         if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
             raise
         return None  # a mistake indistinguishable from the key
-    if not all(_distinct(a) for a in answers):
+    if not all(mistakes_distinguishable(a, MARGIN) for a in answers):
         return None
     I1, I2, I3 = d.moments
     return Variant(
@@ -241,8 +234,4 @@ def generate(rng: np.random.Generator) -> Variant:
         No acceptable draw in ``MAX_ATTEMPTS`` (a template bug: about one draw in a few is
         rejected).
     """
-    for _ in range(MAX_ATTEMPTS):
-        variant = _variant(_draw(rng))
-        if variant is not None:
-            return variant
-    raise RuntimeError(f"{NAME}: no acceptable draw in {MAX_ATTEMPTS} attempts")
+    return first_acceptable(lambda r: _variant(_draw(r)), rng, NAME, MAX_ATTEMPTS)

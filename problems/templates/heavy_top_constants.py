@@ -53,7 +53,7 @@ import numpy as np
 
 from problems.answers import Answer, Mistake
 from problems.rounding import latex_sig, round_sig
-from problems.variant import Variant
+from problems.variant import Variant, first_acceptable
 from solver.heavy_top import constants_of_motion, turning_points
 from solver.inertia import centre_of_mass_offset, parallel_axis, shape_tensor
 
@@ -476,8 +476,4 @@ def generate(rng: np.random.Generator) -> Variant:
     RuntimeError
         No acceptable draw in ``MAX_ATTEMPTS`` (a template bug: most draws are accepted).
     """
-    for _ in range(MAX_ATTEMPTS):
-        variant = _variant(rng)
-        if variant is not None:
-            return variant
-    raise RuntimeError(f"{NAME}: no acceptable draw in {MAX_ATTEMPTS} attempts")
+    return first_acceptable(_variant, rng, NAME, MAX_ATTEMPTS)

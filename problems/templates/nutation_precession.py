@@ -43,10 +43,10 @@ import math
 import numpy as np
 from scipy.special import ellipk
 
-from problems.answers import Answer, Mistake
+from problems.answers import Answer, Mistake, mistakes_distinguishable
 from problems.rounding import latex_sig, round_sig
-from problems.templates.sleeping_top import distinguishable, draw_top
-from problems.variant import Variant
+from problems.templates.sleeping_top import draw_top
+from problems.variant import Variant, first_acceptable
 from solver.heavy_top import constants_of_motion, critical_spin, cubic_roots, nutation
 from solver.parameters import ParameterError
 
@@ -200,7 +200,7 @@ def _variant(rng: np.random.Generator) -> Variant | None:
         if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
             raise
         return None
-    if not all(distinguishable(a, MARGIN) for a in answers):
+    if not all(mistakes_distinguishable(a, MARGIN) for a in answers):
         return None
     params = {"I1": I1, "I3": I3, "Mgl": Mgl, "beta0": beta0, "omega3": omega3,
               "alpha_dot0": alpha_dot0}
@@ -223,8 +223,4 @@ def generate(rng: np.random.Generator) -> Variant:
         Answers ``T_nut`` (s) and ``mean_rate`` (rad/s), computed by
         :func:`solver.heavy_top.nutation` from the displayed (3-figure) parameters.
     """
-    for _ in range(MAX_ATTEMPTS):
-        variant = _variant(rng)
-        if variant is not None:
-            return variant
-    raise RuntimeError(f"{NAME}: no acceptable draw in {MAX_ATTEMPTS} attempts")  # pragma: no cover
+    return first_acceptable(_variant, rng, NAME, MAX_ATTEMPTS)

@@ -24,7 +24,7 @@ Tolerance: ``omega3_c`` has ``rtol = 1e-3``: it is one square root of products o
 data, which any careful computation reproduces to ~1e-15; the known mistakes differ by factors
 of order one.
 
-:func:`draw_top` and :func:`distinguishable` are shared with the other heavy-top templates
+:func:`draw_top` is shared with the other heavy-top templates
 (:mod:`~problems.templates.nutation_precession`, :mod:`~problems.templates.steady_precession`,
 :mod:`~problems.templates.symbolic_derivation`).
 """
@@ -32,13 +32,13 @@ of order one.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
-from problems.answers import Answer, Mistake, grade
+from problems.answers import Answer, Mistake, mistakes_distinguishable
 from problems.rounding import latex_sig, round_sig
-from problems.variant import Variant
+from problems.variant import Variant, first_acceptable
 from solver.heavy_top import critical_spin, sleeping_top_stable
 from solver.inertia import centre_of_mass_offset, parallel_axis, shape_tensor
 from solver.parameters import ParameterError
@@ -150,14 +150,6 @@ def draw_top(rng: np.random.Generator, sig: int = SIG) -> Top:
     return Top(kind, M, R, h, arm)
 
 
-def distinguishable(answer: Answer, margin: float = MARGIN) -> bool:
-    """Every known mistake of ``answer`` lies ``margin`` tolerances from the key and from every
-    other mistake (graded with the widened tolerance, each is still recognised by its name)."""
-    try:
-        wide = replace(answer, rtol=margin * answer.rtol, atol=margin * answer.atol)
-    except ParameterError:  # a mistake within the widened tolerance of the key
-        return False
-    return all(grade(wide, m.value).mistake == m.name for m in wide.mistakes)
 
 
 # --------------------------------------------------------------------------------------------
@@ -234,7 +226,7 @@ def _variant(rng: np.random.Generator) -> Variant | None:
         if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
             raise
         return None
-    if not all(distinguishable(a) for a in answers):
+    if not all(mistakes_distinguishable(a, MARGIN) for a in answers):
         return None
     params = {"M": top.M, "R": top.R} | ({} if top.h is None else {"h": top.h})
     if top.kind.arm_range is not None:
@@ -261,8 +253,4 @@ def generate(rng: np.random.Generator) -> Variant:
     Variant
         Answers ``omega3_c`` (rad/s) and ``stable`` (boolean).
     """
-    for _ in range(MAX_ATTEMPTS):
-        variant = _variant(rng)
-        if variant is not None:
-            return variant
-    raise RuntimeError(f"{NAME}: no acceptable draw in {MAX_ATTEMPTS} attempts")  # pragma: no cover
+    return first_acceptable(_variant, rng, NAME, MAX_ATTEMPTS)

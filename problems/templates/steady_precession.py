@@ -40,10 +40,10 @@ import math
 
 import numpy as np
 
-from problems.answers import Answer, Mistake
+from problems.answers import Answer, Mistake, mistakes_distinguishable
 from problems.rounding import latex_sig, round_sig
-from problems.templates.sleeping_top import G, distinguishable, draw_top
-from problems.variant import Variant
+from problems.templates.sleeping_top import G, draw_top
+from problems.variant import Variant, first_acceptable
 from solver.heavy_top import fast_top_rates, steady_precession_rates
 from solver.parameters import ParameterError
 
@@ -179,7 +179,7 @@ def _variant(rng: np.random.Generator) -> Variant | None:
         if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
             raise
         return None
-    if not all(distinguishable(a, MARGIN) for a in answers):
+    if not all(mistakes_distinguishable(a, MARGIN) for a in answers):
         return None
     params = {"M": M, "l": arm, "Icm": Icm, "I3": I3, "g": G, "omega3": omega3, "beta0": beta0}
     units = {"M": "kg", "l": "m", "Icm": "kg m^2", "I3": "kg m^2", "g": "m/s^2",
@@ -201,8 +201,4 @@ def generate(rng: np.random.Generator) -> Variant:
         Answers ``slow``, ``fast``, ``slow_approx``, ``fast_approx`` (rad/s) and
         ``slow_error`` (dimensionless), computed from the displayed (3-figure) parameters.
     """
-    for _ in range(MAX_ATTEMPTS):
-        variant = _variant(rng)
-        if variant is not None:
-            return variant
-    raise RuntimeError(f"{NAME}: no acceptable draw in {MAX_ATTEMPTS} attempts")  # pragma: no cover
+    return first_acceptable(_variant, rng, NAME, MAX_ATTEMPTS)

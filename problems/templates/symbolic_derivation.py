@@ -43,10 +43,10 @@ from functools import cache
 import numpy as np
 import sympy as sp
 
-from problems.answers import Answer, Mistake
+from problems.answers import Answer, Mistake, mistakes_distinguishable
 from problems.rounding import latex_sig, round_sig
-from problems.templates.sleeping_top import distinguishable, draw_top
-from problems.variant import Variant
+from problems.templates.sleeping_top import draw_top
+from problems.variant import Variant, first_acceptable
 from solver.heavy_top import constants_of_motion, critical_spin
 from solver.parameters import ParameterError
 from solver.symbolic import (
@@ -322,7 +322,7 @@ def _variant(rng: np.random.Generator) -> Variant | None:
         if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
             raise
         return None
-    if not distinguishable(number, MARGIN):
+    if not mistakes_distinguishable(number, MARGIN):
         return None
     units = {n: _PARAM[n][2] for n in params}
     return Variant(NAME, q.title, params, units, _statement(q, params), (c.expression, number))
@@ -342,8 +342,4 @@ def generate(rng: np.random.Generator) -> Variant:
         Answers ``<quantity>_expr`` (expression) and ``<quantity>`` (its value, scalar), for a
         quantity drawn from :data:`QUANTITIES`.
     """
-    for _ in range(MAX_ATTEMPTS):
-        variant = _variant(rng)
-        if variant is not None:
-            return variant
-    raise RuntimeError(f"{NAME}: no acceptable draw in {MAX_ATTEMPTS} attempts")  # pragma: no cover
+    return first_acceptable(_variant, rng, NAME, MAX_ATTEMPTS)

@@ -17,14 +17,14 @@ mistake (e.g. ``sin Ωt ≈ 0``, where turning ω the wrong way round gives the 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from problems.answers import Answer, Mistake, grade
+from problems.answers import Answer, Mistake, mistakes_distinguishable
 from problems.rounding import latex_sig, round_sig
-from problems.variant import Variant
+from problems.variant import Variant, first_acceptable
 from solver.inertia import shape_tensor
 from solver.parameters import ParameterError
 from solver.torque_free import (
@@ -197,13 +197,6 @@ def _answers(d: Draw) -> tuple[Answer, ...]:
     )
 
 
-def _distinct(answer: Answer) -> bool:
-    """Every mistake lies ``MARGIN`` tolerances from the key and from every other mistake."""
-    try:
-        wide = replace(answer, rtol=MARGIN * answer.rtol, atol=MARGIN * answer.atol)
-    except ParameterError:  # a mistake within the widened tolerance of the key
-        return False
-    return all(grade(wide, m.value).mistake == m.name for m in wide.mistakes)
 
 
 def _statement(d: Draw) -> str:
@@ -247,7 +240,7 @@ def _variant(d: Draw | None) -> Variant | None:
         if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
             raise
         return None  # a mistake indistinguishable from the key
-    if not all(_distinct(a) for a in answers):
+    if not all(mistakes_distinguishable(a, MARGIN) for a in answers):
         return None
     return Variant(
         family=NAME,
@@ -282,8 +275,4 @@ def generate(rng: np.random.Generator) -> Variant:
         No acceptable draw in ``MAX_ATTEMPTS`` (a template bug: about one draw in a few is
         rejected).
     """
-    for _ in range(MAX_ATTEMPTS):
-        variant = _variant(_draw(rng))
-        if variant is not None:
-            return variant
-    raise RuntimeError(f"{NAME}: no acceptable draw in {MAX_ATTEMPTS} attempts")
+    return first_acceptable(lambda r: _variant(_draw(r)), rng, NAME, MAX_ATTEMPTS)

@@ -56,7 +56,7 @@ from problems.templates.heavy_top_constants import (
     variant_params,
     well_conditioned,
 )
-from problems.variant import Variant
+from problems.variant import Variant, first_acceptable
 from solver.heavy_top import constants_of_motion, effective_potential, turning_points
 
 NAME = "turning_points"
@@ -201,8 +201,4 @@ def generate(rng: np.random.Generator) -> Variant:
     RuntimeError
         No acceptable draw in ``MAX_ATTEMPTS`` (a template bug: most draws are accepted).
     """
-    for _ in range(MAX_ATTEMPTS):
-        variant = _variant(rng)
-        if variant is not None:
-            return variant
-    raise RuntimeError(f"{NAME}: no acceptable draw in {MAX_ATTEMPTS} attempts")
+    return first_acceptable(_variant, rng, NAME, MAX_ATTEMPTS)
