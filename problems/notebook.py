@@ -131,10 +131,10 @@ def _parameter_cell(variants: Sequence[Variant]) -> str:
 def _rules_cell(student: Mapping[str, str], specs: Sequence[dict]) -> str:
     sid = student["id"]
     name = student.get("name", "").strip()
-    who = f"`{sid}`" + (f" ({html.escape(name)})" if name else "")
+    who = f"`{sid}`" + (f" ({html.escape(name, quote=False)})" if name else "")
     rows = [
         f"| `{s['variable']}` | {kind_hint(s)} | {s['unit'] or '—'} | {s['points']:g} | "
-        f"{html.escape(_one_line(s['description'])).replace('|', '&#124;')} |"
+        f"{html.escape(_one_line(s['description']), quote=False).replace('|', '&#124;')} |"
         for s in specs
     ]
     return RULES.format(who=who, file=f"{sid}.ipynb", table="\n".join(rows)).rstrip("\n")
