@@ -19,12 +19,15 @@ exist for a case are ``null``.
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import math
 import sys
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import Any, TextIO
+
+import numpy as np
 
 # Field kinds accepted on input: a number, a 3-vector, a number or a list of numbers, a list of
 # numbers, a list of 3-vectors, or a string.
@@ -207,51 +210,102 @@ def _plain(value: Any, name: str) -> Any:
     raise TypeError(f"unexpected {type(value).__name__} in output field {name}")
 
 
+def _prepare(case: dict[str, Any], default_scene: str | None) -> tuple[Scene, dict[str, Any]]:
+    """The case's scene and checked input fields; :class:`_FieldError` naming a bad field."""
+    scene_name = case.get("scene", default_scene)
+    if scene_name is None:
+        raise _FieldError("scene", f"missing: one of {', '.join(SCENES)}")
+    if scene_name not in SCENES:
+        raise _FieldError("scene", f"unknown scene {scene_name!r}; known: {', '.join(SCENES)}")
+    scene = SCENES[scene_name]
+    params = {k: v for k, v in case.items() if k not in RESERVED}
+    known = {**scene.required, **scene.optional}
+    for name in params:
+        if name not in known:
+            raise _FieldError(name, f"unknown field for {scene_name}; known: {', '.join(known)}")
+    for name in scene.required:
+        if name not in params:
+            raise _FieldError(name, "missing")
+    for name, value in params.items():
+        _check_value(name, known[name], value)
+    return scene, params
+
+
+def _with_id(case: dict[str, Any], fields: dict[str, Any]) -> dict[str, Any]:
+    return {**({"id": case["id"]} if "id" in case else {}), **fields}
+
+
 def solve_case(case: dict[str, Any], default_scene: str | None = None) -> dict[str, Any]:
     """Answer one case (a dict of input fields) or return ``{"error": ...}`` naming the field."""
     from solver.parameters import ParameterError
 
-    out: dict[str, Any] = {"id": case["id"]} if "id" in case else {}
     try:
-        scene_name = case.get("scene", default_scene)
-        if scene_name is None:
-            raise _FieldError("scene", f"missing: one of {', '.join(SCENES)}")
-        if scene_name not in SCENES:
-            raise _FieldError("scene", f"unknown scene {scene_name!r}; known: {', '.join(SCENES)}")
-        scene = SCENES[scene_name]
-        params = {k: v for k, v in case.items() if k not in RESERVED}
-        known = {**scene.required, **scene.optional}
-        for name in params:
-            if name not in known:
-                raise _FieldError(
-                    name, f"unknown field for {scene_name}; known: {', '.join(known)}"
-                )
-        for name in scene.required:
-            if name not in params:
-                raise _FieldError(name, "missing")
-        for name, value in params.items():
-            _check_value(name, known[name], value)
+        scene, params = _prepare(case, default_scene)
         result = scene.solve(**params)
-        out.update({k: _plain(v, k) for k, v in result.items()})
+        return _with_id(case, {k: _plain(v, k) for k, v in result.items()})
     except (_FieldError, ParameterError) as exc:
-        return {**({"id": case["id"]} if "id" in case else {}), "error": str(exc)}
-    return out
+        return _with_id(case, {"error": str(exc)})
 
 
-def solve_lines(lines: Iterable[str], default_scene: str | None = None) -> Iterator[dict]:
-    """Answer a JSON-lines stream, one output object per non-blank input line, in order."""
-    for number, line in enumerate(lines, start=1):
-        if not line.strip():
-            continue
-        try:
-            case = json.loads(line)
-        except json.JSONDecodeError as exc:
-            yield {"error": f"line {number}: not valid JSON ({exc.msg} at column {exc.colno})"}
-            continue
-        if not isinstance(case, dict):
-            yield {"error": f"line {number}: expected a JSON object, got {type(case).__name__}"}
-            continue
-        yield solve_case(case, default_scene)
+def _solve_heavy_tops(cases: list[dict[str, Any]], params: list[dict[str, Any]]) -> list[dict]:
+    """Heavy-top cases in one vectorised call (R14–R21); one by one if any state is invalid,
+    so that each bad line gets its own error naming its field."""
+    from solver.heavy_top import heavy_top_record, solve_heavy_top_many
+    from solver.parameters import ParameterError
+
+    names = SCENES["heavy-top"].required
+    try:
+        table = solve_heavy_top_many(*(np.array([p[n] for p in params], float) for n in names))
+    except ParameterError:
+        return [solve_case(c, "heavy-top") for c in cases]
+    return [_with_id(c, {k: _plain(v, k) for k, v in heavy_top_record(table, i).items()})
+            for i, c in enumerate(cases)]
+
+
+def _parse_line(number: int, line: str) -> dict[str, Any]:
+    try:
+        case = json.loads(line)
+    except json.JSONDecodeError as exc:
+        raise _FieldError(
+            f"line {number}", f"not valid JSON ({exc.msg} at column {exc.colno})"
+        ) from None
+    if not isinstance(case, dict):
+        raise _FieldError(f"line {number}", f"expected a JSON object, got {type(case).__name__}")
+    return case
+
+
+def solve_lines(
+    lines: Iterable[str], default_scene: str | None = None, chunk: int = 2048
+) -> Iterator[dict]:
+    """Answer a JSON-lines stream, one output object per non-blank input line, in order.
+
+    Lines are read in chunks; the heavy tops of a chunk are solved in one vectorised call (the
+    per-call overhead of numpy on scalars would otherwise dominate), everything else per line.
+    """
+    numbered = ((n, line) for n, line in enumerate(lines, start=1) if line.strip())
+    while batch := list(itertools.islice(numbered, chunk)):
+        answers: list[dict | None] = [None] * len(batch)
+        heavy: list[tuple[int, dict, dict]] = []
+        for slot, (number, line) in enumerate(batch):
+            try:
+                case = _parse_line(number, line)
+            except _FieldError as exc:
+                answers[slot] = {"error": str(exc)}
+                continue
+            try:
+                scene, params = _prepare(case, default_scene)
+            except _FieldError as exc:
+                answers[slot] = _with_id(case, {"error": str(exc)})
+                continue
+            if scene.name == "heavy-top":
+                heavy.append((slot, case, params))
+            else:
+                answers[slot] = solve_case(case, default_scene)
+        if heavy:
+            solved = _solve_heavy_tops([h[1] for h in heavy], [h[2] for h in heavy])
+            for (slot, _, _), answer in zip(heavy, solved, strict=True):
+                answers[slot] = answer
+        yield from answers  # type: ignore[misc]
 
 
 # --- the command ---------------------------------------------------------------------------

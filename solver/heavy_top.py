@@ -331,6 +331,42 @@ def cos_beta(
     return _out(cos_beta_of(cubic, np.ravel(full[0]), flat[5]), full[0].shape)
 
 
+def solve_heavy_top_many(
+    I1: ArrayLike, I3: ArrayLike, Mgl: ArrayLike, beta0: ArrayLike,
+    alpha_dot0: ArrayLike, beta_dot0: ArrayLike, gamma_dot0: ArrayLike,
+) -> dict[str, NDArray]:
+    """Every ``eulertop solve heavy-top`` field for many initial states at once (R14–R21).
+
+    Vectorised: one solution of the cubic for all states. Returns 1-D arrays over the
+    broadcast (flattened) states: floats with NaN where a quantity does not exist (see
+    :func:`solve_heavy_top`), ``motion`` as str, ``sleeping_stable`` as bool, and
+    ``steady_precession_rates`` as an (n, 2) array ``[slow, fast]`` (NaN when not real).
+    """
+    state = (I1, I3, Mgl, beta0, alpha_dot0, beta_dot0, gamma_dot0)
+    _, cubic, flat = _cubic(*state)
+    i1, i3, mgl, b0 = flat[0], flat[1], flat[2], flat[3]
+    p_alpha, p_gamma, e_prime = (np.ravel(x) for x in constants_of_motion(*flat))
+    motion = _motion(cubic, flat)
+    period = _period(cubic, flat)
+    sleeping = motion == "sleeping"
+    slow, fast = steady_precession_rates(i1, i3, mgl, b0, p_gamma)
+    return {
+        "p_alpha": p_alpha,
+        "p_gamma": p_gamma,
+        "E_prime": e_prime,
+        "beta1": cubic.beta[:, 1],
+        "beta2": cubic.beta[:, 0],
+        "alpha_dot_beta1": np.where(sleeping, np.nan, precession_rate_at(cubic, 1)),
+        "alpha_dot_beta2": np.where(sleeping, np.nan, precession_rate_at(cubic, 0)),
+        "nutation_period": period,
+        "mean_precession_rate": _mean_rate(cubic, flat, period),
+        "motion": motion,
+        "sleeping_stable": np.asarray(sleeping_top_stable(i1, i3, mgl, _omega3(flat))),
+        "omega3_critical": np.ravel(critical_spin(i1, i3, mgl)),
+        "steady_precession_rates": np.stack([np.ravel(slow), np.ravel(fast)], axis=-1),
+    }
+
+
 def solve_heavy_top(
     I1: float, I3: float, Mgl: float, beta0: float,
     alpha_dot0: float, beta_dot0: float, gamma_dot0: float,
@@ -359,33 +395,25 @@ def solve_heavy_top(
     for name, value in zip(_STATE, state, strict=True):
         if np.ndim(as_real(name, value)) != 0:
             raise ParameterError(name, "solve_heavy_top takes one state: a number, not an array")
-    _, cubic, flat = _cubic(*state)
-    i1, i3, mgl = flat[0], flat[1], flat[2]
-    p_alpha, p_gamma, e_prime = constants_of_motion(*state)
-    motion = _motion(cubic, flat)
-    period = _period(cubic, flat)
-    mean = _mean_rate(cubic, flat, period)
-    sleeping = motion == "sleeping"
-    rate1 = np.where(sleeping, np.nan, precession_rate_at(cubic, 1))
-    rate2 = np.where(sleeping, np.nan, precession_rate_at(cubic, 0))
-    slow, fast = steady_precession_rates(I1, I3, Mgl, beta0, p_gamma)
-    beta = cubic.beta
-    return {
-        "p_alpha": float(p_alpha),
-        "p_gamma": float(p_gamma),
-        "E_prime": float(e_prime),
-        "beta1": float(beta[0, 1]),
-        "beta2": float(beta[0, 0]),
-        "alpha_dot_beta1": _finite(rate1),
-        "alpha_dot_beta2": _finite(rate2),
-        "nutation_period": _finite(period),
-        "mean_precession_rate": _finite(mean),
-        "motion": str(motion[0]),
-        "sleeping_stable": bool(sleeping_top_stable(i1, i3, mgl, _omega3(flat))[0]),
-        "omega3_critical": float(critical_spin(I1, I3, Mgl)),
-        "steady_precession_rates": None if not np.isfinite(slow) else [float(slow),
-                                                                       _finite(fast)],
-    }
+    return heavy_top_record(solve_heavy_top_many(*state), 0)
+
+
+def heavy_top_record(table: dict[str, NDArray], i: int) -> dict[str, Any]:
+    """Row ``i`` of :func:`solve_heavy_top_many`'s table as plain Python (None for NaN/inf)."""
+    slow, fast = table["steady_precession_rates"][i]
+    row: dict[str, Any] = {}
+    for key, column in table.items():
+        if key == "steady_precession_rates":
+            row[key] = None if not math.isfinite(slow) else [float(slow), _finite(fast)]
+        elif key == "motion":
+            row[key] = str(column[i])
+        elif key == "sleeping_stable":
+            row[key] = bool(column[i])
+        elif key in ("p_alpha", "p_gamma", "E_prime", "beta1", "beta2", "omega3_critical"):
+            row[key] = float(column[i])
+        else:
+            row[key] = _finite(column[i])
+    return row
 
 
 def _omega3(flat):

@@ -13,6 +13,7 @@ import pytest
 
 from eulertop.cli import main
 from solver.cli import SCENES, solve_lines
+from solver.heavy_top import solve_heavy_top
 
 HEAVY = {"I1": 2.0e-4, "I3": 1.0e-4, "Mgl": 0.02, "beta0": 0.5,
          "alpha_dot0": 0.3, "beta_dot0": 0.0, "gamma_dot0": 150.0}
@@ -154,10 +155,12 @@ def test_batch_solutions_equal_single_solutions():
     rng = np.random.default_rng(7)
     cases = [{**HEAVY, "beta0": float(b), "gamma_dot0": float(g)}
              for b, g in zip(rng.uniform(0.2, 2.5, 5), rng.uniform(80, 400, 5), strict=True)]
-    batch = list(solve_lines(json.dumps({"scene": "heavy-top", **c}) for c in cases))
+    lines = [json.dumps({"scene": "heavy-top", **c}) for c in cases]
+    lines.insert(2, json.dumps({"scene": "heavy-top", **{**HEAVY, "Mgl": -1.0}}))
+    batch = list(solve_lines(lines, chunk=2))  # chunk boundaries, and a bad state inside one
+    assert batch.pop(2)["error"].startswith("Mgl:")
     for case, answer in zip(cases, batch, strict=True):
-        [single] = solve_lines([json.dumps({"scene": "heavy-top", **case})])
-        assert single == answer
+        assert answer == {k: v for k, v in solve_heavy_top(**case).items()}
 
 
 def test_console_script_end_to_end(tmp_path):
