@@ -1,0 +1,188 @@
+"""``eulertop check NOTEBOOK.ipynb``: run a notebook as the grader would; are its answers well
+formed?
+
+For a student, before submitting. The notebook runs exactly as in ``eulertop grade``
+(:func:`grader.execute.execute_submission`, default :class:`~grader.limits.Limits`), then each
+answer listed in the notebook's own ``metadata["eulertop"]`` (the public answer spec written
+by the generator: names, kinds, units, vector lengths, options, symbols — never values) is
+reported as *well formed*, *missing* or *malformed and why*
+(:func:`problems.answers.check_spec`). It never says whether an answer is right: the key is not
+here.
+
+Advisory only: the metadata is in the student's hands and may have been edited; the grader
+never reads it (it takes the answer list from the instructor's key).
+
+Exit status: 0 when every answer is present and well formed; 1 otherwise (or when the notebook
+could not be run to the end); 2 on usage errors — no such file, not a notebook, no eulertop
+metadata — with one line saying what to do, never a traceback.
+
+Module-level imports stay light: ``eulertop --help`` imports this module.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+WHERE_METADATA = ("check works on the notebook you were given (release/<your id>.ipynb); if "
+                  "you moved your work to a new notebook, copy it back into that one")
+
+
+class CheckUsageError(ValueError):
+    """The notebook cannot be checked at all (exit status 2); the message says what to do."""
+
+
+@dataclass(frozen=True)
+class AnswerCheck:
+    """The form of one answer: ``verdict.status`` is correct (= well formed), missing, invalid."""
+
+    variable: str
+    spec: dict
+    verdict: Any  # problems.answers.Verdict
+
+
+@dataclass(frozen=True)
+class CheckReport:
+    """What ``eulertop check`` found: the run, and one entry per answer of the spec."""
+
+    execution: Any  # grader.execute.Execution
+    answers: tuple[AnswerCheck, ...]
+
+    @property
+    def all_well_formed(self) -> bool:
+        """Every answer present and well formed, and the notebook ran to the end."""
+        return self.execution.status == "ok" and all(
+            a.verdict.status == "correct" for a in self.answers)
+
+
+def add_check_arguments(parser: argparse.ArgumentParser) -> None:
+    """Arguments of ``eulertop check``."""
+    parser.add_argument("notebook", type=Path, metavar="NOTEBOOK.ipynb",
+                        help="your notebook, as you will submit it")
+
+
+def run_check(args: argparse.Namespace) -> int:
+    """Run ``eulertop check``; the exit status (module docstring)."""
+    from grader.limits import Limits
+
+    try:
+        report = check_notebook(args.notebook, Limits())
+    except CheckUsageError as err:
+        print(f"eulertop check: {err}", file=sys.stderr)
+        return 2
+    print(format_report(report, args.notebook))
+    return 0 if report.all_well_formed else 1
+
+
+def answer_specs(path: Path) -> tuple[dict, ...]:
+    """The public answer specs in the notebook's ``metadata["eulertop"]``, in question order.
+
+    Raises
+    ------
+    CheckUsageError
+        No such file, not a notebook, no (or damaged) eulertop metadata.
+    """
+    from grader.notebook_load import SubmissionError, read_notebook
+
+    path = Path(path)
+    if not path.exists():
+        raise CheckUsageError(f"{path}: no such file")
+    try:
+        metadata = read_notebook(path).notebook.get("metadata", {})
+    except SubmissionError as err:
+        raise CheckUsageError(f"{path}: {err}") from None
+    eulertop = metadata.get("eulertop") if isinstance(metadata, Mapping) else None
+    if eulertop is None:
+        raise CheckUsageError(f"{path} has no eulertop answer list in its metadata: "
+                              f"{WHERE_METADATA}")
+    try:
+        specs = tuple(dict(a) for q in eulertop["questions"] for a in q["answers"])
+        if not specs or not all(_valid_spec(s) for s in specs):
+            raise ValueError
+    except (KeyError, TypeError, ValueError):
+        raise CheckUsageError(f"{path}: its eulertop metadata is damaged; "
+                              f"{WHERE_METADATA}") from None
+    return specs
+
+
+def check_notebook(path: Path, limits: Any) -> CheckReport:
+    """Run the notebook under ``limits`` and check the form of each answer of its spec.
+
+    Raises
+    ------
+    CheckUsageError
+        See :func:`answer_specs`.
+    """
+    from grader.execute import execute_submission
+
+    specs = answer_specs(path)
+    execution = execute_submission(Path(path), [s["variable"] for s in specs], limits)
+    answers = tuple(
+        AnswerCheck(s["variable"], s, check_value(s, execution.answers.get(s["variable"])))
+        for s in specs
+    )
+    return CheckReport(execution, answers)
+
+
+def check_value(spec: Mapping[str, Any], value: Any) -> Any:
+    """The form :class:`~problems.answers.Verdict` of one extracted value (markers included)."""
+    from grader.extract import invalid_reason
+    from problems.answers import Verdict, check_spec
+    from problems.notebook import kind_hint
+
+    try:
+        reason = invalid_reason(value)
+        if reason is not None:
+            return Verdict("invalid", 0.0, float(spec.get("points", 1.0)),
+                           f"{reason}; {kind_hint(spec)} is expected")
+        return check_spec(spec, value)
+    except Exception:  # a spec edited into nonsense: say so, never a traceback
+        return Verdict("invalid", 0.0, 0.0, "could not be checked: the notebook's metadata "
+                       "for this answer is damaged")
+
+
+_WORDS = {"correct": "ok", "missing": "MISSING", "invalid": "MALFORMED"}
+
+
+def format_report(report: CheckReport, path: Path) -> str:
+    """The report printed by ``eulertop check``."""
+    execution = report.execution
+    lines = [f"Ran {Path(path).name} as the grader will, in a fresh kernel."]
+    if execution.status != "ok":
+        lines += [execution.message + ".", "No answer could be read, so none could be checked. "
+                  "Fix the problem above and run eulertop check again."]
+        return "\n".join(lines)
+    if execution.cell_errors:
+        lines.append(f"{len(execution.cell_errors)} cell(s) did not finish normally (answers "
+                     "they did not set count as missing):")
+        lines += [f"  - {error}" for error in execution.cell_errors]
+    if execution.output_truncated:
+        lines.append("(Much output: only the beginning was kept. Output is never graded.)")
+    width = max(len(a.variable) for a in report.answers)
+    for a in report.answers:
+        word = _WORDS[a.verdict.status]
+        lines.append(f"  {word:<9} {a.variable:<{width}}  {a.verdict.message}")
+    lines.append(_tally([a.verdict.status for a in report.answers]))
+    lines.append("This checks the form of your answers only, never whether they are right.")
+    return "\n".join(lines)
+
+
+def _tally(statuses: Sequence[str]) -> str:
+    n, good = len(statuses), statuses.count("correct")
+    missing, bad = statuses.count("missing"), statuses.count("invalid")
+    text = f"{good} of {n} answers present and well formed"
+    if missing or bad:
+        text += f"; {missing} missing, {bad} malformed"
+    return text + "."
+
+
+def _valid_spec(spec: Mapping[str, Any]) -> bool:
+    from problems.answers import KINDS
+
+    variable = spec.get("variable")
+    return (isinstance(variable, str) and variable.isidentifier()
+            and spec.get("kind") in KINDS and isinstance(spec.get("name"), str))

@@ -1,0 +1,129 @@
+"""Which submission belongs to which student: the first stage of grading.
+
+A submission is ``SUBMISSIONS/<id>.ipynb`` or ``SUBMISSIONS/<id>/<one>.ipynb``. The student
+id — and so the variant the submission is graded against — comes from that file or folder name
+alone, which the instructor's files control; nothing inside the notebook is consulted here
+(design.md, trust boundaries).
+
+What is found is sorted into four kinds, so that nothing is guessed and nothing is silent:
+
+* a roster id with exactly one submission → a :class:`Submission` to grade;
+* a roster id with none → ``missing``;
+* a roster id with more than one candidate (``alice.ipynb`` *and* ``alice/``, or a folder with
+  two notebooks) → a :class:`Problem` for that student (graded as failed, not guessed);
+* a name that is not a roster id, or a folder without a notebook → a :class:`Problem` that is
+  reported and not graded (an id differing from a roster id only in case is pointed out).
+
+Hidden entries (``.ipynb_checkpoints``, ``.DS_Store``) are ignored; other files that are not
+notebooks are reported.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+SUFFIX = ".ipynb"
+
+
+@dataclass(frozen=True)
+class Submission:
+    """The one notebook submitted by a roster student."""
+
+    student_id: str
+    path: Path
+
+
+@dataclass(frozen=True)
+class Problem:
+    """Something in SUBMISSIONS that cannot be graded as it stands.
+
+    ``student_id`` is the roster id it concerns, or None when it concerns no roster student.
+    ``ignored`` marks a stray file that is not a submission at all (reported, not counted as
+    an ungraded submission).
+    """
+
+    path: Path
+    message: str
+    student_id: str | None = None
+    ignored: bool = False
+
+
+@dataclass(frozen=True)
+class Discovery:
+    """The submissions folder sorted out (module docstring); tuples in roster / name order."""
+
+    submissions: tuple[Submission, ...]
+    missing: tuple[str, ...]
+    problems: tuple[Problem, ...]
+
+
+def _candidates(folder: Path) -> dict[str, list[Path]]:
+    """Every entry naming an id: ``{stem or folder name: [notebook or folder paths]}``."""
+    found: dict[str, list[Path]] = {}
+    for entry in sorted(folder.iterdir()):
+        if entry.name.startswith("."):
+            continue
+        if entry.is_dir():
+            found.setdefault(entry.name, []).append(entry)
+        elif entry.name.endswith(SUFFIX):
+            found.setdefault(entry.name[: -len(SUFFIX)], []).append(entry)
+        else:
+            found.setdefault("", []).append(entry)  # not a notebook: reported below
+    return found
+
+
+def _notebooks_in(folder: Path) -> list[Path]:
+    try:
+        return sorted(p for p in folder.iterdir()
+                      if p.is_file() and p.name.endswith(SUFFIX) and not p.name.startswith("."))
+    except OSError:  # unreadable: reported as holding no notebook the grader can read
+        return []
+
+
+def _resolve(folder: Path, sid: str, entries: list[Path]) -> Submission | Problem:
+    """One student's entries → their submission, or the reason there is none to grade."""
+    notebooks = sorted(n for e in entries for n in (_notebooks_in(e) if e.is_dir() else [e]))
+    if len(notebooks) == 1:
+        return Submission(sid, notebooks[0])
+    if not notebooks:
+        return Problem(entries[0], f"the folder {entries[0].name}/ holds no .ipynb notebook "
+                                   "that can be read", sid)
+    names = ", ".join(str(n.relative_to(folder)) for n in notebooks)
+    return Problem(entries[0], f"{len(notebooks)} notebooks ({names}); submit exactly one — "
+                               "not guessing which one to grade", sid)
+
+
+def discover(folder: Path, roster_ids: Sequence[str]) -> Discovery:
+    """Sort the contents of ``folder`` (module docstring).
+
+    Parameters
+    ----------
+    folder : Path
+        The SUBMISSIONS folder (must be a readable folder: the caller checks).
+    roster_ids : sequence of str
+        The assignment's student ids.
+    """
+    found = _candidates(Path(folder))
+    by_lower = {sid.lower(): sid for sid in roster_ids}
+    submissions, missing, problems = [], [], []
+    for sid in roster_ids:
+        if sid not in found:
+            missing.append(sid)
+            continue
+        outcome = _resolve(Path(folder), sid, found[sid])
+        (submissions if isinstance(outcome, Submission) else problems).append(outcome)
+    for name, entries in found.items():
+        if name in by_lower.values():
+            continue
+        for entry in entries:
+            if name == "":
+                problems.append(Problem(entry, f"{entry.name}: not a notebook (.ipynb) nor a "
+                                               "folder; ignored", ignored=True))
+                continue
+            near = by_lower.get(name.lower())
+            hint = f" (did you mean {near!r}? ids are case-sensitive)" if near else ""
+            message = f"{entry.name}: {name!r} is not on the roster{hint}; not graded"
+            problems.append(Problem(entry, message))
+    return Discovery(tuple(submissions), tuple(missing), tuple(problems))

@@ -1,0 +1,653 @@
+"""Run one submission in a fresh, limited Python kernel and read its answers.
+
+Stage *execute* of the pipeline (``grader/API.md``): ``execute_submission(path, variables,
+limits) -> Execution``.
+
+What one run does
+    1. :func:`grader.notebook_load.read_notebook` reads and sanitizes the file (a notebook that
+       cannot be read gives status ``"invalid_notebook"`` without starting anything).
+    2. Two private folders are made with :func:`tempfile.mkdtemp`: the kernel's working
+       folder, holding only a copy of the submission, and a control folder (connection file,
+       IPC sockets, IPython's profile, the kernel's stderr) that is not its working folder.
+    3. A kernel is started by the *kernel factory* — by default :class:`LocalKernel`: always
+       the grader's own interpreter running ipykernel (whatever the notebook's kernelspec or
+       language says), in its own session and process group, with a scrubbed environment, an
+       address-space limit, one BLAS/OpenMP thread, and stdin/stdout closed.
+    4. Every code cell runs in order through nbclient (``allow_errors``: a cell that raises does
+       not stop the rest). A cell that runs longer than the cell time limit is interrupted
+       (``KeyboardInterrupt``) and the next one runs.
+    5. The answers are read by one more request the student never saw (:mod:`grader.extract`).
+    6. A whole-notebook deadline is enforced here, outside nbclient: when it passes the kernel's
+       process group is killed, whatever it was doing (a loop that swallows
+       ``KeyboardInterrupt`` ends here).
+    7. Always, in ``finally``: the process group is killed, the sockets closed, both folders
+       removed.
+
+Output
+    Output is never graded. :class:`_CappedClient` keeps at most ``Limits.output_bytes``
+    characters of it per notebook and drops the rest on arrival; display updates and widget
+    (comm) messages, which nbclient would otherwise accumulate, are ignored. A single message
+    larger than :data:`MAX_IOPUB_MESSAGE` is refused by ZeroMQ before it is read
+    (``MAXMSGSIZE`` on the IOPub socket only), which severs IOPub: from then on outputs are
+    no longer collected, cells still run, answers are still read (they come back on the shell
+    channel), and ``output_truncated`` is set.
+
+Statuses (``Execution.status``)
+    ``"ok"``: every cell was run (some may have raised or timed out: ``cell_errors``) and the
+    answers were read. ``"invalid_notebook"``: the file is not a notebook we can run.
+    ``"timeout"``: the whole-notebook time limit passed; the kernel was killed; no answers.
+    ``"kernel_died"``: the kernel process ended (``os._exit``, ``exit()``, a crash, memory);
+    cells after it did not run; no answers. ``"error"``: the kernel could not be started, or
+    the notebook ran but its answers could not be read (the notebook broke the machinery the
+    extraction needs); no answers.
+
+Swapping the kernel (issue 5's sandbox, warm kernels)
+    The kernel's launch, interrupt and kill live in one class, :class:`LocalKernel`;
+    :func:`execute_submission` takes ``kernel_factory`` (default :class:`LocalKernel`), any
+    callable ``(workdir, control, limits) -> KernelProcess``. A sandbox wraps
+    :func:`kernel_command` in ``bwrap`` (the IPC sockets already live in the control folder, to
+    be bound into the sandbox); a warm pool hands out kernels forked in advance.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import functools
+import logging
+import os
+import re
+import shutil
+import signal
+import site
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Protocol
+
+from grader.extract import EXTRACTION_FAILED, extraction_request, parse_answers
+from grader.limits import Limits
+from grader.notebook_load import CodeCell, SubmissionError, executable_notebook, read_notebook
+
+__all__ = [
+    "STATUSES",
+    "Execution",
+    "KernelProcess",
+    "Limits",
+    "LocalKernel",
+    "SubmissionError",
+    "execute_submission",
+    "kernel_command",
+    "kernel_environment",
+]
+
+log = logging.getLogger(__name__)
+
+STATUSES = ("ok", "invalid_notebook", "timeout", "kernel_died", "error")
+
+MAX_IOPUB_MESSAGE = 32 * 1024**2
+"""Largest single output message (bytes) the grader accepts from a kernel."""
+
+EXTRACTION_TIMEOUT = 10.0
+"""Seconds the answer extraction may take (within what is left of the whole-notebook limit)."""
+
+STOP_TIMEOUT = 5.0
+"""Seconds allowed for the kernel to be reaped after SIGKILL."""
+
+# The kernel command: the grader's interpreter sets its own resource limits, then runs
+# ipykernel's launcher in-process. Done in the child's own code rather than a Popen preexec_fn,
+# which is unsafe in a threaded grader (`--jobs` runs kernels from a thread pool). No braces:
+# jupyter_client substitutes {names} in the command.
+_LAUNCHER = (
+    "import resource as r, runpy, sys; "
+    "m = int(sys.argv.pop(1)); h = r.getrlimit(r.RLIMIT_AS)[1]; "
+    "m = m if h == r.RLIM_INFINITY else min(m, h); "
+    "r.setrlimit(r.RLIMIT_AS, (m, m)); r.setrlimit(r.RLIMIT_CORE, (0, 0)); "
+    "runpy.run_module('ipykernel_launcher', run_name='__main__', alter_sys=True)"
+)
+
+_CELL_FILE = re.compile(r"\(\d+\.py, line (\d+)\)")
+
+_HINTS = {
+    "SystemExit": "sys.exit() and exit() stop a script, not a notebook cell: remove it",
+    "KeyboardInterrupt": "interrupted",
+    "ModuleNotFoundError": "only the grader's installed packages are available",
+}
+
+
+@dataclass(frozen=True)
+class Execution:
+    """The outcome of running one submission.
+
+    Attributes
+    ----------
+    status : str
+        One of :data:`STATUSES` (module docstring).
+    message : str
+        For a person: what happened, naming the cells (``cell 7 (`x = 1/0`): ZeroDivisionError:
+        division by zero``).
+    answers : dict
+        Declared variable → plain JSON value (``None`` if unset), or an ``{"__invalid__":
+        reason}`` marker (:func:`grader.extract.invalid_reason`). Only the declared names; empty
+        when nothing could be read. Floats may be NaN or infinite (faithfully extracted; the
+        comparison reports them).
+    cell_errors : tuple of str
+        One line per cell that raised, timed out, or was running when the kernel died or time
+        ran out.
+    duration : float
+        Wall time of the run, seconds.
+    output_truncated : bool
+        Some output was dropped (over ``Limits.output_bytes``, or one message too large).
+    """
+
+    status: str
+    message: str
+    answers: dict[str, Any]
+    cell_errors: tuple[str, ...]
+    duration: float
+    output_truncated: bool
+
+
+class KernelProcess(Protocol):
+    """A kernel for one run: what :func:`execute_submission` needs from a kernel launcher."""
+
+    async def start(self) -> Any:
+        """Start the kernel; return a started, ready ``AsyncKernelClient``."""
+
+    async def interrupt(self) -> None:
+        """Send the kernel a keyboard interrupt (SIGINT)."""
+
+    async def stop(self) -> None:
+        """Kill the kernel and everything it started; release sockets. Never raises."""
+
+    def exit_status(self) -> int | None:
+        """The kernel process's exit status once it has ended (negative: killed by a signal)."""
+
+
+KernelFactory = Callable[[Path, Path, Limits], KernelProcess]
+
+
+def kernel_environment(workdir: Path, control: Path) -> dict[str, str]:
+    """The kernel's whole environment: built from scratch, nothing of the grader's own.
+
+    ``HOME`` and ``TMPDIR`` are the private working folder; IPython's and matplotlib's
+    configuration folders are in the control folder (empty: no startup files run); Jupyter
+    configuration is ignored; one BLAS/OpenMP thread (``--jobs`` runs kernels side by side);
+    a fixed hash seed for reproducible runs.
+    """
+    env = {
+        "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.defpath}",
+        "HOME": str(workdir),
+        "TMPDIR": str(workdir),
+        "LANG": "C.UTF-8",
+        "LC_ALL": "C.UTF-8",
+        "PYTHONHASHSEED": "0",
+        "PYTHONDONTWRITEBYTECODE": "1",
+        "IPYTHONDIR": str(control / "ipython"),
+        "MPLCONFIGDIR": str(control / "matplotlib"),
+        "MPLBACKEND": "Agg",
+        "JUPYTER_NO_CONFIG": "1",
+        "OPENBLAS_NUM_THREADS": "1",
+        "OMP_NUM_THREADS": "1",
+        "MKL_NUM_THREADS": "1",
+        "NUMEXPR_NUM_THREADS": "1",
+        "MALLOC_ARENA_MAX": "2",  # fewer malloc arenas: less address space per thread
+    }
+    if site.ENABLE_USER_SITE and site.getusersitepackages() in sys.path:
+        # HOME moved: keep packages installed with `pip install --user` importable
+        env["PYTHONUSERBASE"] = site.getuserbase()
+    return env
+
+
+def kernel_command(limits: Limits) -> list[str]:
+    """The kernel's argv (``{connection_file}`` filled in by jupyter_client)."""
+    return [sys.executable, "-c", _LAUNCHER, str(limits.memory_bytes), "-f", "{connection_file}",
+            "--HistoryManager.hist_file=:memory:"]
+
+
+class LocalKernel:
+    """A fresh ipykernel on this machine, in its own process group: the one place a kernel is
+    launched, interrupted and killed (:class:`KernelProcess`).
+
+    Parameters
+    ----------
+    workdir : Path
+        The kernel's working folder (holds only the submission).
+    control : Path
+        A private folder for the connection file, the IPC sockets and the kernel's stderr.
+    limits : Limits
+        ``memory_bytes`` becomes the kernel's ``RLIMIT_AS``.
+    """
+
+    def __init__(self, workdir: Path, control: Path, limits: Limits) -> None:
+        self.workdir, self.control, self.limits = Path(workdir), Path(control), limits
+        self.km: Any = None
+        self.kc: Any = None
+        self.process: subprocess.Popen | None = None
+        self._context: Any = None
+        self._monitor: Any = None
+        self.iopub_lost = False
+        self.on_iopub_lost: Callable[[], None] | None = None
+
+    async def start(self) -> Any:
+        import zmq
+        import zmq.asyncio
+        from jupyter_client import AsyncKernelManager
+
+        self.km = AsyncKernelManager(
+            kernel_name="eulertop-grader", kernel_spec_manager=_grader_kernel_specs(self.limits),
+            transport="ipc", ip=str(self.control / "kernel"),
+            connection_file=str(self.control / "kernel.json"), autorestart=False,
+        )
+        with open(self.control / "kernel-stderr.txt", "wb") as stderr:
+            await self.km.start_kernel(
+                env=kernel_environment(self.workdir, self.control), cwd=str(self.workdir),
+                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=stderr,
+            )
+        self.process = self.km.provisioner.process
+        self._context = zmq.asyncio.Context()
+        self.kc = self.km.client(context=self._context)
+        for channel in ("shell", "stdin", "control"):
+            getattr(self.kc, f"{channel}_channel")  # created before the size limit is set
+        self._context.setsockopt(zmq.MAXMSGSIZE, MAX_IOPUB_MESSAGE)  # applies to IOPub only
+        self.kc.start_channels()
+        self._watch_iopub(zmq)
+        await self.kc.wait_for_ready(timeout=self.limits.total_timeout)
+        return self.kc
+
+    def _watch_iopub(self, zmq: Any) -> None:
+        """Note when IOPub is severed (a message over MAX_IOPUB_MESSAGE was refused)."""
+        from zmq.utils.monitor import parse_monitor_message
+
+        self._monitor = self.kc.iopub_channel.socket.get_monitor_socket(zmq.EVENT_DISCONNECTED)
+
+        async def watch() -> None:
+            with contextlib.suppress(Exception):
+                parse_monitor_message(await self._monitor.recv_multipart())
+                self.iopub_lost = True
+                if self.on_iopub_lost is not None:
+                    self.on_iopub_lost()
+
+        self._watcher = asyncio.ensure_future(watch())
+
+    async def interrupt(self) -> None:
+        with contextlib.suppress(Exception):
+            await self.km.interrupt_kernel()
+
+    def exit_status(self) -> int | None:
+        return None if self.process is None else self.process.poll()
+
+    async def stop(self) -> None:
+        self.kill_group()
+        with contextlib.suppress(Exception):
+            if getattr(self, "_watcher", None) is not None:
+                self._watcher.cancel()
+            if self._monitor is not None:
+                self.kc.iopub_channel.socket.disable_monitor()
+                self._monitor.close(linger=0)
+        with contextlib.suppress(Exception):
+            if self.kc is not None:
+                self.kc.stop_channels()
+        with contextlib.suppress(Exception):
+            if self.km is not None and self.km.has_kernel:
+                await asyncio.wait_for(self.km.shutdown_kernel(now=True), STOP_TIMEOUT)
+        with contextlib.suppress(Exception):
+            if self.km is not None:
+                await self.km.cleanup_resources()
+        self.reap()
+        with contextlib.suppress(Exception):
+            if self._context is not None:
+                self._context.destroy(linger=0)
+
+    def kill_group(self) -> None:
+        """SIGKILL the kernel's process group (the kernel and what it started), if unreaped."""
+        if self.process is not None and self.process.returncode is None:
+            with contextlib.suppress(OSError):
+                os.killpg(self.process.pid, signal.SIGKILL)  # its own session: pgid == pid
+
+    def reap(self) -> None:
+        """Wait for the killed kernel so that no zombie is left."""
+        if self.process is not None:
+            with contextlib.suppress(Exception):
+                self.process.wait(timeout=STOP_TIMEOUT)
+
+
+def _grader_kernel_spec(limits: Limits) -> Any:
+    from jupyter_client.kernelspec import KernelSpec
+
+    return KernelSpec(argv=kernel_command(limits), display_name="eulertop grader (Python 3)",
+                      language="python", env={}, metadata={})
+
+
+@functools.cache
+def _kernel_spec_manager_class() -> type:
+    from jupyter_client.kernelspec import KernelSpecManager
+
+    class GraderKernelSpecs(KernelSpecManager):
+        """Answers every kernel name with the grader's own Python kernel."""
+
+        def __init__(self, limits: Limits, **kw: Any) -> None:
+            super().__init__(**kw)
+            self._spec = _grader_kernel_spec(limits)
+
+        def get_kernel_spec(self, kernel_name: str) -> Any:
+            return self._spec
+
+    return GraderKernelSpecs
+
+
+def _grader_kernel_specs(limits: Limits) -> Any:
+    return _kernel_spec_manager_class()(limits)
+
+
+# --------------------------------------------------------------------------------------------
+# One run
+
+
+@dataclass
+class _Run:
+    """What a run has done so far (read when it ends, however it ends)."""
+
+    cells: tuple[CodeCell, ...]
+    limits: Limits
+    phase: str = "starting"  # starting | running | extracting | done
+    running: CodeCell | None = None
+    errors: list[str] = field(default_factory=list)
+    timed_out: set[int] = field(default_factory=set)
+    answers: dict[str, Any] = field(default_factory=dict)
+    problem: str | None = None
+    truncated: bool = False
+
+
+class _KernelDied(Exception):
+    pass
+
+
+def execute_submission(
+    path: Path,
+    variables: Sequence[str],
+    limits: Limits,
+    *,
+    kernel_factory: KernelFactory | None = None,
+) -> Execution:
+    """Run the submission at ``path`` in a fresh kernel and read ``variables`` from it.
+
+    Parameters
+    ----------
+    path : Path
+        The submitted notebook (read, never modified).
+    variables : sequence of str
+        The declared answer variables (Python identifiers). Nothing of the key is passed.
+    limits : Limits
+        Time, memory and output limits.
+    kernel_factory : callable, optional
+        ``(workdir, control, limits) -> KernelProcess``; default :class:`LocalKernel`.
+
+    Returns
+    -------
+    Execution
+        Never raises for anything the submission does (module docstring: statuses).
+    """
+    start = time.monotonic()
+    try:
+        loaded = read_notebook(path)
+    except SubmissionError as err:
+        return Execution("invalid_notebook", f"not a valid notebook: {err}", {}, (),
+                         time.monotonic() - start, False)
+    run = _Run(loaded.cells, limits)
+    workdir = Path(tempfile.mkdtemp(prefix="eulertop-run-"))
+    control = Path(tempfile.mkdtemp(prefix="eulertop-ctl-"))
+    kernel = None
+    try:
+        shutil.copyfile(path, workdir / Path(path).name)
+        kernel = (kernel_factory or LocalKernel)(workdir, control, limits)
+        status = asyncio.run(_supervise(run, kernel, tuple(variables)))
+    finally:
+        if isinstance(kernel, LocalKernel):  # last resort, if the event loop was torn down
+            kernel.kill_group()
+            kernel.reap()
+        shutil.rmtree(workdir, ignore_errors=True)
+        shutil.rmtree(control, ignore_errors=True)
+    return _execution(run, status, loaded.notes, kernel, time.monotonic() - start)
+
+
+async def _supervise(run: _Run, kernel: KernelProcess, variables: tuple[str, ...]) -> str:
+    """Run the session under the whole-notebook deadline; the status. Kills the kernel."""
+    task = asyncio.ensure_future(_session(run, kernel, variables))
+    try:
+        done, _ = await asyncio.wait({task}, timeout=run.limits.total_timeout)
+        if not done:
+            await kernel.stop()  # first: whatever the session awaits then fails fast
+            task.cancel()
+            await asyncio.wait({task}, timeout=STOP_TIMEOUT)
+            if task.done() and not task.cancelled():
+                task.exception()  # retrieved: how it unwound does not matter any more
+            return "error" if run.phase == "starting" else "timeout"
+        return task.result()
+    except _KernelDied:
+        return "kernel_died"
+    except Exception as err:  # the grader's side failed on this notebook: say so, go on
+        log.exception("execution failed")
+        run.problem = f"the grader could not run this notebook ({type(err).__name__}: {err})"
+        return "error"
+    finally:
+        if not task.done():
+            task.cancel()
+        await kernel.stop()
+
+
+async def _session(run: _Run, kernel: KernelProcess, variables: tuple[str, ...]) -> str:
+    try:
+        kc = await kernel.start()
+    except Exception as err:
+        run.problem = f"could not start a Python kernel ({type(err).__name__}: {err})"
+        return "error"
+    client = _capped_client(executable_notebook(run.cells), run, kernel)
+    client.kc = kc
+    if hasattr(kernel, "on_iopub_lost"):  # no output (nor idle status) will come: don't wait
+        kernel.on_iopub_lost = lambda: setattr(client, "iopub_timeout", 0)
+    run.phase = "running"
+    for index, cell in enumerate(run.cells):
+        await _run_cell(client, run, index, cell)
+    run.phase = "extracting"
+    run.answers, run.problem = await _extract(kc, kernel, variables, run.limits)
+    run.phase = "done"
+    return "ok" if run.problem is None else "error"
+
+
+async def _run_cell(client: Any, run: _Run, index: int, cell: CodeCell) -> None:
+    from nbclient.exceptions import DeadKernelError
+
+    run.running = cell
+    try:
+        await client.async_execute_cell(client.nb.cells[index], index, execution_count=index + 1)
+    except DeadKernelError:
+        raise _KernelDied from None
+    reply = client.replies.get(index) or {}
+    if cell.position in run.timed_out:
+        run.errors.append(f"{cell.label}: timed out after "
+                          f"{run.limits.effective_cell_timeout:g} s and was interrupted")
+    elif reply.get("status") == "error":
+        run.errors.append(f"{cell.label}: {_error_line(reply, run.limits)}")
+    run.running = None
+
+
+def _error_line(reply: dict, limits: Limits) -> str:
+    ename, evalue = _short(reply.get("ename", "Error"), 60), _short(reply.get("evalue", ""), 160)
+    evalue = _CELL_FILE.sub(r"(line \1)", evalue)  # "(1063758517.py, line 2)": IPython's name
+    line = f"{ename}: {evalue}" if evalue else ename
+    hint = _HINTS.get(ename)
+    if ename == "MemoryError":
+        hint = f"the memory limit is {_gib(limits.memory_bytes)}"
+    return f"{line} — {hint}" if hint else line
+
+
+async def _extract(
+    kc: Any, kernel: KernelProcess, variables: tuple[str, ...], limits: Limits
+) -> tuple[dict[str, Any], str | None]:
+    from queue import Empty
+
+    request = extraction_request(variables)
+    msg_id = kc.execute(request.code, silent=False, store_history=False,
+                        user_expressions=request.user_expressions, allow_stdin=False,
+                        stop_on_error=False)
+    deadline = time.monotonic() + min(EXTRACTION_TIMEOUT, limits.total_timeout)
+    while True:
+        try:
+            msg = await kc.get_shell_msg(timeout=max(0.05, deadline - time.monotonic()))
+        except Empty:
+            if kernel.exit_status() is not None:
+                raise _KernelDied from None
+            if time.monotonic() >= deadline:
+                return {}, (f"{EXTRACTION_FAILED}: reading them took more than "
+                            f"{EXTRACTION_TIMEOUT:g} s")
+            continue
+        parent = msg.get("parent_header") if isinstance(msg, dict) else None
+        if isinstance(parent, dict) and parent.get("msg_id") == msg_id:
+            return parse_answers(msg.get("content"), variables)
+
+
+@functools.cache
+def _cap_client_class() -> type:
+    from nbclient import NotebookClient
+    from nbclient.exceptions import CellExecutionComplete
+    from nbformat.v4 import output_from_msg
+
+    class CappedClient(NotebookClient):
+        """nbclient's executor with bounded output and the grader's own interrupt."""
+
+        def __init__(self, nb: Any, run: _Run, kernel: KernelProcess) -> None:
+            super().__init__(nb, allow_errors=True, interrupt_on_timeout=True,
+                             record_timing=False, timeout_func=self._cell_timeout,
+                             log=_quiet_log())
+            self.run, self.kernel = run, kernel
+            self.kept = 0
+            self.replies: dict[int, dict] = {}
+
+        def _cell_timeout(self, cell: Any) -> float:
+            return self.run.limits.effective_cell_timeout
+
+        async def _async_handle_timeout(self, timeout: int, cell: Any = None) -> None:
+            if self.run.running is not None:
+                self.run.timed_out.add(self.run.running.position)
+            await self.kernel.interrupt()
+            return None  # keep waiting for the interrupted cell's reply
+
+        async def _check_raise_for_error(self, cell: Any, cell_index: int,
+                                         exec_reply: dict | None) -> None:
+            content = exec_reply.get("content") if isinstance(exec_reply, dict) else None
+            self.replies[cell_index] = content if isinstance(content, dict) else {}
+
+        def process_message(self, msg: dict, cell: Any, cell_index: int) -> Any:
+            # Every message is untrusted (the kernel holds the signing key): ignore malformed.
+            try:
+                msg_type, content = msg["msg_type"], msg["content"]
+                if msg_type == "status" and content.get("execution_state") == "idle":
+                    raise CellExecutionComplete()
+                if msg_type in ("stream", "display_data", "execute_result", "error"):
+                    return self._keep(cell, msg)
+            except (KeyError, TypeError, AttributeError, ValueError):
+                pass
+            return None  # display updates, clear_output, comms: nothing the grader needs
+
+        def _keep(self, cell: Any, msg: dict) -> Any:
+            if self.run.truncated:
+                return None
+            size = _content_size(msg["content"])
+            if self.kept + size > self.run.limits.output_bytes:
+                self.run.truncated = True
+                return None
+            self.kept += size
+            out = output_from_msg(msg)
+            cell.outputs.append(out)
+            return out
+
+    return CappedClient
+
+
+def _capped_client(nb: Any, run: _Run, kernel: KernelProcess) -> Any:
+    return _cap_client_class()(nb, run, kernel)
+
+
+def _content_size(content: Any) -> int:
+    """Characters of text in an output message's content (what keeping it would cost)."""
+    if isinstance(content, str):
+        return len(content)
+    if isinstance(content, dict):
+        return sum(_content_size(v) for v in content.values())
+    if isinstance(content, list):
+        return sum(_content_size(v) for v in content)
+    return 8
+
+
+def _quiet_log() -> logging.Logger:
+    # nbclient logs every timeout and interrupt at ERROR level; the grader reports them itself
+    quiet = logging.getLogger("grader.execute.nbclient")
+    quiet.setLevel(logging.CRITICAL)
+    return quiet
+
+
+# --------------------------------------------------------------------------------------------
+# The record
+
+
+def _execution(run: _Run, status: str, notes: Sequence[str], kernel: Any,
+               duration: float) -> Execution:
+    errors = list(run.errors)
+    truncated = run.truncated or bool(getattr(kernel, "iopub_lost", False))
+    if status == "kernel_died" and run.running is not None:
+        errors.append(f"{run.running.label}: the kernel died while it ran")
+    if status == "timeout" and run.running is not None:
+        errors.append(f"{run.running.label}: still running when the time limit "
+                      f"({run.limits.total_timeout:g} s) ran out")
+    answers = run.answers if status == "ok" else {}
+    message = "; ".join([*notes, _summary(run, status, kernel, errors)])
+    return Execution(status, message, answers, tuple(errors), duration, truncated)
+
+
+def _summary(run: _Run, status: str, kernel: Any, errors: Sequence[str]) -> str:
+    n = len(run.cells)
+    cells = f"{n} code cell{'s' if n != 1 else ''}"
+    if status == "ok":
+        if not errors:
+            return f"ran all {cells} without an error"
+        return f"ran all {cells}; {len(errors)} did not finish normally: " + "; ".join(errors)
+    if status == "timeout":
+        where = f" while {run.running.label} was running" if run.running else ""
+        if run.phase == "extracting":
+            where = " while the answers were being read"
+        return (f"stopped at the time limit for the whole notebook ({run.limits.total_timeout:g}"
+                f" s){where} — a loop that does not end, or one that ignores interrupts? "
+                "The kernel was stopped; no answers could be read")
+    if status == "kernel_died":
+        where = f" while {run.running.label} ran" if run.running else ""
+        return (f"the Python kernel died{where}: {_death(kernel, run.limits)}. Cells after it "
+                "did not run; no answers could be read")
+    return run.problem or "the notebook could not be run"
+
+
+def _death(kernel: Any, limits: Limits) -> str:
+    code = kernel.exit_status() if kernel is not None else None
+    memory = f"running out of memory (the limit is {_gib(limits.memory_bytes)})"
+    if code is None or code == 0:
+        return f"the process ended (exit(), quit(), os._exit(), or {memory})"
+    if code > 0:
+        return f"the process exited with status {code} (os._exit()? or {memory})"
+    try:
+        name = signal.Signals(-code).name
+    except ValueError:
+        name = f"signal {-code}"
+    return f"the process was killed by {name} (a crash, or {memory})"
+
+
+def _gib(n: int) -> str:
+    return f"{n / 1024**3:.3g} GiB"
+
+
+def _short(text: object, limit: int) -> str:
+    text = " ".join(str(text).split())
+    return text if len(text) <= limit else text[: limit - 1] + "…"

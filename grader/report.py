@@ -1,0 +1,206 @@
+"""What a grading run hands to people: ``grades.csv``, ``feedback/<id>.html``, the summary.
+
+All three are *derived* from the result records (``results/<id>.json``) and the assignment
+files, and are rebuilt from them — so a resumed run's gradebook is the same as an
+uninterrupted run's, and changing ``--reveal`` rewrites every feedback page.
+
+Feedback pages are for one student each and hold only that student's own parameters, answers,
+verdicts and messages (and, with ``reveal``, that student's key values); nothing of any other
+student is passed in. Everything is HTML-escaped — not only what the student wrote (submitted
+values, exception messages their code raised, which verdict messages echo) but the instructor's
+text too — and the page loads nothing from anywhere (no scripts, no external styles).
+"""
+
+from __future__ import annotations
+
+import csv
+import html
+import io
+import json
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from grader.discover import Problem
+from grader.results import StudentResult
+
+MAX_SHOWN = 400
+"""Characters of a submitted value or message shown before it is cut (the record keeps all)."""
+
+
+def number(x: float) -> str:
+    """A point count for people and spreadsheets: ``3``, ``2.5``, ``0.3333333333``.
+
+    Examples
+    --------
+    >>> number(3.0), number(2.5), number(1 / 3)
+    ('3', '2.5', '0.3333333333')
+    """
+    return f"{x:.10g}"
+
+
+def _cut(text: str, limit: int = MAX_SHOWN) -> str:
+    return text if len(text) <= limit else text[:limit] + f"… ({len(text) - limit} more characters)"
+
+
+# --------------------------------------------------------------------------------------------
+# grades.csv
+
+
+def gradebook_rows(
+    columns: Sequence[str],
+    rows: Sequence[Mapping[str, str]],
+    questions: Sequence[int],
+    results: Mapping[str, StudentResult],
+) -> list[list[str]]:
+    """The gradebook as rows of strings, header first.
+
+    Columns: ``id``, the roster's other columns (as in the roster), ``q1`` … ``qN`` (points per
+    question), ``total``, ``maximum``, ``status``. A student without a result record (only
+    after an interrupted run) gets empty points and status ``not graded yet``.
+    """
+    others = [c for c in columns if c != "id"]
+    table = [["id", *others, *(f"q{k}" for k in questions), "total", "maximum", "status"]]
+    for row in rows:
+        r = results.get(row["id"])
+        if r is None:
+            cells = [""] * (len(questions) + 2) + ["not graded yet"]
+        else:
+            per_question = r.question_points()
+            cells = [number(per_question.get(k, 0.0)) for k in questions]
+            cells += [number(r.points), number(r.max_points), r.status]
+        table.append([row["id"], *(row.get(c, "") for c in others), *cells])
+    return table
+
+
+def gradebook_csv(table: Sequence[Sequence[str]]) -> str:
+    """``table`` as CSV text (RFC 4180 quoting, ``\\r\\n`` line ends as spreadsheets expect)."""
+    buffer = io.StringIO(newline="")
+    csv.writer(buffer).writerows(table)
+    return buffer.getvalue()
+
+
+# --------------------------------------------------------------------------------------------
+# feedback/<id>.html
+
+_STYLE = """
+body { font-family: sans-serif; max-width: 60em; margin: 2em auto; line-height: 1.4; }
+table { border-collapse: collapse; margin: 0.5em 0 1.5em; }
+td, th { border: 1px solid #bbb; padding: 0.25em 0.6em; text-align: left; vertical-align: top; }
+.statement { white-space: pre-wrap; background: #f6f6f6; padding: 0.6em; }
+.correct { color: #165c16; } .wrong, .invalid, .missing { color: #9c1c1c; }
+code { white-space: pre-wrap; word-break: break-all; }
+"""
+
+
+def _e(value: Any) -> str:
+    return html.escape(str(value), quote=True)
+
+
+def _shown(value: Any) -> str:
+    """A submitted value as the student would recognise it (JSON), cut and escaped."""
+    if value is None:
+        return "<em>not set</em>"
+    return f"<code>{_e(_cut(json.dumps(value, ensure_ascii=False)))}</code>"
+
+
+def _parameters(question: Mapping[str, Any]) -> str:
+    units = question.get("param_units", {})
+    rows = "".join(
+        f"<tr><td><code>{_e(name)}</code></td><td>{_e(value)}</td>"
+        f"<td>{_e(units.get(name, ''))}</td></tr>"
+        for name, value in question.get("params", {}).items()
+    )
+    return f"<table><tr><th>parameter</th><th>value</th><th>unit</th></tr>{rows}</table>"
+
+
+def _answers_table(question: Mapping[str, Any], result: StudentResult,
+                   key: Mapping[str, Any] | None) -> str:
+    specs = {s["variable"]: s for s in question.get("answers", [])}
+    mine = [a for a in result.answers if a.question == question["question"]]
+    head = "<th>variable</th><th>unit</th><th>your answer</th><th>verdict</th><th>points</th>"
+    head += "<th>message</th>" + ("<th>key</th>" if key is not None else "")
+    rows = []
+    for a in mine:
+        spec = specs.get(a.variable, {})
+        v = a.verdict
+        cells = [
+            f"<code>{_e(a.variable)}</code><br><small>{_e(spec.get('description', ''))}</small>",
+            _e(spec.get("unit", "")),
+            _shown(a.submitted),
+            f'<span class="{_e(v.status)}">{_e(v.status)}</span>',
+            f"{number(v.points)} / {number(v.max_points)}",
+            _e(_cut(v.message)),
+        ]
+        if key is not None:
+            cells.append(_shown(key.get(a.variable)))
+        rows.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
+    return f"<table><tr>{head}</tr>{''.join(rows)}</table>"
+
+
+def feedback_html(
+    title: str,
+    result: StudentResult,
+    questions: Sequence[Mapping[str, Any]],
+    key: Mapping[str, Any] | None = None,
+) -> str:
+    """One student's feedback page.
+
+    Parameters
+    ----------
+    title : str
+        The assignment's title.
+    result : StudentResult
+        The student's result record.
+    questions : sequence of dict
+        The student's own questions from ``assignment.json`` (``students[id]["questions"]``:
+        title, statement, params, param_units, public answer specs).
+    key : mapping or None
+        With ``--reveal``: this student's key values by variable; None hides them.
+    """
+    parts = [
+        "<!DOCTYPE html>",
+        '<html lang="en"><head><meta charset="utf-8">',
+        '<meta http-equiv="Content-Security-Policy" content="default-src \'none\'; '
+        'style-src \'unsafe-inline\'">',
+        f"<title>{_e(title)} — {_e(result.student_id)}</title><style>{_STYLE}</style></head>",
+        f"<body><h1>{_e(title)}</h1>",
+        f"<p>Student <strong>{_e(result.student_id)}</strong> — status "
+        f"<strong>{_e(result.status)}</strong>: {number(result.points)} of "
+        f"{number(result.max_points)} points.</p>",
+    ]
+    if result.message:
+        parts.append(f"<p class=\"message\">{_e(_cut(result.message, 4 * MAX_SHOWN))}</p>")
+    errors = result.execution.get("cell_errors") or []
+    if errors:
+        items = "".join(f"<li><code>{_e(_cut(line))}</code></li>" for line in errors)
+        parts.append(f"<p>While your notebook ran:</p><ul>{items}</ul>")
+    for q in questions:
+        parts.append(f"<h2>Question {_e(q['question'])}: {_e(q.get('title', ''))}</h2>")
+        parts.append(f"<div class=\"statement\">{_e(q.get('statement', ''))}</div>")
+        parts.append(_parameters(q))
+        parts.append(_answers_table(q, result, key))
+    parts.append(f"<p><small>graded {_e(result.graded_at)}</small></p></body></html>\n")
+    return "\n".join(parts)
+
+
+# --------------------------------------------------------------------------------------------
+# the terminal summary
+
+
+def summary_table(results: Sequence[StudentResult], problems: Sequence[Problem] = ()) -> str:
+    """A plain-text table, one line per student, then what was not graded and the counts."""
+    header = ("id", "status", "points", "max", "note")
+    lines = [(r.student_id, r.status, number(r.points), number(r.max_points),
+              _cut(r.message.splitlines()[0] if r.message else "", 70)) for r in results]
+    widths = [max(len(str(row[i])) for row in [header, *lines]) for i in range(4)]
+    fmt = "  ".join(f"{{:<{w}}}" for w in widths) + "  {}"
+    out = [fmt.format(*header).rstrip(), fmt.format(*("-" * w for w in widths), "----")]
+    out += [fmt.format(*row).rstrip() for row in lines]
+    counts = {s: sum(r.status == s for r in results) for s in ("graded", "missing", "failed")}
+    out.append("")
+    out.append(", ".join(f"{n} {s}" for s, n in counts.items()) + f" of {len(results)} students")
+    stray = [p for p in problems if p.student_id is None]
+    if stray:
+        out.append(f"not graded ({len(stray)}):")
+        out += [f"  {p.message}" for p in stray]
+    return "\n".join(out) + "\n"

@@ -1,0 +1,221 @@
+"""Result records of a grading run, and writing them so that no reader ever sees half a file.
+
+``results/<id>.json`` holds one :class:`StudentResult`: everything the gradebook, the feedback
+page and the next run's resume check need, as plain JSON that reads back to an equal record
+(``StudentResult.from_dict(r.to_dict()) == r``; after otter-grader's ``TestCaseResult``).
+
+Plain JSON, strictly
+    What a student submitted is stored as the grader extracted it, except that the floats JSON
+    cannot hold (NaN, ±inf) are stored as the strings ``"NaN"``, ``"Infinity"``,
+    ``"-Infinity"``. The verdict was reached on the real value before that (and its message
+    says what was wrong); the record only keeps it for display. This keeps every result file
+    strict JSON, and makes the round trip exact (NaN never equals itself).
+
+Atomic files
+    :func:`atomic_write_text` writes a temporary file *in the same folder*, flushes it to disk,
+    and renames it over the target (``os.replace``, atomic on POSIX): a reader, or the next
+    run after a crash, sees the old file or the new one, never a mixture. A run killed between
+    the two steps leaves a hidden ``.<name>.*.tmp`` file, which :func:`remove_stale_temporaries`
+    clears at the start of the next run.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+from pathlib import Path
+from typing import Any
+
+from problems.answers import Verdict
+
+STATUSES = ("graded", "missing", "failed")
+"""``graded``: executed and compared; ``missing``: no submission; ``failed``: a submission
+that could not be graded (the message says why) — it earns nothing (fail closed)."""
+
+TEMP_SUFFIX = ".tmp"
+_NON_FINITE = {"NaN": math.nan, "Infinity": math.inf, "-Infinity": -math.inf}
+
+
+def plain_json(value: Any) -> Any:
+    """``value`` as strict JSON data: tuples become lists, non-finite floats strings.
+
+    Examples
+    --------
+    >>> plain_json((1, float("nan"), {"a": (True, None)}))
+    [1, 'NaN', {'a': [True, None]}]
+    """
+    if isinstance(value, float) and not math.isfinite(value):
+        return "NaN" if math.isnan(value) else ("Infinity" if value > 0 else "-Infinity")
+    if isinstance(value, list | tuple):
+        return [plain_json(v) for v in value]
+    if isinstance(value, Mapping):
+        return {str(k): plain_json(v) for k, v in value.items()}
+    if value is None or isinstance(value, bool | int | float | str):
+        return value
+    # The extractor hands over plain JSON only; anything else is shown, never interpreted.
+    return repr(value)
+
+
+@dataclass(frozen=True)
+class AnswerResult:
+    """One answer of one question, as graded.
+
+    Attributes
+    ----------
+    variable : str
+        The notebook variable, ``q{question}_{name}``.
+    question : int
+        The question number (1-based).
+    name : str
+        The answer's name within the question.
+    submitted : Any
+        What was extracted, as plain JSON (module docstring); None when not set.
+    verdict : problems.answers.Verdict
+        Status, points, message and recognised mistake.
+    """
+
+    variable: str
+    question: int
+    name: str
+    submitted: Any
+    verdict: Verdict
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "submitted", plain_json(self.submitted))
+
+    def to_dict(self) -> dict:
+        """Plain JSON; ``AnswerResult.from_dict(a.to_dict()) == a``."""
+        return {"variable": self.variable, "question": self.question, "name": self.name,
+                "submitted": self.submitted, "verdict": self.verdict.to_dict()}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> AnswerResult:
+        """Inverse of :meth:`to_dict`."""
+        return cls(variable=d["variable"], question=int(d["question"]), name=d["name"],
+                   submitted=d["submitted"], verdict=Verdict.from_dict(d["verdict"]))
+
+
+@dataclass(frozen=True)
+class StudentResult:
+    """One student's result: ``results/<id>.json``.
+
+    Attributes
+    ----------
+    student_id : str
+        The roster id; it came from the submission's file or folder name.
+    status : str
+        One of :data:`STATUSES`.
+    message : str
+        For people: what happened (execution problems, a metadata mismatch …); ``""`` if none.
+    answers : tuple of AnswerResult
+        Every answer of the student's key, in question order (all unawarded when not graded).
+    points, max_points : float
+        Awarded and possible points.
+    submission_sha256 : str or None
+        SHA-256 (hex) of the submitted file's bytes; None when missing.
+    key_sha256 : str
+        The student's key hash from ``key.json`` (``"sha256:…"``); resume compares both.
+    execution : dict
+        ``status``, ``message``, ``cell_errors`` (list), ``duration`` (s),
+        ``output_truncated``; ``{}`` when nothing was executed.
+    sandboxed : bool
+        Whether the kernel ran inside a sandbox (issue 5); False for now.
+    graded_at : str
+        ISO 8601 time (UTC) the record was made — the volatile field, with
+        ``execution["duration"]``.
+    """
+
+    student_id: str
+    status: str
+    message: str
+    answers: tuple[AnswerResult, ...]
+    points: float
+    max_points: float
+    submission_sha256: str | None
+    key_sha256: str
+    execution: dict
+    sandboxed: bool
+    graded_at: str
+
+    def __post_init__(self) -> None:
+        if self.status not in STATUSES:
+            raise ValueError(f"status must be one of {STATUSES}, got {self.status!r}")
+        object.__setattr__(self, "answers", tuple(self.answers))
+        object.__setattr__(self, "points", float(self.points))
+        object.__setattr__(self, "max_points", float(self.max_points))
+        object.__setattr__(self, "execution", plain_json(self.execution))
+
+    def question_points(self) -> dict[int, float]:
+        """Points awarded per question number (every question of the key, 0 when unawarded)."""
+        totals: dict[int, float] = {}
+        for a in self.answers:
+            totals[a.question] = totals.get(a.question, 0.0) + a.verdict.points
+        return totals
+
+    def to_dict(self) -> dict:
+        """Plain JSON; ``StudentResult.from_dict(r.to_dict()) == r``."""
+        d = {f.name: getattr(self, f.name) for f in fields(self)}
+        d["answers"] = [a.to_dict() for a in self.answers]
+        return d
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> StudentResult:
+        """Inverse of :meth:`to_dict`; raises KeyError/ValueError/TypeError on a foreign file."""
+        names = {f.name for f in fields(cls)}
+        unknown = sorted(set(d) - names)
+        if unknown:
+            raise ValueError(f"unknown fields {unknown} in a result record")
+        kw = {name: d[name] for name in names}
+        kw["answers"] = tuple(AnswerResult.from_dict(a) for a in d["answers"])
+        return cls(**kw)
+
+
+def result_json(result: StudentResult) -> str:
+    """The text of ``results/<id>.json`` (sorted keys, strict JSON, indented for reading)."""
+    return json.dumps(result.to_dict(), sort_keys=True, indent=1, ensure_ascii=False,
+                      allow_nan=False) + "\n"
+
+
+def read_result(path: Path) -> StudentResult | None:
+    """The record in ``path``, or None when it is absent or not a readable result."""
+    try:
+        return StudentResult.from_dict(json.loads(Path(path).read_text(encoding="utf-8")))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, ValueError, TypeError):
+        return None
+
+
+def atomic_write_text(path: Path, text: str) -> None:
+    """Replace ``path`` by a file holding ``text``, atomically (module docstring)."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=TEMP_SUFFIX, dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def write_result(folder: Path, result: StudentResult) -> Path:
+    """Write ``folder/<id>.json`` atomically; returns its path."""
+    path = Path(folder) / f"{result.student_id}.json"
+    atomic_write_text(path, result_json(result))
+    return path
+
+
+def remove_stale_temporaries(*folders: Path) -> list[Path]:
+    """Delete the hidden temporary files an interrupted run left in ``folders``; the list."""
+    removed = []
+    for folder in folders:
+        if Path(folder).is_dir():
+            for p in Path(folder).glob(f".*{TEMP_SUFFIX}"):
+                p.unlink(missing_ok=True)
+                removed.append(p)
+    return removed

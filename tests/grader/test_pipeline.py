@@ -1,0 +1,298 @@
+"""The grading pipeline with a fake execution stage: sorting, resume, locking, failing closed.
+
+The fake reads the answer assignments of a notebook's code cells with ``ast.literal_eval`` (the
+solutions notebooks hold literals), so no kernel starts here; the real execution is exercised
+end to end in ``test_cli.py``.
+"""
+
+from __future__ import annotations
+
+import ast
+import csv
+import json
+import shutil
+import threading
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import pytest
+
+from grader.notebook_load import SubmissionError
+from grader.pipeline import RunInProgress, UsageError, grade_assignment, run_lock
+from grader.results import StudentResult, read_result
+from problems.generate import generate_assignment
+from problems.roster import Roster
+from problems.templates import FAMILIES
+
+ROSTER = ("alice", "bob", "carol", "dave", "erin", "frank")
+
+
+@dataclass(frozen=True)
+class FakeExecution:
+    status: str
+    message: str
+    answers: dict
+    cell_errors: tuple = ()
+    duration: float = 0.5
+    output_truncated: bool = False
+
+
+class FakeExecute:
+    """``execute(path, variables, limits)``: literal answers, or a scripted failure."""
+
+    def __init__(self):
+        self.calls = []
+        self.lock = threading.Lock()
+
+    def __call__(self, path, variables, limits):
+        with self.lock:
+            self.calls.append((Path(path), tuple(variables), limits))
+        try:
+            nb = json.loads(Path(path).read_text())
+        except ValueError as e:
+            raise SubmissionError(f"not JSON: {e}") from None
+        sources = ["".join(c["source"]) if isinstance(c["source"], list) else c["source"]
+                   for c in nb["cells"] if c["cell_type"] == "code"]
+        if any("KILL_KERNEL" in s for s in sources):
+            return FakeExecution("kernel_died", "the kernel died in cell 5", {})
+        if any("GRADER_BUG" in s for s in sources):
+            raise RuntimeError("executor exploded")
+        answers = dict.fromkeys(variables)
+        for node in ast.walk(ast.parse("\n".join(sources))):
+            if isinstance(node, ast.Assign) and isinstance(node.targets[0], ast.Name) \
+                    and node.targets[0].id in answers:
+                answers[node.targets[0].id] = ast.literal_eval(node.value)
+        raised = [s for s in sources if "1 / 0" in s]
+        if raised:
+            return FakeExecution("error", "cell 6 raised ZeroDivisionError", answers,
+                                 ("cell 6 raised ZeroDivisionError: division by zero",))
+        return FakeExecution("ok", "", answers)
+
+
+@pytest.fixture(scope="module")
+def assignment(tmp_path_factory) -> Path:
+    hw = tmp_path_factory.mktemp("pipeline") / "HW"
+    roster = Roster(("id", "name"), tuple({"id": s, "name": s.title()} for s in ROSTER))
+    generate_assignment(roster, hw, FAMILIES, problems=["inertia_tensor", "euler_rotation"],
+                        seed=5)
+    return hw
+
+
+def _key(hw: Path) -> dict:
+    return json.loads((hw / "key.json").read_text())
+
+
+def _variables(hw: Path, sid: str) -> list[str]:
+    return [f"q{q['question']}_{a['name']}" for q in _key(hw)["students"][sid]["questions"]
+            for a in q["answers"]]
+
+
+def _notebook(hw: Path, sid: str, extra_cell: str | None = None, wrong: str | None = None):
+    nb = json.loads((hw / "solutions" / f"{sid}.ipynb").read_text())
+    for cell in nb["cells"]:
+        src = "".join(cell["source"]) if isinstance(cell["source"], list) else cell["source"]
+        if wrong:
+            cell["source"] = "\n".join(f"{wrong} = 'no idea'" if line.startswith(f"{wrong} =")
+                                       else line for line in src.splitlines())
+    if extra_cell:
+        nb["cells"].append({"cell_type": "code", "id": "extra", "metadata": {},
+                            "source": extra_cell, "outputs": [], "execution_count": None})
+    return json.dumps(nb)
+
+
+@pytest.fixture
+def hw(assignment, tmp_path) -> Path:
+    """A private copy of the generated assignment (runs write HW/graded)."""
+    return Path(shutil.copytree(assignment, tmp_path / "HW"))
+
+
+@pytest.fixture
+def subs(hw, tmp_path) -> Path:
+    """alice right, bob one answer invalid + a cell raising, carol's kernel dies, dave
+    missing, erin two notebooks, frank not JSON, mallory not on the roster."""
+    s = tmp_path / "subs"
+    (s / "erin").mkdir(parents=True)
+    (s / "alice.ipynb").write_text(_notebook(hw, "alice"))
+    (s / "bob.ipynb").write_text(_notebook(hw, "bob", "1 / 0", wrong=_variables(hw, "bob")[0]))
+    (s / "carol.ipynb").write_text(_notebook(hw, "carol", "KILL_KERNEL"))
+    (s / "erin" / "a.ipynb").write_text(_notebook(hw, "erin"))
+    (s / "erin" / "b.ipynb").write_text(_notebook(hw, "erin"))
+    (s / "frank.ipynb").write_text("{not json")
+    (s / "mallory.ipynb").write_text(_notebook(hw, "alice"))
+    return s
+
+
+def _run(hw, subs, execute, **kw):
+    return grade_assignment(hw, subs, limits="LIMITS", execute=execute, jobs=2, **kw)
+
+
+@pytest.fixture
+def first_run(hw, subs):
+    execute = FakeExecute()
+    return _run(hw, subs, execute), execute
+
+
+def _by_id(report) -> dict[str, StudentResult]:
+    return {r.student_id: r for r in report.results}
+
+
+def test_every_roster_student_gets_a_row_saying_what_happened(hw, first_run):
+    report, _ = first_run
+    r = _by_id(report)
+    assert [x.student_id for x in report.results] == list(ROSTER)
+    assert {s: x.status for s, x in r.items()} == {
+        "alice": "graded", "bob": "graded", "carol": "failed", "dave": "missing",
+        "erin": "failed", "frank": "failed"}
+    assert r["alice"].points == r["alice"].max_points > 0
+    assert r["bob"].points == r["bob"].max_points - 1  # one answer 'no idea', the rest right
+    assert "cell 6 raised ZeroDivisionError" in r["bob"].message
+    assert "the kernel died in cell 5" in r["carol"].message
+    assert "2 notebooks" in r["erin"].message
+    assert r["frank"].message.startswith("not a valid notebook: not JSON")
+    assert r["dave"].message == "no submission"
+
+
+def test_fail_closed_nothing_extracted_nothing_awarded(first_run):
+    r = _by_id(first_run[0])
+    for sid in ("carol", "dave", "erin", "frank"):
+        assert r[sid].points == 0
+        assert {a.verdict.status for a in r[sid].answers} == {"missing"}
+        assert r[sid].max_points == r["alice"].max_points
+
+
+def test_not_graded_lists_failures_and_strays(first_run):
+    listed = "\n".join(first_run[0].not_graded)
+    for fragment in ("carol:", "erin:", "frank:", "'mallory' is not on the roster"):
+        assert fragment in listed
+    assert "alice" not in listed and "dave" not in listed
+
+
+def test_execution_gets_names_only(hw, first_run):
+    _, execute = first_run
+    calls = {p.stem: (variables, limits) for p, variables, limits in execute.calls}
+    assert set(calls) == {"alice", "bob", "carol", "frank"}  # never mallory, dave or erin
+    for sid, (variables, limits) in calls.items():
+        assert list(variables) == _variables(hw, sid)
+        assert limits == "LIMITS"
+
+
+def test_records_round_trip_and_the_gradebook_is_built_from_them(hw, first_run):
+    report, _ = first_run
+    out = hw / "graded"
+    for r in report.results:
+        assert read_result(out / "results" / f"{r.student_id}.json") == r
+        assert (out / "feedback" / f"{r.student_id}.html").is_file()
+    with open(out / "grades.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert [row["id"] for row in rows] == list(ROSTER)
+    assert [row["name"] for row in rows] == [s.title() for s in ROSTER]
+    for row, r in zip(rows, report.results, strict=True):
+        assert float(row["total"]) == r.points == float(row["q1"]) + float(row["q2"])
+        assert (float(row["maximum"]), row["status"]) == (r.max_points, r.status)
+    assert sorted(p.name for p in out.iterdir()) == [".lock", "feedback", "grades.csv",
+                                                     "results"]
+
+
+def test_a_rerun_skips_what_is_unchanged(hw, subs, first_run):
+    before, _ = first_run
+    execute = FakeExecute()
+    again = _run(hw, subs, execute)
+    assert execute.calls == []
+    assert again.results == before.results  # not even graded_at changed
+    assert set(again.unchanged) == set(ROSTER)
+
+
+def test_force_regrades_everything(hw, subs, first_run):
+    execute = FakeExecute()
+    again = _run(hw, subs, execute, force=True)
+    assert len(execute.calls) == 4
+    strip = lambda rs: [replace(r, graded_at="") for r in rs]  # noqa: E731
+    assert strip(again.results) == strip(first_run[0].results)
+
+
+def test_a_changed_submission_or_key_is_regraded(hw, subs, first_run):
+    (subs / "bob.ipynb").write_text(_notebook(hw, "bob"))  # bob fixed his answer
+    key = _key(hw)
+    key["students"]["alice"]["hash"] = "sha256:changed"  # e.g. a reroll
+    (hw / "key.json").write_text(json.dumps(key))
+    (subs / "erin" / "b.ipynb").unlink()  # erin now has one notebook
+    execute = FakeExecute()
+    r = _by_id(_run(hw, subs, execute))
+    assert sorted(p.stem for p, _, _ in execute.calls) == ["a", "alice", "bob"]
+    assert r["bob"].points == r["bob"].max_points
+    assert r["alice"].key_sha256 == "sha256:changed"
+    assert r["erin"].status == "graded"
+
+
+def test_the_variant_comes_from_the_file_name_and_a_mismatch_is_flagged(hw, tmp_path):
+    s = tmp_path / "mixed"
+    s.mkdir()
+    (s / "bob.ipynb").write_text(_notebook(hw, "alice"))  # alice's notebook, named bob
+    r = _by_id(_run(hw, s, FakeExecute()))["bob"]
+    assert r.status == "graded"
+    assert "metadata names student 'alice'; it was graded as 'bob'" in r.message
+    assert r.points < r.max_points  # alice's values against bob's key
+
+
+def test_a_grader_fault_on_one_submission_spares_the_others(hw, tmp_path):
+    s = tmp_path / "s"
+    s.mkdir()
+    (s / "alice.ipynb").write_text(_notebook(hw, "alice", "GRADER_BUG"))
+    (s / "bob.ipynb").write_text(_notebook(hw, "bob"))
+    r = _by_id(_run(hw, s, FakeExecute()))
+    assert r["alice"].status == "failed"
+    assert "could not run this notebook (RuntimeError: executor exploded)" in r["alice"].message
+    assert r["bob"].points == r["bob"].max_points
+
+
+def test_a_second_run_is_told_one_is_in_progress(hw, subs):
+    out = hw / "graded"
+    out.mkdir()
+    with run_lock(out):
+        with pytest.raises(RunInProgress, match=r"another 'eulertop grade' run \(pid \d+\)"):
+            _run(hw, subs, FakeExecute())
+    assert not (out / "results").exists() or not any((out / "results").iterdir())
+
+
+def test_temporaries_of_a_killed_run_are_cleared(hw, subs):
+    results = hw / "graded" / "results"
+    results.mkdir(parents=True)
+    (results / ".alice.json.abc.tmp").write_text('{"half')
+    _run(hw, subs, FakeExecute())
+    assert not list(results.glob(".*"))
+
+
+@pytest.mark.parametrize(("case", "fragment"), [
+    ("no HW", "no such assignment folder"),
+    ("no key", r"no answer key \(key.json\) here"),
+    ("bad key", "cannot read the answer key"),
+    ("no submissions", "not a readable folder of submissions"),
+])
+def test_usage_errors(hw, subs, case, fragment):
+    if case == "no HW":
+        hw = hw.parent / "nothing"
+    elif case == "no key":
+        (hw / "key.json").unlink()
+    elif case == "bad key":
+        (hw / "key.json").write_text("{")
+    else:
+        subs = subs / "alice.ipynb"
+    with pytest.raises(UsageError, match=fragment):
+        _run(hw, subs, FakeExecute())
+
+
+def test_an_unreadable_submission_fails_alone(hw, subs, monkeypatch):
+    from grader import pipeline
+
+    real = pipeline.file_sha256
+
+    def sha(path):
+        if path.name == "bob.ipynb":
+            raise PermissionError(13, "Permission denied")
+        return real(path)
+
+    monkeypatch.setattr(pipeline, "file_sha256", sha)
+    r = _by_id(_run(hw, subs, FakeExecute()))
+    assert (r["bob"].status, r["bob"].message) == (
+        "failed", "cannot read bob.ipynb: Permission denied")
+    assert r["alice"].points == r["alice"].max_points
