@@ -18,6 +18,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "check": ("grader.cli", "run a notebook as the grader would: are its answers well formed?"),
     "grade": ("grader.cli", "grade every submission against the key: gradebook, feedback, summary"),
     "bench": ("solver.work_precision", "work-precision charts and the stability battery"),
+    "demo": ("eulertop.demo", "the whole pipeline on a built-in sample class, end to end"),
 }
 
 
