@@ -1,0 +1,485 @@
+"""``eulertop bench``: work-precision charts, turning-point methods, invariant drift, ranking.
+
+Pipeline (one stage, one input, one output; composed in :func:`run_bench`):
+measure (``work_precision``, ``turning_point_methods``, ``invariant_drift``) → rows (dicts)
+→ CSV + PNG per chart → ``summary.md`` (ranking at equal accuracy, cost of the exact models).
+
+Errors are against references computed *independently* of the code under test: mpmath at 40
+digits evaluating Landau–Lifshitz's R10 (``mp.ellipfun``) and R20 (``mp.polyroots`` of the cubic,
+``mp.ellipf`` for the phase). Times are medians of repeats of ``time.perf_counter`` (3 repeats
+for runs under 0.5 s, else 1 — recorded per row); every ratio in the summary is from one run.
+
+Importing this module is cheap; matplotlib is imported by :func:`run_bench` only (Agg backend).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import itertools
+import math
+import statistics
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import mpmath as mp
+import numpy as np
+
+from solver.asymmetric_top import asymmetric_top_period
+from solver.heavy_top import (
+    constants_of_motion,
+    effective_potential,
+    nutation_period,
+    steady_precession_rates,
+    turning_points,
+)
+from solver.methods import METHODS, solve
+from solver.scenes import FreeBody, HeavyBody, choose_model
+from solver.torque_free import invariants
+
+__all__ = [
+    "FREE_SCENE",
+    "HEAVY_SCENE",
+    "BenchConfig",
+    "add_bench_arguments",
+    "free_reference",
+    "heavy_reference",
+    "invariant_drift",
+    "mp_cubic_roots",
+    "rank_at_accuracy",
+    "run_bench",
+    "turning_point_methods",
+    "work_precision",
+]
+
+# I1 < I2 < I3, L² > 2T I2 and ω2(0) = 0: Landau–Lifshitz's R10 as printed, phase zero.
+FREE_SCENE = FreeBody(1.0, 2.0, 3.0, (0.5, 0.0, 1.0))
+# A looping heavy top with nutation period ≈ 4.1 s.
+HEAVY_SCENE = HeavyBody(1.0, 1.0, 0.6, 1.0, 0.8, 0.2, 0.5, 3.0)
+
+
+@dataclass(frozen=True)
+class BenchConfig:
+    """How much to measure. ``full()`` is the documented run; ``quick()`` the test's (< 1 min)."""
+
+    free_periods: int
+    heavy_periods: int
+    drift_periods: int
+    rtols: tuple[float, ...]
+    radau_min_rtol: float  # Radau's cost explodes below this; the sweep stops there
+    steps_per_period: tuple[int, ...]
+    drift_rtol: float = 1e-6
+    drift_steps_per_period: int = 25
+    drift_samples: int = 60
+    radau_drift_periods: int = 1000  # Radau at 1e4 periods alone took 7 min (measured)
+
+    @classmethod
+    def full(cls) -> BenchConfig:
+        return cls(100, 50, 10_000, tuple(10.0 ** -np.arange(3, 14)), 1e-9,
+                   (10, 20, 40, 80, 160, 320, 640))
+
+    @classmethod
+    def quick(cls) -> BenchConfig:
+        return cls(10, 5, 100, (1e-3, 1e-6, 1e-9, 1e-12), 1e-6, (20, 80, 320),
+                   drift_samples=20)
+
+
+# --- independent references (mpmath, 40 digits) ---------------------------------------------
+
+
+def free_reference(scene: FreeBody, t: float) -> np.ndarray:
+    """ω(t) from Landau–Lifshitz §37 (R10) in mpmath; needs I1 < I2 < I3, L² > 2T I2, ω2(0) = 0
+    and ω1(0), ω3(0) > 0 (then ω = (A1 cn, A2 sn, A3 dn)(λt), no phase)."""
+    with mp.workdps(40):
+        I1, I2, I3 = (mp.mpf(x) for x in (scene.I1, scene.I2, scene.I3))
+        w1, w2, w3 = (mp.mpf(x) for x in scene.omega0)
+        if not (I1 < I2 < I3 and w2 == 0 and w1 > 0 and w3 > 0):
+            raise ValueError("scene: the reference covers only Landau–Lifshitz's printed case")
+        two_T = I1 * w1**2 + I3 * w3**2
+        L2 = I1**2 * w1**2 + I3**2 * w3**2
+        lam = mp.sqrt((I3 - I2) * (L2 - two_T * I1) / (I1 * I2 * I3))
+        m = (I2 - I1) * (two_T * I3 - L2) / ((I3 - I2) * (L2 - two_T * I1))
+        u = lam * mp.mpf(t)
+        amp = [mp.sqrt((two_T * I3 - L2) / (I1 * (I3 - I1))),
+               mp.sqrt((two_T * I3 - L2) / (I2 * (I3 - I2))),
+               mp.sqrt((L2 - two_T * I1) / (I3 * (I3 - I1)))]
+        funcs = [mp.ellipfun(name, u, m=m) for name in ("cn", "sn", "dn")]
+        return np.array([float(a * f) for a, f in zip(amp, funcs, strict=True)])
+
+
+def mp_cubic_roots(state: tuple[float, ...]) -> list:
+    """Roots u1 ≤ u2 ≤ u3 of R17's cubic from the exact binary state, in mpmath (40 digits)."""
+    I1, I3, Mgl, b0, ad, bd, gd = (mp.mpf(x) for x in state)
+    c, s = mp.cos(b0), mp.sin(b0)
+    pg = I3 * (ad * c + gd)
+    pa = I1 * ad * s**2 + pg * c
+    E = (I1 * (bd**2 + ad**2 * s**2)) / 2 + Mgl * c
+    a, b, A, B = pg / I1, pa / I1, 2 * E / I1, 2 * Mgl / I1
+    roots = mp.polyroots([B, -(A + a * a), 2 * a * b - B, A - b * b], maxsteps=400,
+                         extraprec=400)
+    return sorted(mp.re(r) for r in roots)
+
+
+def heavy_reference(scene: HeavyBody, t: float) -> float:
+    """``u(t) = u1 + (u2 − u1) sn²(λt + φ, k)`` (R20) in mpmath, ``φ = ∓F(ψ0 | k²)``,
+    ``sin²ψ0 = (u0 − u1)/(u2 − u1)``, sign opposite to ``β̇0``."""
+    with mp.workdps(40):
+        state = scene.heavy_top_state()
+        u1, u2, u3 = mp_cubic_roots(state)
+        B = 2 * mp.mpf(scene.Mgl) / mp.mpf(scene.I1)
+        u0 = mp.cos(mp.mpf(scene.beta0))
+        m = (u2 - u1) / (u3 - u1)
+        psi0 = mp.asin(mp.sqrt(min(max((u0 - u1) / (u2 - u1), 0), 1)))
+        phase = (-1 if scene.beta_dot0 > 0 else 1) * mp.ellipf(psi0, m)
+        sn = mp.ellipfun("sn", mp.sqrt(B * (u3 - u1)) / 2 * mp.mpf(t) + phase, m=m)
+        return float(u1 + (u2 - u1) * sn**2)
+
+
+# --- measurements ----------------------------------------------------------------------------
+
+
+def _timed(call: Callable[[], object]) -> tuple[object, float, int]:
+    """(result, median wall time over repeats, repeats): 3 repeats if one run is < 0.5 s."""
+    start = time.perf_counter()
+    result = call()
+    times = [time.perf_counter() - start]
+    if times[0] < 0.5:
+        for _ in range(2):
+            start = time.perf_counter()
+            call()
+            times.append(time.perf_counter() - start)
+    return result, statistics.median(times), len(times)
+
+
+def _controls(method: str, period: float, config: BenchConfig) -> list[float | None]:
+    control = METHODS[method].control
+    if control == "rtol":
+        floor = config.radau_min_rtol if method == "Radau" else 0.0
+        return [r for r in config.rtols if r >= floor]
+    if control == "step":
+        return [period / n for n in config.steps_per_period]
+    return [None]
+
+
+def work_precision(scene, period: float, n_periods: int, reference: np.ndarray | float,
+                   config: BenchConfig) -> list[dict]:
+    """Error at ``n_periods · period`` against ``reference``, with cost, for every method that
+    answers ``scene`` and every control of the sweep. Error: max-norm of ω's error over |ω0|
+    (free body), ``|Δ cos β|`` (heavy body)."""
+    times = np.array([0.0, n_periods * period])
+    scale = np.linalg.norm(scene.omega0) if isinstance(scene, FreeBody) else 1.0
+    rows = []
+    for name, method in METHODS.items():
+        if scene.kind not in method.kinds:
+            continue
+        for control in _controls(name, period, config):
+            traj, seconds, repeats = _timed(lambda n=name, c=control: solve(scene, times, n, c))
+            error = (float(np.max(np.abs(traj.y[-1] - reference))) / scale
+                     if traj.success and len(traj.t) == 2 else math.nan)
+            rows.append({"method": name, "control": control, "error": error,
+                         "seconds": seconds, "repeats": repeats, "nfev": traj.nfev,
+                         "nsteps": traj.nsteps, "success": traj.success})
+    return rows
+
+
+def _np_roots_betas(state) -> tuple[float, float]:
+    pa, pg, e = constants_of_motion(*state)
+    I1, Mgl = state[0], state[2]
+    a, b, A, B = pg / I1, pa / I1, 2 * e / I1, 2 * Mgl / I1
+    u = np.sort(np.roots([B, -A - a * a, 2 * a * b - B, A - b * b]).real)
+    return float(np.arccos(np.clip(u[1], -1, 1))), float(np.arccos(np.clip(u[0], -1, 1)))
+
+
+def _brentq_betas(state) -> tuple[float, float]:
+    from scipy.optimize import brentq
+
+    pa, pg, e = constants_of_motion(*state)
+    I1, Mgl, b0 = state[0], state[2], state[3]
+
+    def g(beta):
+        return float(effective_potential(beta, I1, Mgl, pa, pg)) - float(e)
+
+    lo, hi = 1e-12, math.pi - 1e-12
+    return (brentq(g, lo, b0, xtol=1e-16, rtol=8.9e-16),
+            brentq(g, b0, hi, xtol=1e-16, rtol=8.9e-16))
+
+
+def _integrated_betas(state) -> tuple[float, float]:
+    """Integrate R14 in Euler angles (DOP853, rtol 1e-10) until β̇ = 0 twice."""
+    from scipy.integrate import solve_ivp
+
+    from solver.integrators import heavy_top_euler_rhs
+
+    rhs = heavy_top_euler_rhs(state[0], state[1], state[2])
+
+    def turning(t, y):
+        return y[4]
+
+    turning.terminal = 2
+    period = float(nutation_period(*state))
+    sol = solve_ivp(rhs, (0.0, 2.0 * period), [0.0, state[3], 0.0, *state[4:]],
+                    method="DOP853", rtol=1e-10, atol=1e-12, events=turning)
+    betas = sorted(float(y[1]) for y in sol.y_events[0])
+    return betas[0], betas[-1]
+
+
+TURNING_POINT_METHODS: dict[str, Callable] = {
+    "ours (cubic in w = u − u0)": lambda s: tuple(float(x) for x in turning_points(*s)),
+    "np.roots (expanded cubic)": _np_roots_betas,
+    "brentq on V_eff": _brentq_betas,
+    "integrate to β̇ = 0": _integrated_betas,
+}
+
+
+def turning_point_cases() -> dict[str, tuple[float, ...]]:
+    """Generic, fast and nearly steady tops (all with β̇0 ≠ 0, so every method applies)."""
+    slow, _ = steady_precession_rates(1.0, 0.6, 1.0, 0.8, 0.6 * 60.0)
+    return {
+        "generic": HEAVY_SCENE.heavy_top_state(),
+        "fast top (ω3 = 200)": (1.0, 0.6, 1.0, 0.8, 0.0, 0.1, 200.0),
+        "near steady (β̇0 = 1e-6)": (1.0, 0.6, 1.0, 0.8, float(slow), 1e-6,
+                                     60.0 - float(slow) * math.cos(0.8)),
+    }
+
+
+def turning_point_methods() -> list[dict]:
+    """Max error of (β1, β2) against mpmath roots, and median time, per case and method."""
+    rows = []
+    for case, state in turning_point_cases().items():
+        with mp.workdps(40):
+            u1, u2, _ = mp_cubic_roots(state)
+            ref = (float(mp.acos(u2)), float(mp.acos(u1)))
+        for name, method in TURNING_POINT_METHODS.items():
+            try:
+                (b1, b2), seconds, repeats = _timed(lambda m=method, s=state: m(s))
+                error = max(abs(b1 - ref[0]), abs(b2 - ref[1]))
+            except (ValueError, IndexError) as exc:  # no bracket / no event: a result, not a crash
+                error, seconds, repeats = math.nan, math.nan, 0
+                print(f"eulertop bench: {name} failed on {case}: {exc}")
+            rows.append({"case": case, "method": name, "error_rad": error,
+                         "seconds": seconds, "repeats": repeats})
+    return rows
+
+
+def invariant_drift(scene: FreeBody, period: float, config: BenchConfig) -> list[dict]:
+    """Relative errors of T and L² at log-spaced times up to ``drift_periods`` periods
+    (Radau: ``radau_drift_periods``, its cost being ~40× the others')."""
+    T0, L20 = invariants(scene.I1, scene.I2, scene.I3, scene.omega0)
+    rows = []
+    for name, method in METHODS.items():
+        if scene.kind not in method.kinds:
+            continue
+        last = min(config.drift_periods, config.radau_drift_periods) if name == "Radau" else (
+            config.drift_periods)
+        times = period * np.unique(np.round(np.geomspace(1.0, last, config.drift_samples)))
+        control = {"rtol": config.drift_rtol, "step": period / config.drift_steps_per_period,
+                   None: None}[method.control]
+        start = time.perf_counter()
+        traj = solve(scene, times, name, control)
+        seconds = time.perf_counter() - start
+        T, L2 = invariants(scene.I1, scene.I2, scene.I3, traj.y)
+        for t, dT, dL in zip(traj.t, np.abs(T / T0 - 1), np.abs(L2 / L20 - 1), strict=True):
+            rows.append({"method": name, "control": control, "periods": t / period,
+                         "energy_error": float(dT), "L2_error": float(dL),
+                         "seconds_total": seconds})
+    return rows
+
+
+def rank_at_accuracy(rows: list[dict], target: float) -> list[dict]:
+    """Cost of each method to reach ``target`` error, by log–log interpolation of its sweep.
+
+    Returns rows sorted by wall time: method, seconds, nfev at ``target`` (NaN if the sweep
+    never reached it). Exact models (a single point) qualify if their error ≤ target.
+    """
+    ranked = []
+    for name in dict.fromkeys(r["method"] for r in rows):
+        pts = sorted((r["error"], r["seconds"], r["nfev"]) for r in rows
+                     if r["method"] == name and np.isfinite(r["error"]) and r["error"] > 0)
+        exact = [r for r in rows if r["method"] == name and r["control"] is None]
+        if exact:
+            ok = exact[0]["error"] <= target
+            ranked.append({"method": name, "seconds": exact[0]["seconds"] if ok else math.nan,
+                           "nfev": 0 if ok else math.nan})
+            continue
+        ranked.append({"method": name, **_interpolate_cost(pts, target)})
+    return sorted(ranked, key=lambda r: (math.isnan(r["seconds"]), r["seconds"]))
+
+
+def _interpolate_cost(pts, target) -> dict:
+    """Interpolate log(cost) against log(error) between the sweep points bracketing target."""
+    for (e_lo, s_lo, n_lo), (e_hi, s_hi, n_hi) in itertools.pairwise(pts):
+        if e_lo <= target <= e_hi:
+            w = (math.log(target) - math.log(e_hi)) / (math.log(e_lo) - math.log(e_hi))
+            return {"seconds": math.exp((1 - w) * math.log(s_hi) + w * math.log(s_lo)),
+                    "nfev": math.exp((1 - w) * math.log(max(n_hi, 1)) + w * math.log(max(n_lo, 1)))}
+    if pts and pts[0][0] <= target:  # only one point, already good enough
+        return {"seconds": pts[0][1], "nfev": pts[0][2]}
+    return {"seconds": math.nan, "nfev": math.nan}
+
+
+# --- output ----------------------------------------------------------------------------------
+
+
+def _write_csv(path: Path, rows: list[dict]) -> None:
+    with path.open("w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+
+
+def _plot_work_precision(plt, rows, cost: str, title: str, path: Path) -> None:
+    fig, ax = plt.subplots(figsize=(7, 5))
+    for name in dict.fromkeys(r["method"] for r in rows):
+        # in sweep order (loose → tight), not sorted by cost: a noisy timing must not reorder
+        pts = [(r[cost], r["error"]) for r in rows if r["method"] == name
+               and np.isfinite(r["error"]) and r[cost] > 0]
+        if not pts:
+            continue
+        x, y = zip(*pts, strict=True)
+        ax.loglog(x, np.maximum(y, 1e-17), "o-" if len(x) > 1 else "*", label=name,
+                  markersize=5 if len(x) > 1 else 12)
+    ax.set_xlabel({"seconds": "median wall time (s)", "nfev": "right-hand-side evaluations"}[cost])
+    ax.set_ylabel("error at final time")
+    ax.set_title(title)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _plot_drift(plt, rows, path: Path) -> None:
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharex=True)
+    for name in dict.fromkeys(r["method"] for r in rows):
+        sub = [r for r in rows if r["method"] == name]
+        x = [r["periods"] for r in sub]
+        for ax, key in zip(axes, ("energy_error", "L2_error"), strict=True):
+            ax.loglog(x, np.maximum([r[key] for r in sub], 1e-17), label=name)
+    for ax, label in zip(axes, ("|T/T0 − 1|", "|L²/L²0 − 1|"), strict=True):
+        ax.set_xlabel("time (periods of ω)")
+        ax.set_ylabel(label)
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.suptitle("Invariant drift, free asymmetric top (floor 1e-17 = exact to rounding)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _plot_turning_points(plt, rows, path: Path) -> None:
+    fig, ax = plt.subplots(figsize=(7, 5))
+    for name in TURNING_POINT_METHODS:
+        sub = [r for r in rows if r["method"] == name]
+        ax.loglog([r["seconds"] for r in sub], [max(r["error_rad"], 1e-17) for r in sub], "o",
+                  label=name, markersize=7)
+    ax.set_xlabel("median wall time (s)")
+    ax.set_ylabel("max error of β1, β2 (rad)")
+    ax.set_title("Turning points: three tops (generic, fast, near steady)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _fmt(x) -> str:
+    if x is None:
+        return "—"
+    if isinstance(x, float):
+        return "n/a" if not math.isfinite(x) else f"{x:.2g}"
+    return str(x)
+
+
+def _table(rows: list[dict], keys: list[str]) -> str:
+    lines = ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
+    lines += ["| " + " | ".join(_fmt(r[k]) for k in keys) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def _summary(results: dict, config: BenchConfig, wall: float) -> str:
+    out = [f"# eulertop bench — {'quick' if config.free_periods < 100 else 'full'} run",
+           "",
+           f"Free asymmetric top {FREE_SCENE} over {config.free_periods} periods of ω; heavy top "
+           f"{HEAVY_SCENE} over {config.heavy_periods} nutation periods. Errors against mpmath "
+           "(40 digits) evaluations of R10 / R20. Times: median of repeats, one machine, one run. "
+           f"Total bench wall time {wall:.0f} s.", ""]
+    for key, title in (("free", "free asymmetric top"), ("heavy", "heavy symmetric top")):
+        rows = results[key]
+        out += [f"## Ranking at equal accuracy — {title}", ""]
+        for target in (1e-6, 1e-10):
+            ranked = rank_at_accuracy(rows, target)
+            fastest = ranked[0]["seconds"]
+            for r in ranked:
+                r["× fastest"] = r["seconds"] / fastest
+            out += [f"Error ≤ {target:g}:", "", _table(ranked, ["method", "seconds", "nfev",
+                                                             "× fastest"]), ""]
+        exact = [r for r in rows if r["control"] is None]
+        out += ["Exact models (error vs mpmath, time for the final time):", "",
+                _table(exact, ["method", "error", "seconds"]), "",
+                f"![work-precision {key}](wp_{key}_time.png) ![](wp_{key}_nfev.png)", ""]
+    out += ["## Turning points", "", _table(results["turning"],
+                                             ["case", "method", "error_rad", "seconds"]), "",
+            "![turning points](turning_points.png)", "",
+            f"## Invariant drift over {config.drift_periods} periods", "",
+            f"(adaptive methods at rtol {config.drift_rtol:g}; fixed-step at period/"
+            f"{config.drift_steps_per_period}; Radau only to "
+            f"{min(config.drift_periods, config.radau_drift_periods)} periods; the table shows "
+            "each method's last sample)", ""]
+    last = {}
+    for r in results["drift"]:
+        last[r["method"]] = r
+    out += [_table(list(last.values()), ["method", "energy_error", "L2_error", "seconds_total"]),
+            "", "![drift](drift.png)", ""]
+    out += [f"Models chosen by `solver.scenes.choose_model`: free asymmetric → "
+            f"{choose_model(FREE_SCENE)}, heavy symmetric → {choose_model(HEAVY_SCENE)}.", ""]
+    return "\n".join(out)
+
+
+def add_bench_arguments(parser: argparse.ArgumentParser) -> None:
+    """``eulertop bench [--out DIR] [--quick]``."""
+    parser.add_argument("--out", type=Path, default=Path("bench-results"),
+                        help="directory for the PNG charts, their CSV data and summary.md")
+    parser.add_argument("--quick", action="store_true",
+                        help="a reduced sweep (< 1 min; what the tests run)")
+
+
+def run_bench(args: argparse.Namespace) -> int:
+    """Measure everything, write charts, CSVs and ``summary.md`` into ``args.out``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    config = BenchConfig.quick() if args.quick else BenchConfig.full()
+    out: Path = args.out
+    out.mkdir(parents=True, exist_ok=True)
+    start = time.perf_counter()
+    free_period = float(asymmetric_top_period(FREE_SCENE.I1, FREE_SCENE.I2, FREE_SCENE.I3,
+                                              FREE_SCENE.omega0))
+    heavy_period = float(nutation_period(*HEAVY_SCENE.heavy_top_state()))
+    results = {
+        "free": work_precision(FREE_SCENE, free_period, config.free_periods,
+                               free_reference(FREE_SCENE, config.free_periods * free_period),
+                               config),
+        "heavy": work_precision(HEAVY_SCENE, heavy_period, config.heavy_periods,
+                                heavy_reference(HEAVY_SCENE, config.heavy_periods * heavy_period),
+                                config),
+        "turning": turning_point_methods(),
+        "drift": invariant_drift(FREE_SCENE, free_period, config),
+    }
+    for key in ("free", "heavy"):
+        _write_csv(out / f"wp_{key}.csv", results[key])
+        for cost in ("seconds", "nfev"):
+            name = "time" if cost == "seconds" else cost
+            _plot_work_precision(plt, results[key], cost, f"Work-precision, {key} top",
+                                 out / f"wp_{key}_{name}.png")
+    _write_csv(out / "turning_points.csv", results["turning"])
+    _plot_turning_points(plt, results["turning"], out / "turning_points.png")
+    _write_csv(out / "drift.csv", results["drift"])
+    _plot_drift(plt, results["drift"], out / "drift.png")
+    (out / "summary.md").write_text(_summary(results, config, time.perf_counter() - start))
+    print(f"eulertop bench: wrote {out}/summary.md and charts in "
+          f"{time.perf_counter() - start:.0f} s")
+    return 0
