@@ -19,6 +19,7 @@ import csv
 import itertools
 import math
 import statistics
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -459,16 +460,22 @@ def run_bench(args: argparse.Namespace) -> int:
     free_period = float(asymmetric_top_period(FREE_SCENE.I1, FREE_SCENE.I2, FREE_SCENE.I3,
                                               FREE_SCENE.omega0))
     heavy_period = float(nutation_period(*HEAVY_SCENE.heavy_top_state()))
-    results = {
-        "free": work_precision(FREE_SCENE, free_period, config.free_periods,
-                               free_reference(FREE_SCENE, config.free_periods * free_period),
-                               config),
-        "heavy": work_precision(HEAVY_SCENE, heavy_period, config.heavy_periods,
-                                heavy_reference(HEAVY_SCENE, config.heavy_periods * heavy_period),
-                                config),
-        "turning": turning_point_methods(),
-        "drift": invariant_drift(FREE_SCENE, free_period, config),
+    stages = {
+        "free": ("free asymmetric top, work-precision", lambda: work_precision(
+            FREE_SCENE, free_period, config.free_periods,
+            free_reference(FREE_SCENE, config.free_periods * free_period), config)),
+        "heavy": ("heavy top, work-precision", lambda: work_precision(
+            HEAVY_SCENE, heavy_period, config.heavy_periods,
+            heavy_reference(HEAVY_SCENE, config.heavy_periods * heavy_period), config)),
+        "turning": ("turning points, four ways", turning_point_methods),
+        "drift": ("invariant drift", lambda: invariant_drift(FREE_SCENE, free_period, config)),
     }
+    results = {}
+    for i, (key, (label, stage)) in enumerate(stages.items(), start=1):
+        # Progress on stderr: the full run takes minutes.
+        print(f"eulertop bench [{i}/{len(stages)}] {label} "
+              f"({time.perf_counter() - start:.0f} s so far)", file=sys.stderr, flush=True)
+        results[key] = stage()
     for key in ("free", "heavy"):
         _write_csv(out / f"wp_{key}.csv", results[key])
         for cost in ("seconds", "nfev"):
