@@ -5,7 +5,9 @@ solutions notebook with small noise on every number (relative 1e-6 — still cor
 every fifth student, 1e-1 on one answer — wrong). Then, on the same notebooks, in one run:
 
 * ``eulertop grade --jobs J --force`` as a fresh process (start-up included): notebooks per
-  minute, from the median of ``--runs`` runs;
+  minute, from the median of ``--runs`` runs, with warm kernels (the default: forked from a
+  zygote, :mod:`grader.kernel_pool`) and with ``--cold-kernels``; CPU seconds per notebook
+  (user + system of the grader and every process it started, from ``RUSAGE_CHILDREN``);
 * the same with ``--jobs 1``, and every notebook executed bare, one after the other, with
   ``nbclient.NotebookClient`` in one process: the per-notebook overhead of eulertop over bare
   execution is the difference of the two serial times, divided by the number of notebooks;
@@ -28,7 +30,7 @@ import json
 import os
 import platform
 import random
-import statistics
+import resource
 import subprocess
 import sys
 import tempfile
@@ -106,35 +108,51 @@ def make_class(root: Path, students: int, problems: list[str]) -> tuple[Path, Pa
     return hw, subs
 
 
-def _timed(cmd: list[str], **kw) -> float:
-    t0 = time.perf_counter()
+def _cpu(who: int) -> float:
+    usage = resource.getrusage(who)
+    return usage.ru_utime + usage.ru_stime
+
+
+def _timed(cmd: list[str], **kw) -> tuple[float, float]:
+    """(wall seconds, CPU seconds of the command and every process it waited for)."""
+    c0, t0 = _cpu(resource.RUSAGE_CHILDREN), time.perf_counter()
     subprocess.run(cmd, check=False, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, **kw)
-    return time.perf_counter() - t0
+    return time.perf_counter() - t0, _cpu(resource.RUSAGE_CHILDREN) - c0
 
 
-def time_eulertop(hw: Path, subs: Path, jobs: int, runs: int) -> float:
-    """Median wall time of ``eulertop grade --force`` as a fresh process."""
+def _median(samples: list[tuple[float, float]]) -> tuple[float, float]:
+    """The (wall, CPU) sample of median wall time."""
+    ordered = sorted(samples)
+    return ordered[(len(ordered) - 1) // 2]
+
+
+def time_eulertop(hw: Path, subs: Path, jobs: int, runs: int,
+                  cold: bool = False) -> tuple[float, float]:
+    """(wall, CPU) seconds of ``eulertop grade --force`` as a fresh process (median run)."""
     cmd = [sys.executable, "-m", "eulertop", "grade", str(hw), str(subs), "--jobs", str(jobs),
-           "--force"]
+           "--force", *(["--cold-kernels"] if cold else [])]
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    return statistics.median(_timed(cmd, env=env, cwd=ROOT) for _ in range(runs))
+    return _median([_timed(cmd, env=env, cwd=ROOT) for _ in range(runs)])
 
 
-def time_bare(subs: Path, runs: int) -> float:
-    """Median wall time of executing every notebook with nbclient, serially, in-process."""
+def time_bare(subs: Path, runs: int) -> tuple[float, float]:
+    """(wall, CPU) seconds of executing every notebook with nbclient, serially, in-process
+    (median run; CPU of this process and the kernels)."""
     import nbformat
     from nbclient import NotebookClient
 
     paths = sorted(subs.glob("*.ipynb"))
 
-    def once() -> float:
+    def once() -> tuple[float, float]:
+        c0 = _cpu(resource.RUSAGE_SELF) + _cpu(resource.RUSAGE_CHILDREN)
         t0 = time.perf_counter()
         for p in paths:
             nb = nbformat.read(p, as_version=4)
             NotebookClient(nb, kernel_name="python3", timeout=60, allow_errors=True).execute()
-        return time.perf_counter() - t0
+        return (time.perf_counter() - t0,
+                _cpu(resource.RUSAGE_SELF) + _cpu(resource.RUSAGE_CHILDREN) - c0)
 
-    return statistics.median(once() for _ in range(runs))
+    return _median([once() for _ in range(runs)])
 
 
 # --------------------------------------------------------------------------------------------
@@ -180,8 +198,10 @@ def install_nbgrader(venv: Path) -> tuple[Path | None, str]:
     return venv / "bin" / "nbgrader", f"installed in {time.perf_counter() - t0:.0f} s"
 
 
-def time_nbgrader(nbgrader: Path, course: Path, hw: Path, subs: Path, runs: int) -> float:
-    """Median wall time of ``nbgrader autograde ps1 --force`` over the same submissions."""
+def time_nbgrader(nbgrader: Path, course: Path, hw: Path, subs: Path,
+                  runs: int) -> tuple[float, float]:
+    """(wall, CPU) seconds of ``nbgrader autograde ps1 --force`` over the same submissions
+    (median run)."""
     key = json.loads((hw / "key.json").read_text())["students"]
     ids = sorted(key)
     points = {q["question"]: len(q["answers"]) for q in key[ids[0]]["questions"]}
@@ -208,7 +228,7 @@ def time_nbgrader(nbgrader: Path, course: Path, hw: Path, subs: Path, runs: int)
         if done.returncode != 0:
             raise RuntimeError(f"nbgrader {' '.join(cmd)}: {done.stderr.strip()[-500:]}")
     autograde = [str(nbgrader), "autograde", "ps1", "--force"]
-    median = statistics.median(_timed(autograde, cwd=course, env=env) for _ in range(runs))
+    median = _median([_timed(autograde, cwd=course, env=env) for _ in range(runs)])
     graded = len(list(course.glob("autograded/*/ps1/ps1.ipynb")))
     if graded != len(ids):
         raise RuntimeError(f"autograde wrote {graded} of {len(ids)} graded notebooks")
@@ -231,34 +251,46 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory(prefix="bench-grade-") as tmp:
         tmp = Path(tmp)
         hw, subs = make_class(tmp, n, args.problems.split(","))
-        print(f"{n} submissions, problems {args.problems}; median of {args.runs} run(s)")
-        t_par = time_eulertop(hw, subs, args.jobs, args.runs)
-        print(f"eulertop grade --jobs {args.jobs}: {t_par:6.1f} s  "
-              f"{60 * n / t_par:6.1f} notebooks/min  ({t_par / n:.2f} s/notebook)")
-        t_one = time_eulertop(hw, subs, 1, args.runs)
-        t_bare = time_bare(subs, args.runs)
-        print(f"eulertop grade --jobs 1: {t_one:6.1f} s  {60 * n / t_one:6.1f} notebooks/min")
-        print(f"bare nbclient, serial:   {t_bare:6.1f} s  {60 * n / t_bare:6.1f} notebooks/min")
-        print(f"overhead of eulertop over bare nbclient (serial): "
-              f"{(t_one - t_bare) / n:+.2f} s/notebook")
-        if args.no_nbgrader:
-            return 0
-        if args.nbgrader_venv:
-            nbgrader, note = args.nbgrader_venv / "bin" / "nbgrader", "reused"
-        else:
-            nbgrader, note = install_nbgrader(tmp / "venv")
-        if nbgrader is None:
-            print(f"nbgrader: could not be installed here ({note}); not measured")
-            return 0
-        print(f"nbgrader: {note}")
-        try:
-            t_nbg = time_nbgrader(nbgrader, tmp / "course", hw, subs, args.runs)
-        except RuntimeError as e:
-            print(f"nbgrader: could not be run ({e}); not measured")
-            return 0
-        print(f"nbgrader autograde:      {t_nbg:6.1f} s  {60 * n / t_nbg:6.1f} notebooks/min "
-              f"(serial)")
-        print(f"eulertop --jobs {args.jobs} vs nbgrader: {t_nbg / t_par:.1f}x the throughput")
+        print(f"{n} submissions, problems {args.problems}; median of {args.runs} run(s); "
+              f"load average before: {os.getloadavg()[0]:.2f}")
+        rows: dict[str, tuple[float, float]] = {}
+
+        def row(label: str, sample: tuple[float, float]) -> None:
+            rows[label] = sample
+            wall, cpu = sample
+            print(f"{label:34s} {wall:6.1f} s  {60 * n / wall:6.1f} notebooks/min  "
+                  f"{wall / n:5.2f} s/notebook  CPU {cpu / n:5.2f} s/notebook", flush=True)
+
+        warm_label, cold_label = (f"eulertop --jobs {args.jobs} (warm kernels)",
+                                  f"eulertop --jobs {args.jobs} --cold-kernels")
+        row(warm_label, time_eulertop(hw, subs, args.jobs, args.runs))
+        row(cold_label, time_eulertop(hw, subs, args.jobs, args.runs, cold=True))
+        row("eulertop --jobs 1 (warm kernels)", time_eulertop(hw, subs, 1, args.runs))
+        row("bare nbclient, serial, in-process", time_bare(subs, args.runs))
+        warm, one, bare = (rows[warm_label][0], rows["eulertop --jobs 1 (warm kernels)"][0],
+                           rows["bare nbclient, serial, in-process"][0])
+        print(f"overhead of eulertop (warm, --jobs 1) over bare nbclient: "
+              f"{(one - bare) / n:+.2f} s/notebook (negative: faster than a bare run, whose "
+              "kernels start cold)")
+        if not args.no_nbgrader:
+            if args.nbgrader_venv:
+                nbgrader, note = args.nbgrader_venv / "bin" / "nbgrader", "reused"
+            else:
+                nbgrader, note = install_nbgrader(tmp / "venv")
+            if nbgrader is None:
+                print(f"nbgrader: could not be installed here ({note}); not measured")
+                return 0
+            print(f"nbgrader: {note}")
+            try:
+                row("nbgrader autograde (serial)",
+                    time_nbgrader(nbgrader, tmp / "course", hw, subs, args.runs))
+            except RuntimeError as e:
+                print(f"nbgrader: could not be run ({e}); not measured")
+                return 0
+            nbg, cold = rows["nbgrader autograde (serial)"][0], rows[cold_label][0]
+            print(f"throughput vs nbgrader: warm --jobs {args.jobs} {nbg / warm:.1f}x, "
+                  f"cold --jobs {args.jobs} {nbg / cold:.1f}x, warm --jobs 1 {nbg / one:.1f}x")
+        print(f"load average after: {os.getloadavg()[0]:.2f}")
     return 0
 
 

@@ -68,6 +68,9 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> None:
                         help="regrade every submission, even those unchanged since last run")
     parser.add_argument("--reveal", action="store_true",
                         help="show each student their own key values in their feedback page")
+    parser.add_argument("--cold-kernels", action="store_true",
+                        help="start every kernel from scratch instead of forking it from a "
+                             "pre-imported one (slower; the same isolation)")
 
 
 def _limits(timeout: float | None):
@@ -88,7 +91,7 @@ def run_grade(args: argparse.Namespace, execute=None) -> int:
         report = grade_assignment(
             args.hw, args.submissions, args.out, limits=_limits(args.timeout), jobs=args.jobs,
             force=args.force, reveal=args.reveal, execute=execute,
-            on_plan=lambda n: Progress(n),
+            on_plan=lambda n: Progress(n), cold_kernels=getattr(args, "cold_kernels", False),
         )
     except UsageError as e:
         print(f"eulertop grade: {e}", file=sys.stderr)

@@ -46,7 +46,9 @@ Swapping the kernel (issue 5's sandbox, warm kernels)
     :func:`execute_submission` takes ``kernel_factory`` (default :class:`LocalKernel`), any
     callable ``(workdir, control, limits) -> KernelProcess``. A sandbox wraps
     :func:`kernel_command` in ``bwrap`` (the IPC sockets already live in the control folder, to
-    be bound into the sandbox); a warm pool hands out kernels forked in advance.
+    be bound into the sandbox); the warm pool (:mod:`grader.kernel_pool`, the grader's default)
+    hands out kernels forked from a pre-imported zygote, with launch, interrupt and kill going
+    through it (:class:`LocalKernel` subclass, sharing :meth:`LocalKernel._connect`).
 """
 
 from __future__ import annotations
@@ -234,8 +236,6 @@ class LocalKernel:
         self.on_iopub_lost: Callable[[], None] | None = None
 
     async def start(self) -> Any:
-        import zmq
-        import zmq.asyncio
         from jupyter_client import AsyncKernelManager
 
         self.km = AsyncKernelManager(
@@ -249,15 +249,54 @@ class LocalKernel:
                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=stderr,
             )
         self.process = self.km.provisioner.process
+        return await self._connect(self.km.client)
+
+    async def _connect(self, make_client: Callable[..., Any]) -> Any:
+        """Open the channels of ``make_client(context=...)`` and wait until the kernel answers.
+
+        IOPub alone refuses messages over :data:`MAX_IOPUB_MESSAGE`. Ready means a
+        ``kernel_info`` reply on the shell channel *and* a message on IOPub (so the
+        subscription is live and no output is lost); jupyter_client's ``wait_for_ready`` also
+        waits for 0.2 s of IOPub silence after that, a delay on every kernel start that the
+        grader does not need (messages are matched to their request by ``msg_id``).
+        """
+        import zmq
+        import zmq.asyncio
+
         self._context = zmq.asyncio.Context()
-        self.kc = self.km.client(context=self._context)
+        self.kc = make_client(context=self._context)
         for channel in ("shell", "stdin", "control"):
             getattr(self.kc, f"{channel}_channel")  # created before the size limit is set
         self._context.setsockopt(zmq.MAXMSGSIZE, MAX_IOPUB_MESSAGE)  # applies to IOPub only
         self.kc.start_channels()
         self._watch_iopub(zmq)
-        await self.kc.wait_for_ready(timeout=self.limits.total_timeout)
+        await self._ready(self.limits.total_timeout)
         return self.kc
+
+    async def _ready(self, timeout: float) -> None:
+        from queue import Empty
+
+        deadline = time.monotonic() + timeout
+        while True:
+            msg_id = self.kc.kernel_info()
+            while True:  # this request's reply, or give up on it after a while
+                try:
+                    reply = await self.kc.get_shell_msg(timeout=0.5)
+                except Empty:
+                    reply = None
+                    break
+                if reply.get("parent_header", {}).get("msg_id") == msg_id:
+                    break
+            if reply is not None:
+                try:
+                    await self.kc.get_iopub_msg(timeout=0.25)
+                    return
+                except Empty:
+                    pass  # IOPub not subscribed yet: ask again
+            if self.exit_status() is not None:
+                raise RuntimeError("the kernel died before it answered")
+            if time.monotonic() > deadline:
+                raise RuntimeError(f"the kernel did not answer in {timeout:g} s")
 
     def _watch_iopub(self, zmq: Any) -> None:
         """Note when IOPub is severed (a message over MAX_IOPUB_MESSAGE was refused)."""
@@ -283,15 +322,7 @@ class LocalKernel:
 
     async def stop(self) -> None:
         self.kill_group()
-        with contextlib.suppress(Exception):
-            if getattr(self, "_watcher", None) is not None:
-                self._watcher.cancel()
-            if self._monitor is not None:
-                self.kc.iopub_channel.socket.disable_monitor()
-                self._monitor.close(linger=0)
-        with contextlib.suppress(Exception):
-            if self.kc is not None:
-                self.kc.stop_channels()
+        self._disconnect()
         with contextlib.suppress(Exception):
             if self.km is not None and self.km.has_kernel:
                 await asyncio.wait_for(self.km.shutdown_kernel(now=True), STOP_TIMEOUT)
@@ -302,6 +333,18 @@ class LocalKernel:
         with contextlib.suppress(Exception):
             if self._context is not None:
                 self._context.destroy(linger=0)
+
+    def _disconnect(self) -> None:
+        """Stop watching IOPub and close the client's channels (the context stays)."""
+        with contextlib.suppress(Exception):
+            if getattr(self, "_watcher", None) is not None:
+                self._watcher.cancel()
+            if self._monitor is not None:
+                self.kc.iopub_channel.socket.disable_monitor()
+                self._monitor.close(linger=0)
+        with contextlib.suppress(Exception):
+            if self.kc is not None:
+                self.kc.stop_channels()
 
     def kill_group(self) -> None:
         """SIGKILL the kernel's process group (the kernel and what it started), if unreaped."""

@@ -14,6 +14,11 @@ them together and owns the run's bookkeeping:
    (:func:`grader.results.write_result`), with its feedback page; the gradebook and every
    feedback page are rebuilt from the records at the end.
 
+Kernels: unless ``execute`` is given, each submission runs in a *warm* kernel — forked, one
+fresh process per submission, from a per-slot zygote that has imported ipykernel, numpy, scipy
+and sympy once (:mod:`grader.kernel_pool`); ``cold_kernels`` (``--cold-kernels``) starts each
+kernel from scratch instead, as it is done automatically where ``fork`` is not available.
+
 Parallelism: a pool of ``jobs`` *threads*. The work of a submission happens in its kernel, a
 separate process; the grader's side is waiting on sockets and a little JSON, which threads do
 without pickling the key or the results across processes and with the assignment loaded once.
@@ -38,6 +43,7 @@ from concurrent.futures import ThreadPoolExecutor, wait
 from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import UTC, datetime
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -320,6 +326,7 @@ def grade_assignment(
     execute: Execute | None = None,
     progress: Callable[[StudentResult], None] | None = None,
     on_plan: Callable[[int], Callable[[StudentResult], None] | None] | None = None,
+    cold_kernels: bool = False,
 ) -> RunReport:
     """Grade every submission in ``submissions`` against the assignment ``hw``.
 
@@ -339,12 +346,15 @@ def grade_assignment(
         Show each student their own key values in their feedback page.
     execute : callable, optional
         ``execute(path, variables, limits) -> Execution``; default
-        :func:`grader.execute.execute_submission`.
+        :func:`grader.execute.execute_submission` with warm kernels
+        (:class:`grader.kernel_pool.KernelPool`, one slot per job).
     progress : callable, optional
         Called with each record as it is written (from worker threads).
     on_plan : callable, optional
         Called with the number of submissions to execute before any runs; may return the
         ``progress`` callable (so a progress bar knows its total).
+    cold_kernels : bool
+        With the default ``execute``: start every kernel from scratch, not from a zygote.
 
     Raises
     ------
@@ -356,6 +366,7 @@ def grade_assignment(
     if not submissions.is_dir() or not os.access(submissions, os.R_OK | os.X_OK):
         raise UsageError(f"{submissions}: not a readable folder of submissions")
     out = Path(hw) / "graded" if out is None else Path(out)
+    warm = execute is None and not cold_kernels
     if execute is None or limits is None:
         from grader.limits import Limits
 
@@ -377,11 +388,26 @@ def grade_assignment(
             _publish(a, out, result, reveal)
             if progress:
                 progress(result)
-        _run_all(a, out, to_run, execute, limits, jobs or os.cpu_count() or 1, reveal, progress)
+        jobs = jobs or os.cpu_count() or 1
+        with _kernels(warm and bool(to_run), min(jobs, len(to_run))) as factory:
+            run = execute if factory is None else partial(execute, kernel_factory=factory)
+            _run_all(a, out, to_run, run, limits, jobs, reveal, progress)
         results = {sid: read_result(out / RESULTS / f"{sid}.json") for sid in a.ids}
         _rebuild(a, out, results, reveal)
     graded_now = tuple(t[0].student_id for t in to_run) + tuple(r.student_id for r in to_write)
     return RunReport(tuple(results[s] for s in a.ids), graded_now, tuple(kept), found.problems)
+
+
+@contextmanager
+def _kernels(warm: bool, slots: int) -> Iterator[Callable | None]:
+    """The kernel factory of the run: a warm pool's (closed at the end), or None (default)."""
+    if not warm:
+        yield None
+        return
+    from grader.kernel_pool import KernelPool
+
+    with KernelPool(slots) as pool:
+        yield pool.kernel
 
 
 def _run_all(a, out, to_run, execute, limits, jobs, reveal, progress) -> None:

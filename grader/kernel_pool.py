@@ -1,0 +1,559 @@
+"""Warm kernels: one fresh kernel process per submission, forked from a pre-imported zygote.
+
+A cold kernel (:class:`grader.execute.LocalKernel`) spends about a second of CPU importing
+ipykernel, IPython, numpy, scipy and sympy before it runs a line of the submission; on two
+cores that alone caps the grader near nbgrader's speed. Here each worker slot owns a *zygote*
+(:mod:`grader.zygote`), a server that has done those imports once; a kernel is a ``fork`` of
+it, which starts in milliseconds with the modules already in (copy-on-write) memory. Every
+submission still gets its own new process — fork semantics: a child that changes a module it
+inherited changes its own copy only — in its own session, with its own private working and
+control folders, limits and environment. While submission *k* runs in a slot, the kernel
+for submission *k + 1* is forked and initialises (``prewarm``): it does not depend on the
+submission until the submission is moved into its (until then empty) working folder.
+
+:class:`KernelPool` is the ``kernel_factory`` of :func:`grader.execute.execute_submission`:
+``pool.kernel(workdir, control, limits) -> PooledKernel``. The grader talks to a pooled
+kernel through nbclient exactly as to a cold one (same IPC transport, same client setup, same
+output cap); only launch, interrupt, kill and the exit status go through the zygote.
+
+Measured (``benchmarks/bench_grade.py``, 40 submissions, 2 cores shared with other work): a
+warm kernel costs ≈ 0.1 s of CPU per notebook against ≈ 0.35–0.5 s cold; prewarming the next
+kernel halves the wall time of a serial run (0.09 against 0.24 s per trivial notebook).
+
+Why one zygote per slot (and not one per run), and how issue 5's sandbox fits
+    Issue 5 puts every kernel in a bubblewrap sandbox: read-only system and Python, a private
+    writable folder, its own network and PID namespaces, resource limits. A forked kernel
+    cannot be wrapped in ``bwrap`` after the fact, so the sandbox must already surround the
+    zygote: :func:`zygote_command` is the one seam — issue 5 prefixes it with ``bwrap
+    --unshare-all --die-with-parent --new-session --ro-bind`` (system, interpreter) ``--bind
+    SLOT SLOT`` (the slot's folder, :attr:`Slot.folder`, where every kernel folder of the slot
+    is made). Per slot, because then
+
+    * with prewarm off (``KernelPool(prewarm=False)``), a slot's kernels never coexist: kernel
+      *k* is killed — its process group, and every leftover, found because the zygote is a
+      child subreaper — before kernel *k + 1* is forked. The per-slot ``bwrap`` alone then
+      isolates every kernel from every other (other slots are other sandboxes). Issue 5 can
+      ship on this with no more than the wrapped command;
+    * with prewarm on, kernel *k* and the idle, prewarmed *k + 1* share the slot's sandbox.
+      While *k* runs, it could reach *k + 1*'s IPC sockets (the connection file, with the
+      key, is removed as soon as *k + 1* has loaded it, but not before) and so run code in the
+      next student's kernel before that student's notebook starts, or listen to its output.
+      Issue 5 closes this by confining each child after ``fork`` too
+      (:func:`grader.zygote._become_kernel` is the place: ``unshare`` of user, mount, PID and
+      network namespaces, then a mount view with only its own two folders) — or keeps prewarm
+      off under the sandbox. Kernels are non-dumpable, so ptrace and ``/proc/<pid>/mem`` across
+      kernels already fail for a process without ``CAP_SYS_PTRACE``;
+    * a kernel that kills or stops its zygote harms only its own slot: the kernel dies with its
+      zygote (``PR_SET_PDEATHSIG``; that student's "kernel died" is their own doing), the slot
+      starts a new zygote on its next kernel, and the other slot runs on;
+    * pids differ inside a PID namespace, so the grader never signals a kernel itself: it asks
+      the slot's zygote (:meth:`Zygote.request` ``signal`` / ``kill``), which also reports each
+      kernel's exit status.
+
+Nothing secret in a zygote
+    It is started before any submission is read, from a script that imports nothing of the
+    grader, with the scrubbed kernel environment (so its ``/proc/<pid>/environ``, which a
+    forked child shares, holds nothing of the grader's), and only ever receives paths and the
+    limits of the kernel it is asked to fork. It never holds the key, results or submissions.
+
+Residual risks (for issue 5)
+    Without a sandbox, every kernel runs as the grader's user: it can signal (not ptrace: both
+    the zygote and kernels are non-dumpable) the zygote and the other slot's kernel, and read
+    any folder the user can — the cold path has the same exposure. A kernel running as root
+    can ptrace anything (``CAP_SYS_PTRACE``) and ignores ``RLIMIT_NPROC``. A leftover process
+    re-parented to the zygote is killed when its kernel ends; one that outlives a SIGKILLed
+    zygote (then re-parented to init) is not — ``bwrap --die-with-parent`` and a PID namespace
+    close that.
+
+Fallback
+    Where ``fork`` is unavailable (not Linux) or a zygote cannot be started, kernels are cold
+    (:class:`grader.execute.LocalKernel`); ``eulertop grade --cold-kernels`` asks for that.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import math
+import os
+import queue
+import secrets
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from grader.execute import LocalKernel, kernel_environment
+from grader.limits import Limits
+
+__all__ = [
+    "CPU_MARGIN",
+    "FILE_BYTES",
+    "PROCESSES",
+    "KernelPool",
+    "PooledKernel",
+    "Slot",
+    "Zygote",
+    "ZygoteError",
+    "child_limits",
+    "fork_available",
+    "zygote_command",
+]
+
+ZYGOTE_SCRIPT = Path(__file__).with_name("zygote.py")
+
+ZYGOTE_START_TIMEOUT = 60.0
+"""Seconds a zygote may take to import its modules (a loaded machine: several seconds)."""
+
+REQUEST_TIMEOUT = 10.0
+"""Seconds a zygote may take to answer a request (a stopped zygote is then replaced)."""
+
+CPU_MARGIN = 10
+"""CPU seconds a kernel may use beyond the whole-notebook time limit (``RLIMIT_CPU``)."""
+
+FILE_BYTES = 256 * 1024**2
+"""Largest file a kernel may write (``RLIMIT_FSIZE``), bytes."""
+
+PROCESSES = 64
+"""Processes/threads a kernel may add to those its user has (``RLIMIT_NPROC``)."""
+
+
+class ZygoteError(RuntimeError):
+    """A zygote could not be started, died, or did not answer."""
+
+
+def fork_available() -> bool:
+    """Can kernels be forked from a zygote here (Linux: ``fork``, ``prctl``, ``/proc``)?"""
+    return sys.platform.startswith("linux") and hasattr(os, "fork") and \
+        Path("/proc/self/task").is_dir()
+
+
+def child_limits(limits: Limits) -> dict[str, int]:
+    """The resource limits of a forked kernel (what :mod:`grader.zygote` applies).
+
+    ``as``: address space, ``limits.memory_bytes``; ``cpu``: CPU seconds, the whole-notebook
+    limit plus :data:`CPU_MARGIN`; ``fsize``: :data:`FILE_BYTES`; ``nproc``: :data:`PROCESSES`
+    more than the user already has.
+    """
+    return {"as": limits.memory_bytes, "cpu": math.ceil(limits.total_timeout) + CPU_MARGIN,
+            "fsize": FILE_BYTES, "nproc": PROCESSES}
+
+
+def zygote_command(die_with_parent: bool = False,
+                   preload: Sequence[str] | None = None) -> list[str]:
+    """The zygote's argv — the seam issue 5's sandbox wraps (module docstring).
+
+    ``preload``: the modules to import before forking (default :data:`grader.zygote.PRELOAD`;
+    what ipykernel itself needs to start is always imported).
+    """
+    return [sys.executable, str(ZYGOTE_SCRIPT), "--remove-own-folder",
+            *(["--die-with-parent"] if die_with_parent else []),
+            *([f"--preload={','.join(preload)}"] if preload is not None else [])]
+
+
+class Zygote:
+    """The grader's end of one zygote process: requests, replies, exit statuses.
+
+    Parameters
+    ----------
+    folder : Path
+        A new private folder: the zygote's working folder, ``HOME`` and ``TMPDIR``, and its
+        log (``zygote-stderr.txt``).
+    preload : sequence of str, optional
+        Modules to import before forking (:func:`zygote_command`).
+    """
+
+    def __init__(self, folder: Path, preload: Sequence[str] | None = None) -> None:
+        self.folder = Path(folder)
+        self.folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+        env = kernel_environment(self.folder, self.folder)
+        main = threading.current_thread() is threading.main_thread()
+        with open(self.folder / "zygote-stderr.txt", "wb") as log:
+            self.process = subprocess.Popen(
+                zygote_command(die_with_parent=main, preload=preload), stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE, stderr=log, env=env, cwd=self.folder, close_fds=True)
+        self._lock = threading.Lock()  # one writer at a time
+        self._changed = threading.Condition()
+        self._replies: dict[int, dict] = {}
+        self._exits: dict[int, int] = {}
+        self._seq = 0
+        self.ready: dict | None = None
+        self.dead = False
+        self._reader = threading.Thread(target=self._read, name="eulertop-zygote", daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        try:
+            for line in self.process.stdout:
+                message = json.loads(line)
+                with self._changed:
+                    if "ready" in message:
+                        self.ready = message
+                    elif message.get("event") == "exit":
+                        self._exits[int(message["pid"])] = int(message["status"])
+                    elif "seq" in message:
+                        self._replies[int(message["seq"])] = message
+                    self._changed.notify_all()
+        except (OSError, ValueError):
+            pass
+        finally:
+            with self._changed:
+                self.dead = True
+                self._changed.notify_all()
+
+    def wait_ready(self, timeout: float | None = None) -> None:
+        """Block until the zygote has its modules imported (at most ``timeout``, default
+        :data:`ZYGOTE_START_TIMEOUT`); :class:`ZygoteError` otherwise."""
+        timeout = ZYGOTE_START_TIMEOUT if timeout is None else timeout
+        with self._changed:
+            self._changed.wait_for(lambda: self.ready is not None or self.dead, timeout)
+            ready = self.ready
+        if ready is None or not ready.get("ready"):
+            tail = self._log_tail()
+            self.close(timeout=0.5)
+            why = (ready or {}).get("error") or (
+                "it ended" if self.dead else f"no answer in {timeout:g} s")
+            raise ZygoteError(f"the kernel zygote could not start: {why}{tail}")
+
+    def _log_tail(self) -> str:
+        with contextlib.suppress(OSError):
+            text = (self.folder / "zygote-stderr.txt").read_text(errors="replace").strip()
+            return f" ({text.splitlines()[-1]})" if text else ""
+        return ""
+
+    @property
+    def alive(self) -> bool:
+        """Running and answering (not ended, not known to be stuck)."""
+        return not self.dead and self.process.poll() is None
+
+    def request(self, op: str, timeout: float | None = None, **fields: Any) -> dict:
+        """Send one request and wait for its reply (at most ``timeout``, default
+        :data:`REQUEST_TIMEOUT`); :class:`ZygoteError` if there is none."""
+        timeout = REQUEST_TIMEOUT if timeout is None else timeout
+        with self._lock:
+            self._seq += 1
+            seq = self._seq
+            try:
+                self.process.stdin.write((json.dumps({"seq": seq, "op": op, **fields}) + "\n")
+                                         .encode())
+                self.process.stdin.flush()
+            except (OSError, ValueError) as err:
+                raise ZygoteError(f"the kernel zygote is gone ({err})") from None
+        with self._changed:
+            self._changed.wait_for(lambda: seq in self._replies or self.dead, timeout)
+            reply = self._replies.pop(seq, None)
+        if reply is None:
+            if not self.dead:
+                self.close(timeout=0.5)  # stopped or stuck: replace it, and its kernels
+            raise ZygoteError(f"the kernel zygote did not answer {op!r}")
+        if "error" in reply:
+            raise ZygoteError(f"the kernel zygote could not {op}: {reply['error']}")
+        return reply
+
+    def exit_status(self, pid: int) -> int | None:
+        """Kernel ``pid``'s exit status once reaped (negative: a signal); SIGKILL when the
+        zygote died before reporting it (its kernels die with it)."""
+        with self._changed:
+            if pid in self._exits:
+                return self._exits[pid]
+            return -signal.SIGKILL if self.dead else None
+
+    def forget(self, pid: int) -> None:
+        """Drop ``pid``'s exit status (it is no longer asked about)."""
+        with self._changed:
+            self._exits.pop(pid, None)
+
+    def close(self, timeout: float = 5.0) -> None:
+        """End the zygote: end of input makes it kill its kernels and leftovers and exit."""
+        with contextlib.suppress(OSError, ValueError):
+            self.process.stdin.close()
+        try:
+            self.process.wait(timeout)
+        except subprocess.TimeoutExpired:
+            self.process.kill()  # its kernels follow (PR_SET_PDEATHSIG)
+            self.process.wait()
+        with self._changed:
+            self.dead = True
+            self._changed.notify_all()
+        with contextlib.suppress(OSError, ValueError):
+            self.process.stdout.close()
+
+
+@dataclass
+class _Forked:
+    """A kernel forked by a slot's zygote, with its folders and connection info."""
+
+    zygote: Zygote
+    pid: int
+    workdir: Path
+    control: Path
+    connection: dict
+    limits: Limits
+
+
+class Slot:
+    """One worker slot: a zygote, and at most one prewarmed kernel waiting for a submission."""
+
+    def __init__(self, folder: Path, preload: Sequence[str] | None = None) -> None:
+        self.folder = Path(folder)
+        self.folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+        self.preload = preload
+        self.zygote: Zygote | None = None
+        self.waiting: _Forked | None = None
+        self.forks = 0
+        self.starts = 0
+        self.start_zygote()
+
+    def start_zygote(self) -> None:
+        if self.zygote is not None:
+            self.zygote.close()
+        self.starts += 1
+        self.zygote = Zygote(self.folder / f"z{self.starts}", self.preload)
+
+    def fork(self, limits: Limits) -> _Forked:
+        """Fork a new kernel (restarting a dead zygote first); :class:`ZygoteError`."""
+        from jupyter_client.connect import write_connection_file
+
+        if not self.zygote.alive:
+            self.start_zygote()
+        self.zygote.wait_ready()
+        self.folder.mkdir(mode=0o700, parents=True, exist_ok=True)  # a closed zygote's rmdir
+        # short names: an IPC socket's path must fit in 107 bytes (sun_path)
+        workdir = Path(tempfile.mkdtemp(prefix="w", dir=self.folder))
+        control = Path(tempfile.mkdtemp(prefix="c", dir=self.folder))
+        try:
+            _, info = write_connection_file(
+                str(control / "kernel.json"), ip=str(control / "k"), transport="ipc",
+                key=secrets.token_hex(32).encode(), kernel_name="eulertop-grader")
+            reply = self.zygote.request(
+                "fork", workdir=str(workdir), control=str(control),
+                connection_file=str(control / "kernel.json"),
+                env=kernel_environment(workdir, control), limits=child_limits(limits))
+        except BaseException:
+            shutil.rmtree(workdir, ignore_errors=True)
+            shutil.rmtree(control, ignore_errors=True)
+            raise
+        self.forks += 1
+        return _Forked(self.zygote, int(reply["pid"]), workdir, control, dict(info), limits)
+
+    def take(self, limits: Limits) -> _Forked:
+        """The prewarmed kernel if it is still usable, else a new one."""
+        forked, self.waiting = self.waiting, None
+        if forked is not None:
+            usable = (forked.zygote is self.zygote and self.zygote.alive
+                      and forked.limits == limits and forked.zygote.exit_status(forked.pid) is None
+                      and not any(forked.workdir.iterdir()))  # nothing planted in it
+            if usable:
+                return forked
+            release(forked)
+        return self.fork(limits)
+
+    def prewarm(self, limits: Limits) -> None:
+        """Fork the slot's next kernel now (it initialises while the current one runs)."""
+        if self.waiting is None:
+            with contextlib.suppress(ZygoteError, OSError):
+                self.waiting = self.fork(limits)
+
+    def close(self) -> None:
+        if self.waiting is not None:
+            release(self.waiting)
+            self.waiting = None
+        if self.zygote is not None:
+            self.zygote.close()
+
+
+def release(forked: _Forked) -> int:
+    """Kill a forked kernel (its group and leftovers), remove its folders; its exit status
+    (negative: the signal that ended it). Never raises."""
+    zygote = forked.zygote
+    with contextlib.suppress(ZygoteError):
+        if zygote.alive and zygote.exit_status(forked.pid) is None:
+            zygote.request("kill", pid=forked.pid)  # the exit event comes before the reply
+    status = zygote.exit_status(forked.pid)
+    zygote.forget(forked.pid)
+    shutil.rmtree(forked.workdir, ignore_errors=True)
+    shutil.rmtree(forked.control, ignore_errors=True)
+    return -signal.SIGKILL if status is None else status
+
+
+class KernelPool:
+    """Warm kernels for ``slots`` submissions at a time: the ``kernel_factory`` of
+    :func:`grader.execute.execute_submission` (module docstring).
+
+    Parameters
+    ----------
+    slots : int
+        Kernels running at once (``--jobs``); one zygote each, started now, in parallel.
+    prewarm : bool
+        Fork each slot's next kernel while the current one runs.
+    cold : bool
+        Hand out cold :class:`~grader.execute.LocalKernel` s only (also chosen automatically
+        where :func:`fork_available` is false, or after a zygote failed to start).
+    preload : sequence of str, optional
+        Modules each zygote imports (default :data:`grader.zygote.PRELOAD`: ipykernel,
+        IPython, numpy, scipy, sympy).
+
+    Use as a context manager (or call :meth:`close`): ending it kills every zygote, kernel and
+    leftover process, and removes the pool's folder.
+    """
+
+    def __init__(self, slots: int, *, prewarm: bool = True, cold: bool = False,
+                 preload: Sequence[str] | None = None) -> None:
+        self.prewarm = prewarm
+        self.cold = cold or not fork_available()
+        self.problem: str | None = None if not self.cold or cold else "fork is not available"
+        self.folder: Path | None = None
+        self.slots: list[Slot] = []
+        self._free: queue.Queue[Slot] = queue.Queue()
+        if not self.cold:
+            self.folder = Path(tempfile.mkdtemp(prefix="eulertop-"))
+            for i in range(max(1, slots)):
+                slot = Slot(self.folder / str(i), preload)
+                self.slots.append(slot)
+                self._free.put(slot)
+
+    def kernel(self, workdir: Path, control: Path, limits: Limits) -> LocalKernel:
+        """The kernel factory: ``(workdir, control, limits) -> KernelProcess``."""
+        if self.cold:
+            return LocalKernel(workdir, control, limits)
+        return PooledKernel(self, workdir, control, limits)
+
+    @property
+    def forks(self) -> int:
+        """Kernels forked so far, prewarmed ones included."""
+        return sum(s.forks for s in self.slots)
+
+    def acquire(self) -> Slot:
+        return self._free.get()
+
+    def give_back(self, slot: Slot) -> None:
+        self._free.put(slot)
+
+    def fail(self, err: Exception) -> None:
+        """A zygote could not be started: cold kernels from now on, and say why once."""
+        if not self.cold:
+            self.cold, self.problem = True, str(err)
+            sys.stderr.write(f"eulertop grade: {err}; kernels start cold from now on "
+                             "(slower, equally isolated)\n")
+
+    def close(self) -> None:
+        """Kill every zygote, kernel and leftover; remove the pool's folder."""
+        for slot in self.slots:
+            slot.close()
+        if self.folder is not None:
+            shutil.rmtree(self.folder, ignore_errors=True)
+
+    def __enter__(self) -> KernelPool:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _pool_client_class() -> type:
+    from jupyter_client.asynchronous import AsyncKernelClient
+
+    class PoolClient(AsyncKernelClient):
+        """A client whose liveness is the forked process's, as the zygote reports it."""
+
+        alive_check: Any = None
+
+        async def _async_is_alive(self) -> bool:
+            return self.alive_check is None or self.alive_check()
+
+        is_alive = _async_is_alive
+
+    return PoolClient
+
+
+class PooledKernel(LocalKernel):
+    """A forked kernel from a :class:`KernelPool` slot (:class:`grader.execute.KernelProcess`).
+
+    ``workdir`` and ``control`` are :func:`~grader.execute.execute_submission`'s folders: the
+    submission copied into ``workdir`` is moved into the forked kernel's own working folder
+    (made in the slot's folder, empty until then) when the kernel is handed out. If the slot's
+    zygote cannot be started, this kernel (and every later one) is a cold
+    :class:`~grader.execute.LocalKernel` instead.
+    """
+
+    def __init__(self, pool: KernelPool, workdir: Path, control: Path, limits: Limits) -> None:
+        super().__init__(workdir, control, limits)
+        self.pool = pool
+        self.slot: Slot | None = None
+        self.forked: _Forked | None = None
+        self.cold = False
+        self._status: int | None = None
+        self._released = False
+
+    async def start(self) -> Any:
+        self.slot = await asyncio.to_thread(self.pool.acquire)
+        try:
+            self.forked = await asyncio.to_thread(self.slot.take, self.limits)
+        except ZygoteError as err:
+            self._give_back()
+            self.pool.fail(err)
+            self.cold = True
+            return await super().start()
+        for entry in self.workdir.iterdir():  # the submission, into the kernel's own folder
+            os.replace(entry, self.forked.workdir / entry.name)
+        forked = self.forked
+
+        def make_client(context: Any) -> Any:
+            kc = _pool_client_class()(context=context)
+            kc.load_connection_info(forked.connection)
+            kc.alive_check = lambda: self.exit_status() is None
+            return kc
+
+        kc = await self._connect(make_client)
+        if self.pool.prewarm:
+            await asyncio.to_thread(self.slot.prewarm, self.limits)
+        return kc
+
+    async def interrupt(self) -> None:
+        if self.cold:
+            return await super().interrupt()
+        with contextlib.suppress(ZygoteError):
+            if self.forked is not None:
+                await asyncio.to_thread(self.forked.zygote.request, "signal",
+                                        pid=self.forked.pid, signal=int(signal.SIGINT))
+
+    def exit_status(self) -> int | None:
+        if self.cold:
+            return super().exit_status()
+        if self._released:
+            return self._status
+        return None if self.forked is None else self.forked.zygote.exit_status(self.forked.pid)
+
+    async def stop(self) -> None:
+        if self.cold:
+            return await super().stop()
+        self._disconnect()
+        await asyncio.to_thread(self.kill_group)
+        with contextlib.suppress(Exception):
+            if self._context is not None:
+                self._context.destroy(linger=0)
+
+    def kill_group(self) -> None:
+        """Kill the kernel's group and leftovers, remove its folders, free the slot (once)."""
+        if self.cold:
+            return super().kill_group()
+        if self.forked is not None and not self._released:
+            self._released = True
+            self._status = release(self.forked)
+        self._give_back()
+
+    def reap(self) -> None:
+        if self.cold:
+            super().reap()
+
+    def _give_back(self) -> None:
+        if self.slot is not None:
+            slot, self.slot = self.slot, None
+            self.pool.give_back(slot)

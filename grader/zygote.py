@@ -1,0 +1,368 @@
+"""The warm fork server ("zygote") of :mod:`grader.kernel_pool`: one per worker slot.
+
+Run by the grader as ``python grader/zygote.py`` (a script: this module imports nothing of the
+grader, so nothing of the grader's state is in its memory), with the scrubbed kernel
+environment of :func:`grader.execute.kernel_environment`, never the grader's own. It
+
+1. makes itself non-dumpable (``PR_SET_DUMPABLE 0``: no ptrace, no ``/proc/<pid>/mem`` for
+   processes without ``CAP_SYS_PTRACE``), a child subreaper (``PR_SET_CHILD_SUBREAPER``: a
+   process a kernel leaves behind is re-parented here, where it is found and killed), and
+   deaf to the catchable termination signals but SIGTERM;
+2. with one BLAS/OpenMP thread set *before* numpy is imported, imports what every kernel
+   needs — :data:`PRELOAD` (ipykernel's kernel app, IPython, numpy, scipy, sympy) and
+   :data:`KERNEL_MODULES` — and checks that it is still single-threaded and has no ZeroMQ
+   context (both are unsafe across ``fork``);
+3. writes ``{"ready": ...}`` and then serves requests, one JSON object per line on stdin,
+   answering on stdout; it reaps its children and reports each exit as an event.
+
+Requests (``seq`` is echoed in the reply)::
+
+    {"seq": 1, "op": "fork", "workdir": W, "control": C, "connection_file": F,
+     "env": {...}, "limits": {"as": bytes, "cpu": s, "nproc": n, "fsize": bytes}}
+        -> {"seq": 1, "pid": P}
+    {"seq": 2, "op": "signal", "pid": P, "signal": 2}      # to P's whole process group
+        -> {"seq": 2, "ok": true}
+    {"seq": 3, "op": "kill", "pid": P}                      # SIGKILL P's group + leftovers
+        -> {"seq": 3, "ok": true}
+    events: {"event": "exit", "pid": P, "status": S}        # S as Popen.returncode
+            {"event": "stray", "pid": Q}                    # a leftover process was killed
+
+End of stdin (the grader ended, however it ended) or SIGTERM (sent when the grader's thread
+that started it ends, ``PR_SET_PDEATHSIG``) kills every child and leftover, removes the
+kernels' folders (only those named in its fork requests), and exits. Pids are the zygote's own
+(inside a PID namespace they differ from the grader's), which is why the grader signals
+kernels through the zygote, never directly.
+
+A forked child (:func:`_become_kernel`) starts its own session, asks to be SIGKILLed when the
+zygote dies (``PR_SET_PDEATHSIG``), becomes non-dumpable, closes every inherited descriptor
+(the zygote's pipes to the grader included), applies the resource limits, replaces its
+environment, chdirs into its private working folder, sends stdin/stdout to ``/dev/null`` and
+stderr to ``control/kernel-stderr.txt``, reseeds what fork would otherwise share (numpy's
+global random state), and runs ``IPKernelApp`` with the given connection file — exactly the
+kernel the cold launcher (:func:`grader.execute.kernel_command`) runs, minus the imports —
+removing the connection file once it is loaded.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import errno
+import json
+import os
+import resource
+import select
+import signal
+import sys
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS"):
+    os.environ[_var] = "1"  # before numpy is imported: a single-threaded zygote forks safely
+
+PRELOAD = ("ipykernel.kernelapp", "IPython", "numpy", "scipy", "scipy.linalg", "scipy.special",
+           "scipy.integrate", "scipy.optimize", "sympy")
+"""Modules imported once in the zygote; every kernel forked from it has them already."""
+
+KERNEL_MODULES = ("ipykernel.ipkernel", "ipykernel.zmqshell", "ipykernel.debugger",
+                  "IPython.core.interactiveshell", "IPython.core.completerlib",
+                  "pygments.styles.default", "tornado.gen", "tornado.locks", "tornado.queues",
+                  "tornado.platform.asyncio", "faulthandler")
+"""What a kernel imports while it starts and runs its first cells (measured with ipykernel 7:
+the debugger alone, debugpy, is a third of a start); imported too, when present."""
+
+PR_SET_PDEATHSIG, PR_SET_DUMPABLE, PR_SET_CHILD_SUBREAPER = 1, 4, 36
+IGNORED = (signal.SIGINT, signal.SIGHUP, signal.SIGQUIT, signal.SIGUSR1, signal.SIGUSR2)
+_libc = ctypes.CDLL(None, use_errno=True)
+
+
+def prctl(option: int, value: int) -> None:
+    """``prctl(2)`` with one argument; OSError on failure."""
+    if _libc.prctl(option, ctypes.c_ulong(value), 0, 0, 0) != 0:
+        err = ctypes.get_errno()
+        raise OSError(err, os.strerror(err))
+
+
+def _send(message: dict) -> None:
+    data = (json.dumps(message) + "\n").encode()
+    while data:
+        data = data[os.write(1, data):]
+
+
+def _children_of(pid: int) -> list[int]:
+    """Live processes whose parent is ``pid`` (leftovers re-parented to this subreaper)."""
+    found = []
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat", "rb") as f:
+                fields = f.read().rsplit(b")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid and fields[0] != b"Z":
+            found.append(int(entry))
+    return found
+
+
+class Zygote:
+    """The server loop: fork kernels on request, signal them, reap them, kill leftovers."""
+
+    def __init__(self) -> None:
+        self.kernels: set[int] = set()  # forked kernels not yet reaped
+        self.folders: list[str] = []  # the kernels' folders (from the requests), removed at end
+        self.pid = os.getpid()
+        self.buffer = b""
+        self.ending = False
+        self.wake_r, wake_w = os.pipe()
+        os.set_blocking(self.wake_r, False)
+        os.set_blocking(wake_w, False)
+        signal.set_wakeup_fd(wake_w)
+        signal.signal(signal.SIGCHLD, lambda *_: None)  # the wakeup fd does the work
+        signal.signal(signal.SIGTERM, self._end)
+
+    def _end(self, *_: object) -> None:
+        self.ending = True
+
+    # -- requests
+
+    def serve(self) -> None:
+        while not self.ending:
+            ready, _, _ = select.select([0, self.wake_r], [], [])
+            if self.wake_r in ready:
+                with contextlib.suppress(BlockingIOError):
+                    os.read(self.wake_r, 4096)
+                self.reap()
+            if 0 in ready and not self.ending:
+                chunk = os.read(0, 65536)
+                if not chunk:
+                    return  # the grader is gone
+                self.buffer += chunk
+                while b"\n" in self.buffer:
+                    line, self.buffer = self.buffer.split(b"\n", 1)
+                    self.handle(json.loads(line))
+
+    def handle(self, request: dict) -> None:
+        op, reply = request.get("op"), {"seq": request.get("seq")}
+        try:
+            if op == "fork":
+                reply["pid"] = self.fork(request)
+            elif op == "signal":
+                self.signal_group(int(request["pid"]), int(request["signal"]))
+                reply["ok"] = True
+            elif op == "kill":
+                self.kill(int(request["pid"]))
+                reply["ok"] = True
+            else:
+                reply["error"] = f"unknown op {op!r}"
+        except Exception as err:  # report, keep serving
+            reply["error"] = f"{type(err).__name__}: {err}"
+        _send(reply)
+
+    def fork(self, request: dict) -> int:
+        pid = os.fork()
+        if pid == 0:
+            code = 1
+            try:
+                _become_kernel(request, self.pid)
+                code = 0
+            except BaseException:
+                with contextlib.suppress(BaseException):
+                    import traceback
+
+                    traceback.print_exc()  # into control/kernel-stderr.txt
+            finally:
+                os._exit(code)  # never return into the server loop
+        self.kernels.add(pid)
+        self.folders += [request["workdir"], request["control"]]
+        return pid
+
+    def signal_group(self, pid: int, signum: int) -> None:
+        if pid not in self.kernels:
+            return  # already reaped: its pid may be reused, do not signal it
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(pid, signum)  # its own session: pgid == pid
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.kill(pid, signum)  # in case it left its group
+
+    # -- children
+
+    def kill(self, pid: int) -> None:
+        """SIGKILL kernel ``pid``'s group, wait for it, then kill what it left behind."""
+        if pid in self.kernels:
+            self.signal_group(pid, signal.SIGKILL)
+            _, status = os.waitpid(pid, 0)  # prompt: SIGKILL cannot be caught
+            self._exited(pid, status)
+        self.kill_strays()
+
+    def _exited(self, pid: int, status: int) -> None:
+        self.kernels.discard(pid)
+        _send({"event": "exit", "pid": pid, "status": os.waitstatus_to_exitcode(status)})
+
+    def reap(self) -> None:
+        """Collect every ended child; after a kernel ends, kill its leftovers."""
+        ended = False
+        while True:
+            try:
+                pid, status = os.waitpid(-1, os.WNOHANG)
+            except ChildProcessError:
+                break
+            if pid == 0:
+                break
+            if pid in self.kernels:
+                self._exited(pid, status)
+                ended = True
+        if ended:
+            self.kill_strays()
+
+    def kill_strays(self) -> None:
+        """SIGKILL every child that is not a live kernel: what a kernel left behind."""
+        for _ in range(100):  # a fork bomb re-parents in waves; RLIMIT_NPROC bounds them
+            strays = [p for p in _children_of(self.pid) if p not in self.kernels]
+            if not strays:
+                return
+            for pid in strays:
+                with contextlib.suppress(ProcessLookupError):
+                    os.kill(pid, signal.SIGKILL)
+                _send({"event": "stray", "pid": pid})
+            for pid in strays:
+                with contextlib.suppress(ChildProcessError):
+                    os.waitpid(pid, 0)
+
+    def shutdown(self) -> None:
+        for pid in list(self.kernels):
+            self.signal_group(pid, signal.SIGKILL)
+        for pid in list(self.kernels):
+            with contextlib.suppress(ChildProcessError):
+                os.waitpid(pid, 0)
+        self.kernels.clear()
+        self.kill_strays()
+        self.remove_folders()
+
+    def remove_folders(self) -> None:
+        """Remove the kernels' folders named in the fork requests; then *only if empty* (plain
+        ``rmdir``, never a recursive removal) the zygote's own folder and the two above it (the
+        slot's and the pool's): a grader that was killed leaves nothing behind."""
+        import shutil
+
+        for folder in self.folders:
+            shutil.rmtree(folder, ignore_errors=True)
+        if "--remove-own-folder" not in sys.argv:
+            return
+        here = os.getcwd()
+        with contextlib.suppress(OSError):
+            os.unlink(os.path.join(here, "zygote-stderr.txt"))
+        for folder in (here, os.path.dirname(here), os.path.dirname(os.path.dirname(here))):
+            with contextlib.suppress(OSError):
+                os.rmdir(folder)  # fails unless empty: never removes anything else
+
+
+def _tasks_of_user(uid: int) -> int:
+    """Threads the real user ``uid`` has now (what ``RLIMIT_NPROC`` counts)."""
+    total = 0
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/status") as f:
+                status = dict(line.split(":", 1) for line in f if ":" in line)
+        except (OSError, ValueError):
+            continue
+        if int(status.get("Uid", "-1").split()[0]) == uid:
+            total += int(status.get("Threads", "1"))
+    return total
+
+
+def _set_limit(which: int, value: int) -> None:
+    hard = resource.getrlimit(which)[1]
+    if hard != resource.RLIM_INFINITY:
+        value = min(value, hard)
+    resource.setrlimit(which, (value, value))
+
+
+def _become_kernel(request: dict, zygote_pid: int) -> None:
+    """In the forked child: confine this process, then run the kernel (returns when it ends)."""
+    os.setsid()
+    prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+    if os.getppid() != zygote_pid:  # the zygote died before the line above
+        os._exit(1)
+    prctl(PR_SET_DUMPABLE, 0)
+    signal.set_wakeup_fd(-1)
+    for signum in (signal.SIGCHLD, signal.SIGTERM, *IGNORED):
+        signal.signal(signum, signal.SIG_DFL)
+    os.umask(0o077)
+    # stdio: nothing inherited stays open (fds 0 and 1 were the zygote's pipes to the grader)
+    null = os.open(os.devnull, os.O_RDWR)
+    log = os.open(os.path.join(request["control"], "kernel-stderr.txt"),
+                  os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    os.dup2(null, 0)
+    os.dup2(null, 1)
+    os.dup2(log, 2)
+    os.closerange(3, resource.getrlimit(resource.RLIMIT_NOFILE)[0])
+    limits = request["limits"]
+    _set_limit(resource.RLIMIT_CORE, 0)
+    _set_limit(resource.RLIMIT_AS, int(limits["as"]))
+    _set_limit(resource.RLIMIT_CPU, int(limits["cpu"]))
+    _set_limit(resource.RLIMIT_FSIZE, int(limits["fsize"]))
+    # RLIMIT_NPROC counts every thread of the real user: allow what exists plus a margin
+    _set_limit(resource.RLIMIT_NPROC, _tasks_of_user(os.getuid()) + int(limits["nproc"]))
+    os.environ.clear()
+    os.environ.update(request["env"])
+    os.chdir(request["workdir"])
+    import tempfile
+
+    tempfile.tempdir = None  # gettempdir() is cached; TMPDIR changed
+    if "numpy" in sys.modules:  # fork copied numpy's global random state: draw a fresh one
+        sys.modules["numpy"].random.seed()
+    argv = ["-f", request["connection_file"], "--HistoryManager.hist_file=:memory:"]
+    sys.argv = ["ipykernel_launcher", *argv]
+    from ipykernel.kernelapp import IPKernelApp
+
+    app = IPKernelApp.instance()
+    app.initialize(argv)
+    # loaded: remove it, so that the key to this kernel's sockets is on disk as briefly as
+    # possible (a prewarmed kernel waits beside a running one; the grader keeps its own copy)
+    with contextlib.suppress(OSError):
+        os.unlink(request["connection_file"])
+    app.start()
+
+
+def main() -> None:
+    """Entry point: make the server ready (imports), then serve until the grader leaves."""
+    if sys.path and os.path.abspath(sys.path[0]) == os.path.dirname(os.path.abspath(__file__)):
+        del sys.path[0]  # run as a script: the grader's folder is not for kernels to import
+    prctl(PR_SET_DUMPABLE, 0)
+    prctl(PR_SET_CHILD_SUBREAPER, 1)
+    for signum in IGNORED:
+        signal.signal(signum, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # until the server handles it
+    if "--die-with-parent" in sys.argv:  # when the grader's starting thread outlives us
+        prctl(PR_SET_PDEATHSIG, signal.SIGTERM)  # SIGTERM: cleaned up like end of input
+    import importlib
+
+    preload = PRELOAD
+    for arg in sys.argv[1:]:
+        if arg.startswith("--preload="):
+            preload = ("ipykernel.kernelapp", *filter(None, arg.split("=", 1)[1].split(",")))
+    for name in preload:
+        importlib.import_module(name)
+    for name in KERNEL_MODULES:
+        with contextlib.suppress(ImportError):
+            importlib.import_module(name)
+    threads = len(os.listdir("/proc/self/task"))
+    zmq = sys.modules.get("zmq")
+    if threads != 1 or (zmq is not None and zmq.Context._instance is not None):
+        _send({"ready": False, "error": f"not fork-safe after imports ({threads} threads)"})
+        return
+    zygote = Zygote()
+    _send({"ready": True, "pid": zygote.pid, "preloaded": list(preload)})
+    try:
+        zygote.serve()
+    finally:
+        zygote.shutdown()
+
+
+if __name__ == "__main__":
+    try:
+        main()
+    except OSError as err:
+        if err.errno != errno.EPIPE:
+            raise
