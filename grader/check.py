@@ -12,6 +12,11 @@ here.
 Advisory only: the metadata is in the student's hands and may have been edited; the grader
 never reads it (it takes the answer list from the instructor's key).
 
+Sandbox: the notebook runs in the grader's sandbox (:mod:`grader.sandbox`) where one can be
+had, and otherwise without one, with a note saying so: a student checking their own notebook
+on their own machine runs their own code, with nothing of the key there to protect (``eulertop
+grade``, in contrast, refuses to run without a sandbox unless told ``--no-sandbox``).
+
 Exit status: 0 when every answer is present and well formed; 1 otherwise (or when the notebook
 could not be run to the end); 2 on usage errors — no such file, not a notebook, no eulertop
 metadata — with one line saying what to do, never a traceback.
@@ -162,6 +167,9 @@ def format_report(report: CheckReport, path: Path) -> str:
         lines += [f"  - {error}" for error in execution.cell_errors]
     if execution.output_truncated:
         lines.append("(Much output: only the beginning was kept. Output is never graded.)")
+    if not getattr(execution, "sandboxed", True):
+        lines.append("(Ran without the grader's sandbox — bubblewrap is not available here; "
+                     "the grader runs it in one.)")
     width = max(len(a.variable) for a in report.answers)
     for a in report.answers:
         word = _WORDS[a.verdict.status]

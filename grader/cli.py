@@ -68,6 +68,10 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> None:
                         help="regrade every submission, even those unchanged since last run")
     parser.add_argument("--reveal", action="store_true",
                         help="show each student their own key values in their feedback page")
+    parser.add_argument("--no-sandbox", action="store_true",
+                        help="run student code WITHOUT the bubblewrap sandbox (where none can "
+                             "be had); it can then read the key and your files. Every run "
+                             "warns, and the records and grades.csv say so")
     parser.add_argument("--cold-kernels", action="store_true",
                         help="start every kernel from scratch instead of forking it from a "
                              "pre-imported one (slower; the same isolation)")
@@ -92,6 +96,7 @@ def run_grade(args: argparse.Namespace, execute=None) -> int:
             args.hw, args.submissions, args.out, limits=_limits(args.timeout), jobs=args.jobs,
             force=args.force, reveal=args.reveal, execute=execute,
             on_plan=lambda n: Progress(n), cold_kernels=getattr(args, "cold_kernels", False),
+            sandbox=not getattr(args, "no_sandbox", False),
         )
     except UsageError as e:
         print(f"eulertop grade: {e}", file=sys.stderr)

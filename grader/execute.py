@@ -6,10 +6,11 @@ limits) -> Execution``.
 What one run does
     1. :func:`grader.notebook_load.read_notebook` reads and sanitizes the file (a notebook that
        cannot be read gives status ``"invalid_notebook"`` without starting anything).
-    2. Two private folders are made with :func:`tempfile.mkdtemp`: the kernel's working
-       folder, holding only a copy of the submission, and a control folder (connection file,
-       IPC sockets, IPython's profile, the kernel's stderr) that is not its working folder.
-    3. A kernel is started by the *kernel factory* — by default :class:`LocalKernel`: always
+    2. Two private folders are made in the run folder (:func:`grader.sandbox.run_folder`):
+       the kernel's working folder, holding only a copy of the submission, and a control
+       folder (connection file, IPC sockets, IPython's profile, the kernel's stderr) that is
+       not its working folder.
+    3. A kernel is started by the *kernel factory* — e.g. :class:`LocalKernel`: always
        the grader's own interpreter running ipykernel (whatever the notebook's kernelspec or
        language says), in its own session and process group, with a scrubbed environment, an
        address-space limit, one BLAS/OpenMP thread, and stdin/stdout closed.
@@ -43,12 +44,13 @@ Statuses (``Execution.status``)
 
 Swapping the kernel (issue 5's sandbox, warm kernels)
     The kernel's launch, interrupt and kill live in one class, :class:`LocalKernel`;
-    :func:`execute_submission` takes ``kernel_factory`` (default :class:`LocalKernel`), any
-    callable ``(workdir, control, limits) -> KernelProcess``. A sandbox wraps
-    :func:`kernel_command` in ``bwrap`` (the IPC sockets already live in the control folder, to
-    be bound into the sandbox); the warm pool (:mod:`grader.kernel_pool`, the grader's default)
+    :func:`execute_submission` takes ``kernel_factory``, any callable ``(workdir, control,
+    limits) -> KernelProcess``. The warm pool (:mod:`grader.kernel_pool`, the grader's default)
     hands out kernels forked from a pre-imported zygote, with launch, interrupt and kill going
-    through it (:class:`LocalKernel` subclass, sharing :meth:`LocalKernel._connect`).
+    through it (:class:`LocalKernel` subclass, sharing :meth:`LocalKernel._connect`). Without a
+    factory, a submission runs in a one-slot sandboxed pool of its own (:mod:`grader.sandbox`)
+    where a sandbox can be had (``sandbox=None``), and in an unsandboxed :class:`LocalKernel`
+    otherwise or with ``sandbox=False``. ``Execution.sandboxed`` says which it was.
 """
 
 from __future__ import annotations
@@ -64,7 +66,6 @@ import signal
 import site
 import subprocess
 import sys
-import tempfile
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -144,6 +145,8 @@ class Execution:
         Wall time of the run, seconds.
     output_truncated : bool
         Some output was dropped (over ``Limits.output_bytes``, or one message too large).
+    sandboxed : bool
+        The kernel ran inside the sandbox of :mod:`grader.sandbox` (issue 5).
     """
 
     status: str
@@ -152,6 +155,7 @@ class Execution:
     cell_errors: tuple[str, ...]
     duration: float
     output_truncated: bool
+    sandboxed: bool = False
 
 
 class KernelProcess(Protocol):
@@ -416,6 +420,7 @@ def execute_submission(
     limits: Limits,
     *,
     kernel_factory: KernelFactory | None = None,
+    sandbox: bool | None = None,
 ) -> Execution:
     """Run the submission at ``path`` in a fresh kernel and read ``variables`` from it.
 
@@ -428,7 +433,12 @@ def execute_submission(
     limits : Limits
         Time, memory and output limits.
     kernel_factory : callable, optional
-        ``(workdir, control, limits) -> KernelProcess``; default :class:`LocalKernel`.
+        ``(workdir, control, limits) -> KernelProcess``. Default: a kernel of its own in the
+        sandbox (:mod:`grader.sandbox`; a one-slot :class:`grader.kernel_pool.KernelPool`,
+        nothing preloaded, closed at the end), or a :class:`LocalKernel` as ``sandbox`` says.
+    sandbox : bool or None
+        With the default factory only. None: sandboxed where a sandbox can be had, else not;
+        True: sandboxed, or :class:`grader.sandbox.SandboxUnavailable`; False: never.
 
     Returns
     -------
@@ -442,20 +452,41 @@ def execute_submission(
         return Execution("invalid_notebook", f"not a valid notebook: {err}", {}, (),
                          time.monotonic() - start, False)
     run = _Run(loaded.cells, limits)
-    workdir = Path(tempfile.mkdtemp(prefix="eulertop-run-"))
-    control = Path(tempfile.mkdtemp(prefix="eulertop-ctl-"))
     kernel = None
-    try:
-        shutil.copyfile(path, workdir / Path(path).name)
-        kernel = (kernel_factory or LocalKernel)(workdir, control, limits)
-        status = asyncio.run(_supervise(run, kernel, tuple(variables)))
-    finally:
-        if isinstance(kernel, LocalKernel):  # last resort, if the event loop was torn down
-            kernel.kill_group()
-            kernel.reap()
-        shutil.rmtree(workdir, ignore_errors=True)
-        shutil.rmtree(control, ignore_errors=True)
+    from grader.sandbox import fresh_folder, run_folder
+
+    with run_folder() as folder, contextlib.ExitStack() as own:
+        workdir = fresh_folder(folder, "w")
+        control = fresh_folder(folder, "c")
+        try:
+            shutil.copyfile(path, workdir / Path(path).name)
+            if kernel_factory is None:
+                kernel_factory = _default_factory(sandbox, own)
+            kernel = kernel_factory(workdir, control, limits)
+            status = asyncio.run(_supervise(run, kernel, tuple(variables)))
+        finally:
+            if isinstance(kernel, LocalKernel):  # last resort, if the event loop was torn down
+                kernel.kill_group()
+                kernel.reap()
+            shutil.rmtree(workdir, ignore_errors=True)
+            shutil.rmtree(control, ignore_errors=True)
     return _execution(run, status, loaded.notes, kernel, time.monotonic() - start)
+
+
+def _default_factory(sandbox: bool | None, stack: contextlib.ExitStack) -> KernelFactory:
+    """The kernel factory when none is given (:func:`execute_submission`): a one-slot
+    sandboxed pool, closed with ``stack``, or :class:`LocalKernel`."""
+    if sandbox is False:
+        return LocalKernel
+    from grader import sandbox as sandboxes
+
+    found = sandboxes.probe() if sandbox else sandboxes.available()
+    if found is None:
+        return LocalKernel
+    from grader.kernel_pool import KernelPool
+
+    pool = stack.enter_context(KernelPool(1, prewarm=False, preload=(), sandbox=found))
+    return pool.kernel
 
 
 async def _supervise(run: _Run, kernel: KernelProcess, variables: tuple[str, ...]) -> str:
@@ -649,7 +680,8 @@ def _execution(run: _Run, status: str, notes: Sequence[str], kernel: Any,
                       f"({run.limits.total_timeout:g} s) ran out")
     answers = run.answers if status == "ok" else {}
     message = "; ".join([*notes, _summary(run, status, kernel, errors)])
-    return Execution(status, message, answers, tuple(errors), duration, truncated)
+    return Execution(status, message, answers, tuple(errors), duration, truncated,
+                     bool(getattr(kernel, "sandboxed", False)))
 
 
 def _summary(run: _Run, status: str, kernel: Any, errors: Sequence[str]) -> str:

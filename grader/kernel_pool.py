@@ -56,14 +56,15 @@ Nothing secret in a zygote
     forked child shares, holds nothing of the grader's), and only ever receives paths and the
     limits of the kernel it is asked to fork. It never holds the key, results or submissions.
 
-Residual risks (for issue 5)
-    Without a sandbox, every kernel runs as the grader's user: it can signal (not ptrace: both
-    the zygote and kernels are non-dumpable) the zygote and the other slot's kernel, and read
-    any folder the user can — the cold path has the same exposure. A kernel running as root
-    can ptrace anything (``CAP_SYS_PTRACE``) and ignores ``RLIMIT_NPROC``. A leftover process
-    re-parented to the zygote is killed when its kernel ends; one that outlives a SIGKILLed
-    zygote (then re-parented to init) is not — ``bwrap --die-with-parent`` and a PID namespace
-    close that.
+Residual risks, and the sandbox (issue 5)
+    Without a sandbox (``KernelPool(sandbox=None)``, ``eulertop grade --no-sandbox``), every
+    kernel runs as the grader's user: it can signal (not ptrace: both the zygote and kernels
+    are non-dumpable) the zygote and the other slot's kernel, and read any folder the user can
+    — the cold path has the same exposure. With ``sandbox=`` (:mod:`grader.sandbox`, the
+    grader's default) each slot's zygote runs in ``bwrap`` (:meth:`Zygote.__init__`), kernels'
+    working folders are in the sandbox's tmpfs and the submission is handed over by the zygote
+    (``deliver``), and as root each kernel has a uid of its own (:meth:`Slot.fork`), which
+    closes the prewarm exposure above; not as root, prewarm is off under the sandbox.
 
 Fallback
     Where ``fork`` is unavailable (not Linux) or a zygote cannot be started, kernels are cold
@@ -73,6 +74,7 @@ Fallback
 from __future__ import annotations
 
 import asyncio
+import base64
 import contextlib
 import json
 import math
@@ -83,7 +85,6 @@ import shutil
 import signal
 import subprocess
 import sys
-import tempfile
 import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -92,6 +93,15 @@ from typing import Any
 
 from grader.execute import LocalKernel, kernel_environment
 from grader.limits import Limits
+from grader.sandbox import (
+    SCRATCH,
+    TOOLS,
+    Sandbox,
+    fresh_folder,
+    kernel_uid,
+    run_folder,
+    spawn,
+)
 
 __all__ = [
     "CPU_MARGIN",
@@ -118,7 +128,7 @@ REQUEST_TIMEOUT = 10.0
 CPU_MARGIN = 10
 """CPU seconds a kernel may use beyond the whole-notebook time limit (``RLIMIT_CPU``)."""
 
-FILE_BYTES = 256 * 1024**2
+FILE_BYTES = 64 * 1024**2
 """Largest file a kernel may write (``RLIMIT_FSIZE``), bytes."""
 
 PROCESSES = 64
@@ -147,15 +157,31 @@ def child_limits(limits: Limits) -> dict[str, int]:
 
 
 def zygote_command(die_with_parent: bool = False,
-                   preload: Sequence[str] | None = None) -> list[str]:
+                   preload: Sequence[str] | None = None, marker: str | None = None) -> list[str]:
     """The zygote's argv — the seam issue 5's sandbox wraps (module docstring).
 
     ``preload``: the modules to import before forking (default :data:`grader.zygote.PRELOAD`;
-    what ipykernel itself needs to start is always imported).
+    what ipykernel itself needs to start is always imported). ``marker``: a ``--run=`` argument
+    (the run folder's name) that the zygote ignores, so that the zygote and every kernel forked
+    from it (same command line) can be found from outside.
     """
     return [sys.executable, str(ZYGOTE_SCRIPT), "--remove-own-folder",
             *(["--die-with-parent"] if die_with_parent else []),
-            *([f"--preload={','.join(preload)}"] if preload is not None else [])]
+            *([f"--preload={','.join(preload)}"] if preload is not None else []),
+            *([f"--run={marker}"] if marker else [])]
+
+
+def _tasks_of_user(uid: int) -> int:
+    """Threads the user ``uid`` has on this machine (what ``RLIMIT_NPROC`` counts)."""
+    total = 0
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            with contextlib.suppress(OSError, ValueError):
+                status = Path(f"/proc/{entry}/status").read_text()
+                fields = dict(line.split(":", 1) for line in status.splitlines() if ":" in line)
+                if int(fields["Uid"].split()[0]) == uid:
+                    total += int(fields.get("Threads", "1"))
+    return total
 
 
 class Zygote:
@@ -168,17 +194,36 @@ class Zygote:
         log (``zygote-stderr.txt``).
     preload : sequence of str, optional
         Modules to import before forking (:func:`zygote_command`).
+    sandbox : grader.sandbox.Sandbox, optional
+        Start it inside this sandbox, with ``bind`` (the slot's folder) its one writable folder.
+    marker : str, optional
+        Put on the zygote's command line (:func:`zygote_command`) and in its environment
+        (``EULERTOP_RUN``), and so on every kernel's.
+
+    Started from :func:`grader.sandbox.spawn`'s long-lived thread, so that its parent-death
+    signal (and ``bwrap --die-with-parent``) fires when the grader ends, not when the thread
+    that happened to start it does.
     """
 
-    def __init__(self, folder: Path, preload: Sequence[str] | None = None) -> None:
+    def __init__(self, folder: Path, preload: Sequence[str] | None = None,
+                 sandbox: Sandbox | None = None, bind: Path | None = None,
+                 marker: str | None = None) -> None:
         self.folder = Path(folder)
         self.folder.mkdir(mode=0o700, parents=True, exist_ok=True)
         env = kernel_environment(self.folder, self.folder)
-        main = threading.current_thread() is threading.main_thread()
+        if marker:
+            env["EULERTOP_RUN"] = marker
+        argv = zygote_command(die_with_parent=True, preload=preload, marker=marker)
+        outer = env
+        if sandbox is not None:
+            inside = f"{TOOLS}/{ZYGOTE_SCRIPT.name}"
+            argv[1] = inside
+            argv = sandbox.command(argv, env, bind or self.folder, self.folder,
+                                   files={str(ZYGOTE_SCRIPT): inside})
+            outer = {"PATH": os.defpath, **({"EULERTOP_RUN": marker} if marker else {})}
         with open(self.folder / "zygote-stderr.txt", "wb") as log:
-            self.process = subprocess.Popen(
-                zygote_command(die_with_parent=main, preload=preload), stdin=subprocess.PIPE,
-                stdout=subprocess.PIPE, stderr=log, env=env, cwd=self.folder, close_fds=True)
+            self.process = spawn(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                 stderr=log, env=outer, cwd=self.folder, close_fds=True)
         self._lock = threading.Lock()  # one writer at a time
         self._changed = threading.Condition()
         self._replies: dict[int, dict] = {}
@@ -296,14 +341,25 @@ class _Forked:
     control: Path
     connection: dict
     limits: Limits
+    sandboxed: bool = False  # workdir is inside the sandbox: not a path of this machine
+    uid: int | None = None  # the kernel's own uid (sandboxed, as root)
 
 
 class Slot:
-    """One worker slot: a zygote, and at most one prewarmed kernel waiting for a submission."""
+    """One worker slot: a zygote, and at most one prewarmed kernel waiting for a submission.
 
-    def __init__(self, folder: Path, preload: Sequence[str] | None = None) -> None:
+    Sandboxed (``sandbox``), the zygote runs in a ``bwrap`` sandbox whose one writable folder
+    is the slot's folder (mode 0711 when kernels get uids of their own: each can reach its own
+    control folder, none can list the others).
+    """
+
+    def __init__(self, folder: Path, preload: Sequence[str] | None = None,
+                 sandbox: Sandbox | None = None, marker: str | None = None) -> None:
         self.folder = Path(folder)
+        self.sandbox, self.marker = sandbox, marker
+        self.mode = 0o711 if sandbox is not None and sandbox.per_kernel_uid else 0o700
         self.folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+        os.chmod(self.folder, self.mode)
         self.preload = preload
         self.zygote: Zygote | None = None
         self.waiting: _Forked | None = None
@@ -315,7 +371,8 @@ class Slot:
         if self.zygote is not None:
             self.zygote.close()
         self.starts += 1
-        self.zygote = Zygote(self.folder / f"z{self.starts}", self.preload)
+        self.zygote = Zygote(self.folder / f"z{self.starts}", self.preload, self.sandbox,
+                             self.folder, self.marker)
 
     def fork(self, limits: Limits) -> _Forked:
         """Fork a new kernel (restarting a dead zygote first); :class:`ZygoteError`."""
@@ -325,23 +382,48 @@ class Slot:
             self.start_zygote()
         self.zygote.wait_ready()
         self.folder.mkdir(mode=0o700, parents=True, exist_ok=True)  # a closed zygote's rmdir
+        os.chmod(self.folder, self.mode)
         # short names: an IPC socket's path must fit in 107 bytes (sun_path)
-        workdir = Path(tempfile.mkdtemp(prefix="w", dir=self.folder))
-        control = Path(tempfile.mkdtemp(prefix="c", dir=self.folder))
+        control = fresh_folder(self.folder, "c")
+        sandboxed = self.sandbox is not None
+        extra: dict[str, Any] = {}
+        uid = None
+        if sandboxed:  # its folders in the sandbox's tmpfs (not a path here), its own uid
+            scratch = f"{SCRATCH}/{control.name}"
+            workdir = Path(scratch) / "work"
+            env = kernel_environment(workdir, control)
+            env.update(IPYTHONDIR=f"{scratch}/ipython", MPLCONFIGDIR=f"{scratch}/matplotlib")
+            extra["scratch"] = scratch
+            if self.sandbox.per_kernel_uid:
+                waiting = self.waiting.uid if self.waiting is not None else None
+                uid = kernel_uid()
+                while uid == waiting:
+                    uid = kernel_uid()
+                extra.update(uid=uid, gid=uid)
+        else:
+            workdir = fresh_folder(self.folder, "w")
+            env = kernel_environment(workdir, control)
+        rlimits = child_limits(limits)
+        if sandboxed and uid is None:  # a user namespace: its /proc does not see them all
+            rlimits["nproc_base"] = _tasks_of_user(os.getuid())
         try:
             _, info = write_connection_file(
                 str(control / "kernel.json"), ip=str(control / "k"), transport="ipc",
                 key=secrets.token_hex(32).encode(), kernel_name="eulertop-grader")
+            if uid is not None:
+                os.chown(control, uid, uid)
+                os.chown(control / "kernel.json", uid, uid)
             reply = self.zygote.request(
                 "fork", workdir=str(workdir), control=str(control),
-                connection_file=str(control / "kernel.json"),
-                env=kernel_environment(workdir, control), limits=child_limits(limits))
+                connection_file=str(control / "kernel.json"), env=env, limits=rlimits, **extra)
         except BaseException:
-            shutil.rmtree(workdir, ignore_errors=True)
+            if not sandboxed:
+                shutil.rmtree(workdir, ignore_errors=True)
             shutil.rmtree(control, ignore_errors=True)
             raise
         self.forks += 1
-        return _Forked(self.zygote, int(reply["pid"]), workdir, control, dict(info), limits)
+        return _Forked(self.zygote, int(reply["pid"]), workdir, control, dict(info), limits,
+                       sandboxed, uid)
 
     def take(self, limits: Limits) -> _Forked:
         """The prewarmed kernel if it is still usable, else a new one."""
@@ -349,7 +431,8 @@ class Slot:
         if forked is not None:
             usable = (forked.zygote is self.zygote and self.zygote.alive
                       and forked.limits == limits and forked.zygote.exit_status(forked.pid) is None
-                      and not any(forked.workdir.iterdir()))  # nothing planted in it
+                      and (forked.sandboxed  # the zygote checks it (``deliver``)
+                           or not any(forked.workdir.iterdir())))  # nothing planted in it
             if usable:
                 return forked
             release(forked)
@@ -369,6 +452,18 @@ class Slot:
             self.zygote.close()
 
 
+def _lock_control(forked: _Forked) -> None:
+    """After a sandboxed kernel bound its sockets, and before any cell of the student runs:
+    its control folder (on this machine's disk) is no longer writable by it — given back to
+    the grader's user when the kernel has a uid of its own, else made read-only."""
+    with contextlib.suppress(OSError):
+        if forked.uid is not None:
+            os.chown(forked.control, os.geteuid(), os.getegid())
+            os.chmod(forked.control, 0o700)
+        else:
+            os.chmod(forked.control, 0o500)
+
+
 def release(forked: _Forked) -> int:
     """Kill a forked kernel (its group and leftovers), remove its folders; its exit status
     (negative: the signal that ended it). Never raises."""
@@ -378,7 +473,10 @@ def release(forked: _Forked) -> int:
             zygote.request("kill", pid=forked.pid)  # the exit event comes before the reply
     status = zygote.exit_status(forked.pid)
     zygote.forget(forked.pid)
-    shutil.rmtree(forked.workdir, ignore_errors=True)
+    if not forked.sandboxed:  # a sandboxed one's is inside the sandbox (the zygote removed it)
+        shutil.rmtree(forked.workdir, ignore_errors=True)
+    with contextlib.suppress(OSError):
+        os.chmod(forked.control, 0o700)  # read-only when locked without a uid of its own
     shutil.rmtree(forked.control, ignore_errors=True)
     return -signal.SIGKILL if status is None else status
 
@@ -399,25 +497,43 @@ class KernelPool:
     preload : sequence of str, optional
         Modules each zygote imports (default :data:`grader.zygote.PRELOAD`: ipykernel,
         IPython, numpy, scipy, sympy).
+    sandbox : grader.sandbox.Sandbox, optional
+        Run each slot's zygote, and so every kernel, in this sandbox (issue 5;
+        :mod:`grader.sandbox`). None: no sandbox (the caller decided so). Sandboxed, the pool
+        never falls back to unsandboxed cold kernels: a zygote that cannot start makes that
+        submission's run fail ("error"); and without kernels of their own uid (not root),
+        prewarm is turned off, so that a slot's kernels never coexist.
 
     Use as a context manager (or call :meth:`close`): ending it kills every zygote, kernel and
-    leftover process, and removes the pool's folder.
+    leftover process, and removes the pool's folder. The pool's folder is in the process's
+    run folder (:func:`grader.sandbox.run_folder`).
     """
 
     def __init__(self, slots: int, *, prewarm: bool = True, cold: bool = False,
-                 preload: Sequence[str] | None = None) -> None:
-        self.prewarm = prewarm
+                 preload: Sequence[str] | None = None, sandbox: Sandbox | None = None) -> None:
+        if sandbox is not None and (cold or not fork_available()):
+            raise ValueError("a sandboxed pool forks its kernels: not cold, and on Linux")
+        self.sandbox = sandbox
+        self.prewarm = prewarm and (sandbox is None or sandbox.per_kernel_uid)
         self.cold = cold or not fork_available()
         self.problem: str | None = None if not self.cold or cold else "fork is not available"
         self.folder: Path | None = None
         self.slots: list[Slot] = []
         self._free: queue.Queue[Slot] = queue.Queue()
+        self._run = contextlib.ExitStack()
         if not self.cold:
-            self.folder = Path(tempfile.mkdtemp(prefix="eulertop-"))
-            for i in range(max(1, slots)):
-                slot = Slot(self.folder / str(i), preload)
-                self.slots.append(slot)
-                self._free.put(slot)
+            run = self._run.enter_context(run_folder())
+            self.folder = fresh_folder(run, "p")
+            if sandbox is not None and sandbox.per_kernel_uid:
+                os.chmod(self.folder, 0o711)
+            try:
+                for i in range(max(1, slots)):
+                    slot = Slot(self.folder / str(i), preload, sandbox, run.name)
+                    self.slots.append(slot)
+                    self._free.put(slot)
+            except BaseException:
+                self.close()
+                raise
 
     def kernel(self, workdir: Path, control: Path, limits: Limits) -> LocalKernel:
         """The kernel factory: ``(workdir, control, limits) -> KernelProcess``."""
@@ -437,7 +553,10 @@ class KernelPool:
         self._free.put(slot)
 
     def fail(self, err: Exception) -> None:
-        """A zygote could not be started: cold kernels from now on, and say why once."""
+        """A zygote could not be started: cold kernels from now on, and say why once.
+        Sandboxed: never (the error is the submission's run's)."""
+        if self.sandbox is not None:
+            raise RuntimeError(f"could not start a sandboxed kernel: {err}") from None
         if not self.cold:
             self.cold, self.problem = True, str(err)
             sys.stderr.write(f"eulertop grade: {err}; kernels start cold from now on "
@@ -449,6 +568,7 @@ class KernelPool:
             slot.close()
         if self.folder is not None:
             shutil.rmtree(self.folder, ignore_errors=True)
+        self._run.close()
 
     def __enter__(self) -> KernelPool:
         return self
@@ -496,13 +616,16 @@ class PooledKernel(LocalKernel):
         self.slot = await asyncio.to_thread(self.pool.acquire)
         try:
             self.forked = await asyncio.to_thread(self.slot.take, self.limits)
+            if self.forked.sandboxed:
+                await asyncio.to_thread(self._deliver)
         except ZygoteError as err:
             self._give_back()
             self.pool.fail(err)
             self.cold = True
             return await super().start()
-        for entry in self.workdir.iterdir():  # the submission, into the kernel's own folder
-            os.replace(entry, self.forked.workdir / entry.name)
+        if not self.forked.sandboxed:
+            for entry in self.workdir.iterdir():  # the submission, into the kernel's own folder
+                os.replace(entry, self.forked.workdir / entry.name)
         forked = self.forked
 
         def make_client(context: Any) -> Any:
@@ -512,9 +635,34 @@ class PooledKernel(LocalKernel):
             return kc
 
         kc = await self._connect(make_client)
+        if forked.sandboxed:  # sockets bound: no more writing in a folder of this machine
+            await asyncio.to_thread(_lock_control, forked)
         if self.pool.prewarm:
             await asyncio.to_thread(self.slot.prewarm, self.limits)
         return kc
+
+    @property
+    def sandboxed(self) -> bool:
+        """Whether this kernel runs in the pool's sandbox."""
+        return self.pool.sandbox is not None and not self.cold
+
+    def _deliver(self) -> None:
+        """Hand the submission to a sandboxed kernel's working folder through its zygote
+        (that folder is in the sandbox's tmpfs); a prewarmed kernel whose folder is no longer
+        empty is replaced by a new one, once."""
+        files = [(e.name, base64.b64encode(e.read_bytes()).decode()) for e in
+                 sorted(self.workdir.iterdir())]
+        for attempt in (1, 2):
+            try:
+                for name, data in files:
+                    self.forked.zygote.request("deliver", pid=self.forked.pid, name=name,
+                                               data=data)
+                return
+            except ZygoteError:
+                release(self.forked)
+                if attempt == 2:
+                    raise
+                self.forked = self.slot.fork(self.limits)
 
     async def interrupt(self) -> None:
         if self.cold:

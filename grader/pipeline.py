@@ -19,6 +19,14 @@ fresh process per submission, from a per-slot zygote that has imported ipykernel
 and sympy once (:mod:`grader.kernel_pool`); ``cold_kernels`` (``--cold-kernels``) starts each
 kernel from scratch instead, as it is done automatically where ``fork`` is not available.
 
+Sandbox (issue 5): with the default execution, every zygote and kernel runs in a bubblewrap
+sandbox (:mod:`grader.sandbox`); where none can be had the run is refused
+(:class:`UsageError` saying how to get one) unless ``sandbox=False`` (``--no-sandbox``), which
+warns on every run and is written into every record (``sandboxed``) and ``grades.csv`` (a
+``sandboxed`` column, present whenever some record was graded without one). All the run's
+temporary folders are in one run folder (:func:`grader.sandbox.run_folder`); those of killed
+runs are removed when the next run starts.
+
 Parallelism: a pool of ``jobs`` *threads*. The work of a submission happens in its kernel, a
 separate process; the grader's side is waiting on sockets and a little JSON, which threads do
 without pickling the key or the results across processes and with the assignment loaded once.
@@ -49,7 +57,7 @@ from typing import Any
 
 from grader.compare import KeyAnswer, compare, key_answers, variable_names
 from grader.discover import Problem, Submission, discover
-from grader.report import feedback_html, gradebook_csv, gradebook_rows
+from grader.report import feedback_html, gradebook_csv, gradebook_rows, ran_code
 from grader.results import (
     StudentResult,
     atomic_write_text,
@@ -181,8 +189,9 @@ def now() -> str:
 
 
 def _execution_record(execution: Any) -> dict:
+    # no duration: it differs on every run, and graded_at is the record's one volatile field
     return {"status": execution.status, "message": execution.message,
-            "cell_errors": list(execution.cell_errors), "duration": execution.duration,
+            "cell_errors": list(execution.cell_errors),
             "output_truncated": execution.output_truncated}
 
 
@@ -229,7 +238,7 @@ def grade_submission(
         submission_sha256=sha256,
         key_sha256=key_sha256,
         execution=_execution_record(execution) if execution is not None else {},
-        sandboxed=False,
+        sandboxed=bool(getattr(execution, "sandboxed", False)),
         graded_at=now(),
     )
 
@@ -268,13 +277,15 @@ def run_lock(out: Path) -> Iterator[None]:
 
 
 def _unchanged(old: StudentResult | None, sha: str | None, key_hash: str,
-               fresh: StudentResult | None = None) -> bool:
+               fresh: StudentResult | None = None, sandboxed: bool = False) -> bool:
     if old is None or old.submission_sha256 != sha or old.key_sha256 != key_hash:
         return False
+    if sandboxed and ran_code(old) and not old.sandboxed:
+        return False  # graded without a sandbox before: grade it in one now
     return fresh is None or (old.status, old.message) == (fresh.status, fresh.message)
 
 
-def _plan(a: Assignment, found, out: Path, force: bool):
+def _plan(a: Assignment, found, out: Path, force: bool, sandboxed: bool = False):
     """Split the roster: (submissions to execute with their hashes, records to write, kept)."""
     to_run, to_write, kept = [], [], []
     problems = {p.student_id: p for p in found.problems if p.student_id is not None}
@@ -290,7 +301,7 @@ def _plan(a: Assignment, found, out: Path, force: bool):
                     sid, "failed", f"cannot read {by_id[sid].path.name}: {e.strerror}",
                     expected, key_hash))
                 continue
-            if _unchanged(old, sha, key_hash):
+            if _unchanged(old, sha, key_hash, sandboxed=sandboxed):
                 kept.append(sid)
             else:
                 to_run.append((by_id[sid], expected, key_hash, sha))
@@ -327,6 +338,7 @@ def grade_assignment(
     progress: Callable[[StudentResult], None] | None = None,
     on_plan: Callable[[int], Callable[[StudentResult], None] | None] | None = None,
     cold_kernels: bool = False,
+    sandbox: bool = True,
 ) -> RunReport:
     """Grade every submission in ``submissions`` against the assignment ``hw``.
 
@@ -355,11 +367,15 @@ def grade_assignment(
         ``progress`` callable (so a progress bar knows its total).
     cold_kernels : bool
         With the default ``execute``: start every kernel from scratch, not from a zygote.
+    sandbox : bool
+        With the default ``execute``: run every kernel in the sandbox (refused where there is
+        none); False runs them unsandboxed, with a warning on stderr and in the records.
 
     Raises
     ------
     UsageError
-        Missing or unreadable inputs; :class:`RunInProgress` when another run holds the lock.
+        Missing or unreadable inputs, no sandbox to be had (with ``sandbox``);
+        :class:`RunInProgress` when another run holds the lock.
     """
     a = load_assignment(hw)
     submissions = Path(submissions)
@@ -367,11 +383,16 @@ def grade_assignment(
         raise UsageError(f"{submissions}: not a readable folder of submissions")
     out = Path(hw) / "graded" if out is None else Path(out)
     warm = execute is None and not cold_kernels
+    found_sandbox = None
+    if execute is None:
+        found_sandbox = _sandbox(sandbox)
     if execute is None or limits is None:
         from grader.limits import Limits
 
         if execute is None:
-            from grader.execute import execute_submission as execute
+            from grader.execute import execute_submission
+
+            execute = partial(execute_submission, sandbox=found_sandbox is not None)
         limits = limits or Limits()
     try:
         for sub in (RESULTS, FEEDBACK):
@@ -381,7 +402,7 @@ def grade_assignment(
     with run_lock(out):
         remove_stale_temporaries(out, out / RESULTS, out / FEEDBACK)
         found = discover(submissions, a.ids)
-        to_run, to_write, kept = _plan(a, found, out, force)
+        to_run, to_write, kept = _plan(a, found, out, force, found_sandbox is not None)
         if on_plan is not None:
             progress = on_plan(len(to_run) + len(to_write)) or progress
         for result in to_write:
@@ -389,7 +410,7 @@ def grade_assignment(
             if progress:
                 progress(result)
         jobs = jobs or os.cpu_count() or 1
-        with _kernels(warm and bool(to_run), min(jobs, len(to_run))) as factory:
+        with _kernels(warm and bool(to_run), min(jobs, len(to_run)), found_sandbox) as factory:
             run = execute if factory is None else partial(execute, kernel_factory=factory)
             _run_all(a, out, to_run, run, limits, jobs, reveal, progress)
         results = {sid: read_result(out / RESULTS / f"{sid}.json") for sid in a.ids}
@@ -398,15 +419,35 @@ def grade_assignment(
     return RunReport(tuple(results[s] for s in a.ids), graded_now, tuple(kept), found.problems)
 
 
+WITHOUT_SANDBOX = ("eulertop grade: WARNING: grading WITHOUT a sandbox (--no-sandbox): student "
+                   "code runs as you and can read the answer key, other submissions and your "
+                   "files, and reach the network; every result record and grades.csv say so\n")
+
+
+def _sandbox(wanted: bool) -> Any:
+    """The run's sandbox (:func:`grader.sandbox.probe`), or None when not ``wanted`` (which
+    warns); :class:`UsageError` when wanted and there is none."""
+    from grader.sandbox import SandboxUnavailable, probe
+
+    if not wanted:
+        sys.stderr.write(WITHOUT_SANDBOX)
+        return None
+    try:
+        return probe()
+    except SandboxUnavailable as err:
+        raise UsageError(str(err)) from None
+
+
 @contextmanager
-def _kernels(warm: bool, slots: int) -> Iterator[Callable | None]:
+def _kernels(warm: bool, slots: int, sandbox: Any = None) -> Iterator[Callable | None]:
     """The kernel factory of the run: a warm pool's (closed at the end), or None (default)."""
     if not warm:
         yield None
         return
     from grader.kernel_pool import KernelPool
+    from grader.sandbox import run_folder
 
-    with KernelPool(slots) as pool:
+    with run_folder(), KernelPool(slots, sandbox=sandbox) as pool:
         yield pool.kernel
 
 
@@ -448,7 +489,8 @@ def _rebuild(a: Assignment, out: Path, results: Mapping[str, StudentResult | Non
              reveal: bool) -> None:
     """The gradebook and every feedback page, from the records on disk."""
     present = {sid: r for sid, r in results.items() if r is not None}
-    table = gradebook_rows(a.columns, a.rows, a.questions, present)
+    unsandboxed = any(ran_code(r) and not r.sandboxed for r in present.values())
+    table = gradebook_rows(a.columns, a.rows, a.questions, present, sandbox_column=unsandboxed)
     atomic_write_text(out / GRADES, gradebook_csv(table))
     for sid, r in present.items():
         key = ({k.variable: k.answer.value for k in key_answers(a.key, sid)} if reveal else None)

@@ -46,20 +46,30 @@ def _cut(text: str, limit: int = MAX_SHOWN) -> str:
 # grades.csv
 
 
+def ran_code(result: StudentResult) -> bool:
+    """Did the student's code run for this record (a kernel was started for it)?"""
+    return bool(result.execution) and result.execution.get("status") != "invalid_notebook"
+
+
 def gradebook_rows(
     columns: Sequence[str],
     rows: Sequence[Mapping[str, str]],
     questions: Sequence[int],
     results: Mapping[str, StudentResult],
+    sandbox_column: bool = False,
 ) -> list[list[str]]:
     """The gradebook as rows of strings, header first.
 
     Columns: ``id``, the roster's other columns (as in the roster), ``q1`` … ``qN`` (points per
-    question), ``total``, ``maximum``, ``status``. A student without a result record (only
-    after an interrupted run) gets empty points and status ``not graded yet``.
+    question), ``total``, ``maximum``, ``status``; with ``sandbox_column`` (the pipeline sets it
+    when some submission was graded without a sandbox, ``--no-sandbox``) a last column
+    ``sandboxed``: ``yes`` / ``no`` (``""`` when nothing was executed). A student without a
+    result record (only after an interrupted run) gets empty points and status
+    ``not graded yet``.
     """
     others = [c for c in columns if c != "id"]
-    table = [["id", *others, *(f"q{k}" for k in questions), "total", "maximum", "status"]]
+    table = [["id", *others, *(f"q{k}" for k in questions), "total", "maximum", "status",
+              *(["sandboxed"] if sandbox_column else [])]]
     for row in rows:
         r = results.get(row["id"])
         if r is None:
@@ -68,6 +78,8 @@ def gradebook_rows(
             per_question = r.question_points()
             cells = [number(per_question.get(k, 0.0)) for k in questions]
             cells += [number(r.points), number(r.max_points), r.status]
+        if sandbox_column:
+            cells.append("yes" if r.sandboxed else "no" if ran_code(r) else "")
         table.append([row["id"], *(row.get(c, "") for c in others), *cells])
     return table
 

@@ -120,13 +120,14 @@ class StudentResult:
     key_sha256 : str
         The student's key hash from ``key.json`` (``"sha256:…"``); resume compares both.
     execution : dict
-        ``status``, ``message``, ``cell_errors`` (list), ``duration`` (s),
-        ``output_truncated``; ``{}`` when nothing was executed.
+        ``status``, ``message``, ``cell_errors`` (list), ``output_truncated``; ``{}`` when
+        nothing was executed. (No duration: it would differ on every run.)
     sandboxed : bool
-        Whether the kernel ran inside a sandbox (issue 5); False for now.
+        Whether the kernel ran inside the sandbox (:mod:`grader.sandbox`); False when graded
+        with ``--no-sandbox``, or when nothing was executed.
     graded_at : str
-        ISO 8601 time (UTC) the record was made — the volatile field, with
-        ``execution["duration"]``.
+        ISO 8601 time (UTC) the record was made — the record's one volatile field: grading
+        the same submissions again gives records equal in everything else.
     """
 
     student_id: str

@@ -24,6 +24,16 @@ Requests (``seq`` is echoed in the reply)::
         -> {"seq": 2, "ok": true}
     {"seq": 3, "op": "kill", "pid": P}                      # SIGKILL P's group + leftovers
         -> {"seq": 3, "ok": true}
+    {"seq": 4, "op": "deliver", "pid": P, "name": N, "data": base64}
+        -> {"seq": 4, "ok": true}        # file N into P's (still empty) scratch working folder
+
+Sandboxed (issue 5, :mod:`grader.sandbox`), a fork request also has ``"scratch"``: a folder in
+the sandbox's own size-limited tmpfs, made by the child (mode 0700) with ``work`` (the working
+folder), ``ipython`` and ``matplotlib`` in it and the kernel's stderr; and, as root,
+``"uid"``/``"gid"``: the child drops to them (``setgroups([])``, ``setgid``, ``setuid``) before
+anything else, so every kernel is its own unprivileged user. The submission then arrives by
+``deliver`` (the grader cannot see the sandbox's tmpfs). When such a kernel ends or is killed,
+every process of its uid is killed and its scratch folder removed (space for the next one).
     events: {"event": "exit", "pid": P, "status": S}        # S as Popen.returncode
             {"event": "stray", "pid": Q}                    # a leftover process was killed
 
@@ -109,6 +119,7 @@ class Zygote:
     def __init__(self) -> None:
         self.kernels: set[int] = set()  # forked kernels not yet reaped
         self.folders: list[str] = []  # the kernels' folders (from the requests), removed at end
+        self.own: dict[int, dict] = {}  # kernel pid -> its request (scratch, uid) while alive
         self.pid = os.getpid()
         self.buffer = b""
         self.ending = False
@@ -151,6 +162,9 @@ class Zygote:
             elif op == "kill":
                 self.kill(int(request["pid"]))
                 reply["ok"] = True
+            elif op == "deliver":
+                self.deliver(request)
+                reply["ok"] = True
             else:
                 reply["error"] = f"unknown op {op!r}"
         except Exception as err:  # report, keep serving
@@ -158,6 +172,14 @@ class Zygote:
         _send(reply)
 
     def fork(self, request: dict) -> int:
+        scratch = request.get("scratch")
+        if scratch:  # sandboxed: the kernel's folders in the sandbox's tmpfs, its own
+            made = [scratch] + [os.path.join(scratch, d) for d in ("work", "ipython",
+                                                                    "matplotlib")]
+            for folder in made:
+                os.mkdir(folder, 0o700)
+                if request.get("uid") is not None:
+                    os.chown(folder, int(request["uid"]), int(request["gid"]))
         pid = os.fork()
         if pid == 0:
             code = 1
@@ -173,7 +195,33 @@ class Zygote:
                 os._exit(code)  # never return into the server loop
         self.kernels.add(pid)
         self.folders += [request["workdir"], request["control"]]
+        if request.get("scratch"):
+            self.folders.append(request["scratch"])
+        self.own[pid] = request
         return pid
+
+    def deliver(self, request: dict) -> None:
+        """Write one file of the submission into a sandboxed kernel's working folder."""
+        import base64
+
+        own = self.own.get(int(request["pid"]))
+        if own is None or not own.get("scratch"):
+            raise ValueError("no such sandboxed kernel")
+        name = str(request["name"])
+        if os.path.basename(name) != name or name in ("", ".", ".."):
+            raise ValueError(f"not a file name: {name!r}")
+        workdir = own["workdir"]
+        if os.listdir(workdir):
+            raise ValueError("the working folder is not empty")
+        fd = os.open(os.path.join(workdir, name), os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+        try:
+            data = base64.b64decode(request["data"])
+            while data:
+                data = data[os.write(fd, data):]
+            if own.get("uid") is not None:
+                os.fchown(fd, int(own["uid"]), int(own["gid"]))
+        finally:
+            os.close(fd)
 
     def signal_group(self, pid: int, signum: int) -> None:
         if pid not in self.kernels:
@@ -195,7 +243,20 @@ class Zygote:
 
     def _exited(self, pid: int, status: int) -> None:
         self.kernels.discard(pid)
+        self._clear(pid)
         _send({"event": "exit", "pid": pid, "status": os.waitstatus_to_exitcode(status)})
+
+    def _clear(self, pid: int) -> None:
+        """A sandboxed kernel ended: kill every process of its uid, remove its scratch."""
+        own = self.own.pop(pid, None)
+        if own is None:
+            return
+        if own.get("uid") is not None:
+            _kill_user(int(own["uid"]))
+        if own.get("scratch"):
+            import shutil
+
+            shutil.rmtree(own["scratch"], ignore_errors=True)
 
     def reap(self) -> None:
         """Collect every ended child; after a kernel ends, kill its leftovers."""
@@ -234,6 +295,8 @@ class Zygote:
             with contextlib.suppress(ChildProcessError):
                 os.waitpid(pid, 0)
         self.kernels.clear()
+        for pid in list(self.own):
+            self._clear(pid)
         self.kill_strays()
         self.remove_folders()
 
@@ -253,6 +316,26 @@ class Zygote:
         for folder in (here, os.path.dirname(here), os.path.dirname(os.path.dirname(here))):
             with contextlib.suppress(OSError):
                 os.rmdir(folder)  # fails unless empty: never removes anything else
+
+
+def _kill_user(uid: int) -> None:
+    """SIGKILL every process of ``uid`` (a kernel's own user), until none is left."""
+    for _ in range(100):  # a fork bomb forks between rounds; RLIMIT_NPROC bounds it
+        found = []
+        for entry in os.listdir("/proc"):
+            if not entry.isdigit():
+                continue
+            with contextlib.suppress(OSError):
+                if os.stat(f"/proc/{entry}").st_uid == uid:
+                    found.append(int(entry))
+        if not found:
+            return
+        for pid in found:
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.kill(pid, signal.SIGKILL)
+        for pid in found:  # reap those that were ours (re-parented here)
+            with contextlib.suppress(ChildProcessError, OSError):
+                os.waitpid(pid, os.WNOHANG)
 
 
 def _tasks_of_user(uid: int) -> int:
@@ -281,7 +364,12 @@ def _set_limit(which: int, value: int) -> None:
 def _become_kernel(request: dict, zygote_pid: int) -> None:
     """In the forked child: confine this process, then run the kernel (returns when it ends)."""
     os.setsid()
-    prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+    scratch, uid = request.get("scratch"), request.get("uid")
+    if uid is not None:  # its own unprivileged user: no capability left, RLIMIT_NPROC counts
+        os.setgroups([])
+        os.setgid(int(request["gid"]))
+        os.setuid(int(uid))
+    prctl(PR_SET_PDEATHSIG, signal.SIGKILL)  # after setuid, which clears it
     if os.getppid() != zygote_pid:  # the zygote died before the line above
         os._exit(1)
     prctl(PR_SET_DUMPABLE, 0)
@@ -291,7 +379,7 @@ def _become_kernel(request: dict, zygote_pid: int) -> None:
     os.umask(0o077)
     # stdio: nothing inherited stays open (fds 0 and 1 were the zygote's pipes to the grader)
     null = os.open(os.devnull, os.O_RDWR)
-    log = os.open(os.path.join(request["control"], "kernel-stderr.txt"),
+    log = os.open(os.path.join(scratch or request["control"], "kernel-stderr.txt"),
                   os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
     os.dup2(null, 0)
     os.dup2(null, 1)
@@ -303,7 +391,9 @@ def _become_kernel(request: dict, zygote_pid: int) -> None:
     _set_limit(resource.RLIMIT_CPU, int(limits["cpu"]))
     _set_limit(resource.RLIMIT_FSIZE, int(limits["fsize"]))
     # RLIMIT_NPROC counts every thread of the real user: allow what exists plus a margin
-    _set_limit(resource.RLIMIT_NPROC, _tasks_of_user(os.getuid()) + int(limits["nproc"]))
+    base = limits.get("nproc_base")  # given where this /proc does not see every process
+    base = _tasks_of_user(os.getuid()) if base is None else int(base)
+    _set_limit(resource.RLIMIT_NPROC, base + int(limits["nproc"]))
     os.environ.clear()
     os.environ.update(request["env"])
     os.chdir(request["workdir"])

@@ -108,7 +108,7 @@ def test_each_student_is_graded_as_expected(graded):
     assert first.message == mistake["feedback"]
     assert all(x.points == 0 for s, x in r.items() if s in ("dave", "erin", "frank"))
     assert r["alice"].execution["status"] == "ok"
-    assert not r["alice"].sandboxed
+    assert r["alice"].sandboxed  # the default: in the bubblewrap sandbox (issue 5)
 
 
 def test_gradebook_summary_and_feedback(graded):

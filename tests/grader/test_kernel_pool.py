@@ -31,7 +31,12 @@ from grader.kernel_pool import FILE_BYTES, KernelPool, PooledKernel, fork_availa
 from grader.limits import Limits
 from tests.grader.golden import CANARY
 
-pytestmark = pytest.mark.skipif(not fork_available(), reason="warm kernels need Linux fork")
+
+@pytest.fixture(autouse=True)
+def _required_here():
+    """Fail, never skip: a missing sandbox must not pass silently (CI installs bubblewrap)."""
+    if not fork_available():
+        pytest.fail("warm kernels need Linux fork", pytrace=False)
 
 ROOT = Path(__file__).resolve().parents[2]
 LIMITS = Limits(cell_timeout=1.0, total_timeout=20.0, memory_bytes=3 * 1024**3 // 2)

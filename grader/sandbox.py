@@ -1,0 +1,411 @@
+"""The sandbox around student kernels (issue 5): bubblewrap, one per worker slot.
+
+A student notebook is untrusted code running on the instructor's machine next to the answer
+key. Every kernel runs inside a ``bwrap`` sandbox that surrounds its slot's zygote
+(:mod:`grader.kernel_pool`, :mod:`grader.zygote`): the zygote is started as
+``bwrap … -- python zygote.py``, and every kernel it forks is inside the same sandbox.
+
+What the sandbox holds (:meth:`Sandbox.command`)
+    * read-only: ``/usr`` (and ``/bin``, ``/lib*``, ``/sbin`` as on the host: symlinks into
+      ``/usr`` or read-only binds), the running interpreter's ``sys.prefix``,
+      ``sys.base_prefix`` and every folder of ``sys.path`` outside them (site-packages), the
+      zygote script (one file, as ``/eulertop/zygote.py``: not the project's folder), and
+      from ``/etc`` only what the dynamic loader and fonts need (:data:`ETC`; not
+      ``resolv.conf``, ``hosts``, ``passwd``);
+    * ``--proc /proc`` (a new procfs: the sandbox's own PID namespace), ``--dev /dev``
+      (``null``, ``zero``, ``urandom`` …);
+    * a size-limited ``tmpfs`` at ``/tmp`` (:data:`SCRATCH_BYTES`, mode 0711): each kernel's
+      working folder, ``HOME``, ``TMPDIR`` and configuration folders are made there, so a
+      notebook that fills "the disk" fills this and nothing of the host;
+    * read-write: the slot's folder only (kernel control folders: the IPC sockets the grader
+      talks to, the zygote's working folder). No home folder, no assignment (key), no
+      submissions, no results, no grader source.
+
+    Namespaces: network (no interface but an unconfigured loopback: nothing connects, no name
+    resolves), PID (the grader and the other slot's sandbox are not there), IPC, UTS, cgroup;
+    ``--new-session``, ``--die-with-parent``, ``--clearenv`` (the zygote's scrubbed
+    environment only).
+
+Per-kernel confinement inside the slot's sandbox
+    *As root* (CI; :attr:`Sandbox.per_kernel_uid`): no user namespace (so that real uids can be
+    used); the zygote keeps only ``CAP_SETUID``, ``CAP_SETGID``, ``CAP_KILL``, ``CAP_CHOWN``,
+    ``CAP_DAC_OVERRIDE``, ``CAP_FOWNER`` (bwrap sets ``no_new_privs``). Each forked kernel drops
+    to a uid/gid of its own (:func:`kernel_uid`, from a high range, never a real user's):
+    ``setgroups([])``, ``setgid``, ``setuid`` — which clears every capability. Then
+    ``RLIMIT_NPROC`` is effective (the kernel ignores it for root), the kernel cannot signal
+    or ptrace the zygote or the prewarmed next kernel (another uid, non-dumpable), cannot enter
+    their folders (0700, another owner), and its own control folder is handed back to root as
+    soon as its sockets are bound (before any cell of the student runs).
+
+    *Not root* (an instructor's laptop): bwrap needs a user namespace, in which only the
+    instructor's own uid exists, so kernels cannot get uids of their own. There the pool turns
+    *prewarm off* (:class:`grader.kernel_pool.KernelPool`): a slot's kernels then never
+    coexist, and the per-slot sandbox alone separates every kernel from every other. The
+    kernel can still signal its own zygote (only its own submission suffers) and its control
+    folder, locked read-only after start, stays its owner's (it could unlock it: the file-size
+    limit still bounds each file).
+
+Where no sandbox can be had (:func:`probe` says why): ``eulertop grade`` refuses with
+:data:`INSTALL_HINT` unless ``--no-sandbox`` is given.
+
+Run folders (:func:`run_folder`)
+    Every temporary folder of a grading process lives in one *run folder*,
+    ``<tmp>/eulertop-<pid>-<8 hex digits>``, removed when the run ends. A run killed by SIGKILL
+    cannot remove it; the next run removes such stale folders — only those whose name matches
+    exactly that pattern, that belong to this user, and whose grader pid is no longer alive
+    (:func:`remove_stale_run_folders`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import itertools
+import os
+import queue
+import re
+import secrets
+import shutil
+import subprocess
+import sys
+import tempfile
+import threading
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = [
+    "ETC",
+    "INSTALL_HINT",
+    "RUN_FOLDER",
+    "SCRATCH",
+    "SCRATCH_BYTES",
+    "Sandbox",
+    "SandboxUnavailable",
+    "available",
+    "fresh_folder",
+    "kernel_uid",
+    "probe",
+    "remove_stale_run_folders",
+    "run_folder",
+    "spawn",
+]
+
+INSTALL_HINT = ("install bubblewrap (Debian/Ubuntu: 'sudo apt-get install bubblewrap'; "
+                "Fedora: 'sudo dnf install bubblewrap'; Arch: 'sudo pacman -S bubblewrap') on "
+                "Linux, or pass --no-sandbox to run student code without one (it can then read "
+                "the answer key and anything else your user can)")
+"""How to get a sandbox: the end of every refusal."""
+
+TOOLS = "/eulertop"
+"""Where the grader's own files a sandbox needs (the zygote script) appear inside it: not at
+their path here, so nothing of the project's folders is visible."""
+
+SCRATCH = "/tmp"
+"""Where, inside the sandbox, the size-limited tmpfs of kernels' working folders is."""
+
+SCRATCH_BYTES = 256 * 1024**2
+"""Size of each slot's scratch tmpfs (shared by a running and a prewarmed kernel), bytes."""
+
+ETC = ("/etc/ld.so.cache", "/etc/ld.so.conf", "/etc/ld.so.conf.d", "/etc/localtime",
+       "/etc/fonts", "/etc/alternatives")
+"""The pieces of ``/etc`` bound into the sandbox (read-only, when present)."""
+
+CAPABILITIES = ("CAP_SETUID", "CAP_SETGID", "CAP_KILL", "CAP_CHOWN", "CAP_DAC_OVERRIDE",
+                "CAP_FOWNER")
+"""What the zygote keeps as root (module docstring); every kernel drops them all."""
+
+UID_BASE, UID_SPAN = 0x60000000, 0x10000000
+"""Kernels' own uids/gids are drawn from ``[UID_BASE, UID_BASE + UID_SPAN)``: far above any
+real user (and below the 32-bit ``-1``)."""
+
+RUN_FOLDER = re.compile(r"eulertop-(\d+)-([0-9a-f]{8})")
+"""Name of a run folder: ``eulertop-<grader pid>-<8 hex digits>``."""
+
+
+class SandboxUnavailable(RuntimeError):
+    """No sandbox can be had here; the message says why and how to get one."""
+
+
+def kernel_uid() -> int:
+    """A fresh uid (= gid) for one kernel, from the reserved high range."""
+    return UID_BASE + secrets.randbelow(UID_SPAN)
+
+
+@dataclass(frozen=True)
+class Sandbox:
+    """How to start a zygote inside bubblewrap (module docstring).
+
+    Attributes
+    ----------
+    bwrap : str
+        Path of the ``bwrap`` executable.
+    per_kernel_uid : bool
+        Running as root: kernels drop to uids of their own; else a user namespace is used.
+    scratch_bytes : int
+        Size of the scratch tmpfs at :data:`SCRATCH`.
+    """
+
+    bwrap: str
+    per_kernel_uid: bool
+    scratch_bytes: int = SCRATCH_BYTES
+
+    def command(self, argv: Sequence[str], env: Mapping[str, str], folder: Path,
+                cwd: Path, files: Mapping[str, str] | None = None) -> list[str]:
+        """``bwrap`` options, then ``argv``: run ``argv`` with environment ``env`` (only), the
+        folder ``folder`` read-write, ``cwd`` as working folder, and ``files`` (host path →
+        path in the sandbox) bound read-only under :data:`TOOLS`."""
+        args = [self.bwrap, "--unshare-ipc", "--unshare-pid", "--unshare-net", "--unshare-uts",
+                "--unshare-cgroup-try", "--die-with-parent", "--new-session", "--clearenv"]
+        if self.per_kernel_uid:
+            args += ["--cap-drop", "ALL"]
+            for cap in CAPABILITIES:
+                args += ["--cap-add", cap]
+        else:
+            args += ["--unshare-user", "--disable-userns"]
+        for name, value in env.items():
+            args += ["--setenv", name, value]
+        made: set[str] = {"/"}
+
+        def ancestors(path: str, perms: str) -> list[str]:
+            out = []
+            for parent in reversed(Path(path).parents):
+                p = str(parent)
+                if p not in made:
+                    made.add(p)
+                    out += ["--perms", perms, "--dir", p]
+            return out
+
+        for top in ("/bin", "/sbin", "/lib", "/lib32", "/lib64", "/libx32"):
+            if os.path.islink(top):
+                args += ["--symlink", os.readlink(top), top]
+            elif os.path.isdir(top):
+                args += ["--ro-bind", top, top]
+        args += ["--ro-bind", "/usr", "/usr"]
+        bound = ["/usr", "/bin", "/sbin", "/lib", "/lib32", "/lib64", "/libx32"]
+        for path in _python_paths():
+            if any(path == b or path.startswith(b.rstrip("/") + "/") for b in bound):
+                continue
+            args += [*ancestors(path, "0755"), "--ro-bind", path, path]
+            bound.append(path)
+        for path in ETC:
+            if os.path.exists(path):
+                args += [*ancestors(path, "0755"), "--ro-bind", path, path]
+        for source, inside in (files or {}).items():
+            if not inside.startswith(TOOLS + "/"):
+                raise ValueError(f"{inside}: files go under {TOOLS}")
+            args += [*ancestors(inside, "0755"), "--ro-bind", source, inside]
+        args += ["--proc", "/proc", "--dev", "/dev"]
+        args += ["--perms", "0711", "--size", str(self.scratch_bytes), "--tmpfs", SCRATCH]
+        made.add(SCRATCH)
+        folder = str(Path(folder).resolve())
+        args += [*ancestors(folder, "0711"), "--bind", folder, folder]
+        args += ["--chdir", str(Path(cwd).resolve()), "--", *argv]
+        return args
+
+
+def _python_paths() -> list[str]:
+    """What the interpreter needs, read-only: prefixes, ``sys.path`` folders."""
+    import site
+
+    paths = [sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix,
+             str(Path(sys.executable).resolve().parent)]
+    # only site-packages folders of sys.path: not the current folder, not a project on it
+    # (an editable install's folder), which would show the project's files to every kernel
+    paths += [p for p in sys.path if os.path.isabs(p)
+              and os.path.basename(p.rstrip("/")) in ("site-packages", "dist-packages")]
+    with contextlib.suppress(Exception):
+        paths += site.getsitepackages()
+    if site.ENABLE_USER_SITE:
+        paths.append(site.getusersitepackages())
+    out: list[str] = []
+    for p in sorted({os.path.realpath(p) for p in paths}, key=len):
+        if os.path.exists(p) and not any(p == o or p.startswith(o.rstrip("/") + "/")
+                                         for o in out):
+            out.append(p)
+    return sorted(out)
+
+
+def _unavailable(why: str) -> SandboxUnavailable:
+    return SandboxUnavailable(f"no sandbox for student code: {why}; {INSTALL_HINT}")
+
+
+@functools.cache
+def probe() -> Sandbox:
+    """The sandbox of this machine, checked by starting one; :class:`SandboxUnavailable`
+    saying why not (not Linux, no ``bwrap``, or ``bwrap`` cannot create its namespaces —
+    e.g. unprivileged user namespaces disabled, or a container without the rights)."""
+    if not sys.platform.startswith("linux"):
+        raise _unavailable(f"bubblewrap needs Linux (this is {sys.platform})")
+    bwrap = shutil.which("bwrap")
+    if bwrap is None:
+        raise _unavailable("the bubblewrap program 'bwrap' is not installed")
+    sandbox = Sandbox(bwrap, per_kernel_uid=os.geteuid() == 0)
+    folder = Path(tempfile.mkdtemp(prefix="eulertop-probe-"))
+    try:
+        code = ("import os, socket\n"
+                "try:\n    socket.create_connection(('127.0.0.1', 9), timeout=1)\n"
+                "except OSError:\n    pass\nelse:\n    raise SystemExit('network reachable')\n"
+                "assert os.getpid() < 10, 'no PID namespace'\n")
+        argv = sandbox.command([sys.executable, "-I", "-c", code], {"PATH": "/usr/bin"},
+                               folder, folder)
+        try:
+            done = subprocess.run(argv, capture_output=True, timeout=30, text=True,
+                                  stdin=subprocess.DEVNULL)
+        except (OSError, subprocess.TimeoutExpired) as err:
+            raise _unavailable(f"bwrap could not be run ({err})") from None
+        if done.returncode != 0:
+            last = (done.stderr.strip().splitlines() or ["no message"])[-1]
+            raise _unavailable(f"bwrap failed to start a sandbox ({last})")
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+    return sandbox
+
+
+def available() -> Sandbox | None:
+    """:func:`probe`'s sandbox, or None where there is none."""
+    try:
+        return probe()
+    except SandboxUnavailable:
+        return None
+
+
+# --------------------------------------------------------------------------------------------
+# Starting processes from one long-lived thread
+
+
+class _Spawner:
+    """Starts processes from one daemon thread that lives as long as the grader.
+
+    ``bwrap --die-with-parent`` and the zygote's own parent-death signal fire when the
+    *thread* that started them ends, not the process; kernels are started from short-lived
+    threads (``asyncio.to_thread``, worker pools). Started from this thread, they die exactly
+    when the grader does — however it ends, SIGKILL included.
+    """
+
+    def __init__(self) -> None:
+        self.requests: queue.Queue = queue.Queue()
+        self.thread = threading.Thread(target=self._serve, name="eulertop-spawner", daemon=True)
+        self.thread.start()
+
+    def _serve(self) -> None:
+        while True:
+            args, kwargs, reply = self.requests.get()
+            try:
+                reply.put((subprocess.Popen(*args, **kwargs), None))
+            except BaseException as err:  # handed to the caller
+                reply.put((None, err))
+
+    def popen(self, *args, **kwargs) -> subprocess.Popen:
+        reply: queue.Queue = queue.Queue(maxsize=1)
+        self.requests.put((args, kwargs, reply))
+        process, err = reply.get()
+        if err is not None:
+            raise err
+        return process
+
+
+_spawner_lock = threading.Lock()
+_spawner: _Spawner | None = None
+
+
+def spawn(*args, **kwargs) -> subprocess.Popen:
+    """``subprocess.Popen(*args, **kwargs)``, started from the grader's spawner thread."""
+    global _spawner
+    with _spawner_lock:
+        if _spawner is None or not _spawner.thread.is_alive():
+            _spawner = _Spawner()
+        spawner = _spawner
+    return spawner.popen(*args, **kwargs)
+
+
+# --------------------------------------------------------------------------------------------
+# Run folders
+
+_run_lock = threading.Lock()
+_run: dict = {"path": None, "users": 0}
+_names = itertools.count()
+
+SOCKET_PATH = 107
+"""Longest path of a Unix socket (``sun_path``), bytes; IPC sockets live in control folders."""
+
+
+def fresh_folder(parent: Path, letter: str) -> Path:
+    """A new private folder (0700) ``parent/<letter><n>``: short names, since an IPC socket's
+    whole path must fit in :data:`SOCKET_PATH` bytes."""
+    while True:
+        with _run_lock:
+            path = Path(parent) / f"{letter}{next(_names)}"
+        try:
+            path.mkdir(mode=0o700)
+            return path
+        except FileExistsError:
+            continue
+
+
+def _run_parent() -> Path:
+    """Where run folders are made: the temporary-files folder, unless its path is too long for
+    the sockets below it (then ``/tmp``)."""
+    parent = Path(tempfile.gettempdir())
+    if len(os.fsencode(parent)) + 40 > SOCKET_PATH and os.access("/tmp", os.W_OK | os.X_OK):
+        return Path("/tmp")
+    return parent
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def remove_stale_run_folders(parent: Path | None = None) -> list[Path]:
+    """Remove run folders of graders that were killed (module docstring); the list.
+
+    Only entries of ``parent`` (default: the temporary-files folder) that are folders (not
+    links) named exactly like :data:`RUN_FOLDER`, owned by this user, whose pid is not a live
+    process, and not this process's own.
+    """
+    parent = Path(parent or _run_parent())
+    removed = []
+    with contextlib.suppress(OSError):
+        for entry in os.scandir(parent):
+            match = RUN_FOLDER.fullmatch(entry.name)
+            if match is None or not entry.is_dir(follow_symlinks=False):
+                continue
+            pid = int(match.group(1))
+            if pid == os.getpid() or _pid_alive(pid):
+                continue
+            with contextlib.suppress(OSError):
+                if entry.stat(follow_symlinks=False).st_uid != os.geteuid():
+                    continue
+                shutil.rmtree(entry.path)
+                removed.append(Path(entry.path))
+    return removed
+
+
+@contextlib.contextmanager
+def run_folder() -> Iterator[Path]:
+    """The process's run folder for the duration of the block (shared by nested and
+    concurrent users; made by the first, removed by the last; stale ones removed first)."""
+    with _run_lock:
+        if _run["users"] == 0:
+            parent = _run_parent()
+            remove_stale_run_folders(parent)
+            path = parent / f"eulertop-{os.getpid()}-{secrets.token_hex(4)}"
+            path.mkdir(mode=0o711)
+            os.chmod(path, 0o711)  # kernels with uids of their own traverse it to their folder
+            _run["path"] = path
+        _run["users"] += 1
+        path = _run["path"]
+    try:
+        yield path
+    finally:
+        with _run_lock:
+            _run["users"] -= 1
+            if _run["users"] == 0:
+                shutil.rmtree(path, ignore_errors=True)
+                _run["path"] = None
