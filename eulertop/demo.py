@@ -166,13 +166,24 @@ def hand_in(out: Path) -> dict:
 
 
 def grade(out: Path, timeout: float, jobs: int | None):
-    """Step 3: the real grader, with its progress display; returns its RunReport."""
+    """Step 3: the real grader, with its progress display; returns its RunReport.
+
+    Sandboxed where bubblewrap is available. The demo's submissions are notebooks the demo
+    itself just wrote, not untrusted code, so without bubblewrap it grades them unsandboxed
+    (records say so) rather than fail on a fresh machine; real grading refuses instead.
+    """
     from grader.limits import Limits
     from grader.pipeline import grade_assignment
     from grader.progress import Progress
+    from grader.sandbox import available
 
+    sandbox = available() is not None
+    if not sandbox:
+        print("      note: bubblewrap (bwrap) is not installed, so the demo grades its own "
+              "sample notebooks without the sandbox; `eulertop grade` on real submissions "
+              "needs it (apt-get install bubblewrap)", file=sys.stderr)
     return grade_assignment(out / HW, out / SUBMISSIONS, limits=Limits(total_timeout=timeout),
-                            jobs=jobs, on_plan=lambda n: Progress(n))
+                            jobs=jobs, on_plan=lambda n: Progress(n), sandbox=sandbox)
 
 
 def bench(out: Path) -> tuple[bool, str]:
