@@ -176,6 +176,10 @@ class Sandbox:
                     out += ["--perms", perms, "--dir", p]
             return out
 
+        # The scratch tmpfs first: a later mount hides what lies under it, and the Python
+        # environment itself may live under SCRATCH (a venv in /tmp, as in a CI clone).
+        args += ["--perms", "0711", "--size", str(self.scratch_bytes), "--tmpfs", SCRATCH]
+        made.add(SCRATCH)
         for top in ("/bin", "/sbin", "/lib", "/lib32", "/lib64", "/libx32"):
             if os.path.islink(top):
                 args += ["--symlink", os.readlink(top), top]
@@ -196,8 +200,6 @@ class Sandbox:
                 raise ValueError(f"{inside}: files go under {TOOLS}")
             args += [*ancestors(inside, "0755"), "--ro-bind", source, inside]
         args += ["--proc", "/proc", "--dev", "/dev"]
-        args += ["--perms", "0711", "--size", str(self.scratch_bytes), "--tmpfs", SCRATCH]
-        made.add(SCRATCH)
         folder = str(Path(folder).resolve())
         args += [*ancestors(folder, "0711"), "--bind", folder, folder]
         args += ["--chdir", str(Path(cwd).resolve()), "--", *argv]

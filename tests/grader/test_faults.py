@@ -33,9 +33,10 @@ ROOT = Path(__file__).resolve().parents[2]
 STUDENTS = ("alice", "bob", "carol")
 SLEEP = 4.0  # s, bob's extra cell: the moment to kill the grader, or to start a second one
 
-@pytest.fixture(autouse=True)
+@pytest.fixture(scope="module", autouse=True)
 def _required_here():
-    """Fail, never skip: a missing sandbox must not pass silently (CI installs bubblewrap)."""
+    """Fail, never skip: a missing sandbox must not pass silently (CI installs bubblewrap).
+    Module-scoped, so it runs before the module's other fixtures start any kernel."""
     if available() is None:
         pytest.fail("bubblewrap (bwrap) is not installed: `apt-get install bubblewrap` "
                     "(README); the battery must run, never skip", pytrace=False)

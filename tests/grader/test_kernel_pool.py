@@ -32,9 +32,10 @@ from grader.limits import Limits
 from tests.grader.golden import CANARY
 
 
-@pytest.fixture(autouse=True)
+@pytest.fixture(scope="module", autouse=True)
 def _required_here():
-    """Fail, never skip: a missing sandbox must not pass silently (CI installs bubblewrap)."""
+    """Fail, never skip: a missing sandbox must not pass silently (CI installs bubblewrap).
+    Module-scoped, so it runs before the module's other fixtures start any kernel."""
     if not fork_available():
         pytest.fail("warm kernels need Linux fork", pytrace=False)
 

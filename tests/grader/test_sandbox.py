@@ -20,6 +20,7 @@ import os
 import secrets
 import shutil
 import socket
+import sys
 import textwrap
 import threading
 import time
@@ -41,9 +42,10 @@ from problems.templates import FAMILIES
 from tests.grader.golden import CANARY
 
 SANDBOX = available()
-@pytest.fixture(autouse=True)
+@pytest.fixture(scope="module", autouse=True)
 def _required_here():
-    """Fail, never skip: a missing sandbox must not pass silently (CI installs bubblewrap)."""
+    """Fail, never skip: a missing sandbox must not pass silently (CI installs bubblewrap).
+    Module-scoped, so it runs before the module's other fixtures start any kernel."""
     if SANDBOX is None:
         pytest.fail("bubblewrap (bwrap) is not installed: `apt-get install bubblewrap` "
                     "(README); the battery must run, never skip", pytrace=False)
@@ -166,7 +168,8 @@ ATTACKS = {
                             hits.append(p)
                     except OSError:
                         pass
-        atk_walk = [hits, seen > 1000, sorted(os.listdir('/'))]
+        atk_walk = [hits, seen > 1000, sorted(os.listdir('/')), os.path.exists({project!r}),
+                    sorted(os.listdir({home!r})) if os.path.isdir({home!r}) else []]
         """,
     "atk_other_submission": """
         try:
@@ -305,6 +308,7 @@ def battery(pool, victims, tmp_path_factory):
     fields = {"key": str(victims / "HW" / "key.json"), "bob": str(victims / "subs" / "bob.ipynb"),
               "hw": str(victims / "HW"), "secret": SECRET, "grader": os.getpid(),
               "port": server.port, "token": token,
+              "project": str(ROOT / "grader"), "home": str(Path.home()),
               "hw_new": str(victims / "HW" / "planted"),
               "subs_new": str(victims / "subs" / "planted")}
     before = tree_digest(victims)
@@ -329,9 +333,16 @@ def test_the_key_cannot_be_read(battery):
     a = battery[0].answers
     assert a["atk_key_relative"] == []
     assert a["atk_key_absolute"] == "FileNotFoundError"  # the instructor's folders: not there
-    hits, walked, root = a["atk_walk"]
+    hits, walked, root, project_seen, home_entries = a["atk_walk"]
     assert hits == [] and walked  # it did walk the whole visible tree
-    assert "home" not in root and ROOT.parts[1] not in root  # no home, no project folders
+    # No project source, wherever the project lives (in CI: under /tmp, where the sandbox has a
+    # /tmp of its own). Of the home folder only the way to a Python installation inside it
+    # (e.g. ~/.pyenv, bound read-only) may show.
+    assert "home" not in root and not project_seen
+    home = Path.home()
+    python_dirs = {Path(p).resolve() for p in (sys.prefix, sys.base_prefix)}
+    allowed = {q.relative_to(home).parts[0] for q in python_dirs if q.is_relative_to(home)}
+    assert set(home_entries) <= allowed, home_entries
 
 
 def test_other_submissions_and_the_graders_process_are_out_of_reach(battery):
