@@ -71,13 +71,15 @@ def faults(solutions: dict, release: dict, specs: Sequence[dict], hw: Path) -> d
 
 
 def ignores_interrupt(solutions: dict, release: dict, specs: Sequence[dict], hw: Path) -> dict:
-    """A loop that swallows KeyboardInterrupt: only the whole-notebook deadline ends it.
+    """A loop that ignores the interrupt: only the whole-notebook deadline ends it.
 
-    The loop is in a function: at a cell's top level IPython lets the interrupt through
-    (observed with ipykernel 7), which would end the cell at the first interrupt.
+    SIGINT is ignored at the OS level (`SIG_IGN`), as a hostile notebook would do it: a loop
+    that merely catches KeyboardInterrupt can be interrupted between two iterations (seen in
+    CI), so it does not reliably outlast the per-cell interrupt.
     """
-    spin = ("def spin():\n    while True:\n        try:\n            while True:\n"
-            "                pass\n        except KeyboardInterrupt:\n            pass\n\nspin()")
+    spin = ("def spin():\n    import signal\n"
+            "    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the interrupt never arrives\n"
+            "    while True:\n        pass\n\nspin()")
     return _insert_after_parameters(solutions, [code_cell(spin, "spin")])
 
 
