@@ -38,6 +38,8 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from grader.cli import seconds_argument, whole_number_argument
+
 DEFAULT_OUT = Path("eulertop-demo")
 MARKER = ".eulertop-demo"
 ROSTER, HW, SUBMISSIONS, BENCH = "roster.csv", "HW", "submissions", "bench"
@@ -52,26 +54,6 @@ class FolderRefused(Exception):
     """``--out`` cannot be used; nothing was written."""
 
 
-def _seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected seconds, got {text!r}") from None
-    if not 0 < value < float("inf"):
-        raise argparse.ArgumentTypeError(f"must be a positive number of seconds, got {text}")
-    return value
-
-
-def _jobs(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
-    return value
-
-
 def add_demo_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``eulertop demo``."""
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, metavar="DIR",
@@ -79,10 +61,10 @@ def add_demo_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--force", action="store_true",
                         help="replace an earlier demo in DIR (never a folder holding anything "
                              "else)")
-    parser.add_argument("--timeout", type=_seconds, default=DEFAULT_TIMEOUT, metavar="S",
+    parser.add_argument("--timeout", type=seconds_argument, default=DEFAULT_TIMEOUT, metavar="S",
                         help="time limit for one whole notebook (default "
                              f"{DEFAULT_TIMEOUT:g} s; the looping student's runs this long)")
-    parser.add_argument("--jobs", type=_jobs, metavar="N",
+    parser.add_argument("--jobs", type=whole_number_argument, metavar="N",
                         help=f"submissions graded at once (default: cores, {os.cpu_count()})")
     parser.add_argument("--no-bench", action="store_true",
                         help="skip the work-precision charts (eulertop bench --quick)")

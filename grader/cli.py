@@ -31,7 +31,7 @@ def run_check(args: argparse.Namespace) -> int:
     return run(args)
 
 
-def _positive_int(text: str) -> int:
+def whole_number_argument(text: str) -> int:
     try:
         value = int(text)
     except ValueError:
@@ -41,7 +41,7 @@ def _positive_int(text: str) -> int:
     return value
 
 
-def _positive_seconds(text: str) -> float:
+def seconds_argument(text: str) -> float:
     try:
         value = float(text)
     except ValueError:
@@ -59,9 +59,9 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> None:
                         help="folder of submissions: <id>.ipynb or <id>/<one notebook>.ipynb")
     parser.add_argument("--out", type=Path, metavar="DIR",
                         help="where results/, feedback/ and grades.csv go (default: HW/graded)")
-    parser.add_argument("--jobs", type=_positive_int, metavar="N",
+    parser.add_argument("--jobs", type=whole_number_argument, metavar="N",
                         help=f"submissions graded at once (default: cores, {os.cpu_count()})")
-    parser.add_argument("--timeout", type=_positive_seconds, metavar="S",
+    parser.add_argument("--timeout", type=seconds_argument, metavar="S",
                         help="time limit for a whole notebook, kernel start included "
                              "(default 120 s; a cell gets at most 30 s)")
     parser.add_argument("--force", action="store_true",
