@@ -49,7 +49,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, fields, replace
 from functools import lru_cache
 from typing import Any, NamedTuple
@@ -766,3 +766,22 @@ def mistakes_distinguishable(answer: Answer, margin: float = 5.0) -> bool:
     except ValueError:  # ParameterError: a mistake within the widened tolerance of the key
         return False
     return all(grade(wide, m.value).mistake == m.name for m in wide.mistakes)
+
+
+def distinguishable_answers(
+    build: Callable[[], tuple[Answer, ...]], margin: float = 5.0
+) -> tuple[Answer, ...] | None:
+    """``build()``'s answers, or None when the draw must be rejected (a template's rule).
+
+    Rejected when a known mistake equals the key within its tolerance (``Answer`` refuses it,
+    raising :class:`ParameterError` on ``mistakes``) or lies within ``margin`` tolerances of the
+    key or of another mistake (:func:`mistakes_distinguishable`). Any other ``ParameterError``
+    is a bug in the template, not an unlucky draw, and propagates.
+    """
+    try:
+        answers = build()
+    except ParameterError as err:
+        if err.parameter != "mistakes":
+            raise
+        return None
+    return answers if all(mistakes_distinguishable(a, margin) for a in answers) else None

@@ -32,12 +32,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import ellipk
 
-from problems.answers import Answer, Mistake, mistakes_distinguishable
+from problems.answers import Answer, Mistake, distinguishable_answers
 from problems.rounding import latex_sig, round_sig
 from problems.templates.near_axis_stability import Body, draw_body
 from problems.variant import Variant, first_acceptable
 from solver.asymmetric_top import asymmetric_top_period, flip_time
-from solver.parameters import ParameterError
 from solver.torque_free import invariants, near_axis_stability
 
 NAME = "asymmetric_free_top"
@@ -193,13 +192,8 @@ def _statement(d: Draw) -> str:
 def _variant(d: Draw) -> Variant | None:
     if not _well_posed(d):
         return None
-    try:
-        answers = _answers(d)
-    except ParameterError as err:
-        if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
-            raise
-        return None  # a mistake indistinguishable from the key
-    if not all(mistakes_distinguishable(a, MARGIN) for a in answers):
+    answers = distinguishable_answers(lambda: _answers(d), MARGIN)
+    if answers is None:
         return None
     I1, I2, I3 = d.moments
     return Variant(

@@ -24,12 +24,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from problems.answers import Answer, Mistake, mistakes_distinguishable
+from problems.answers import Answer, Mistake, distinguishable_answers
 from problems.rounding import latex_sig, round_sig
 from problems.variant import Variant, first_acceptable
 from solver.asymmetric_top import asymmetric_top_period
 from solver.inertia import parallel_axis, shape_tensor
-from solver.parameters import ParameterError
 from solver.torque_free import near_axis_stability
 
 NAME = "near_axis_stability"
@@ -266,13 +265,8 @@ def _statement(d: Draw) -> str:
 def _variant(d: Draw) -> Variant | None:
     if not _well_posed(d):
         return None
-    try:
-        answers = (*_stability_answers(d), _rate_answer(d))
-    except ParameterError as err:
-        if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
-            raise
-        return None  # a mistake indistinguishable from the key
-    if not all(mistakes_distinguishable(a, MARGIN) for a in answers):
+    answers = distinguishable_answers(lambda: (*_stability_answers(d), _rate_answer(d)), MARGIN)
+    if answers is None:
         return None
     I1, I2, I3 = d.moments
     return Variant(

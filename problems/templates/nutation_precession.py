@@ -43,12 +43,11 @@ import math
 import numpy as np
 from scipy.special import ellipk
 
-from problems.answers import Answer, Mistake, mistakes_distinguishable
+from problems.answers import Answer, Mistake, distinguishable_answers
 from problems.rounding import latex_sig, round_sig
 from problems.templates.sleeping_top import draw_top
 from problems.variant import Variant, first_acceptable
 from solver.heavy_top import constants_of_motion, critical_spin, cubic_roots, nutation
-from solver.parameters import ParameterError
 
 NAME = "nutation_precession"
 TITLE = "Nutation period and mean precession rate of a heavy top"
@@ -194,13 +193,10 @@ def _variant(rng: np.random.Generator) -> Variant | None:
         alpha_dot0 = round_sig(rng.uniform(*PUSH) * Mgl / (I3 * omega3), SIG)
     if not _well_posed(_state(I1, I3, Mgl, beta0, omega3, alpha_dot0)):
         return None
-    try:
-        answers = _answers(I1, I3, Mgl, beta0, omega3, alpha_dot0)
-    except ParameterError as err:
-        if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
-            raise
-        return None
-    if not all(mistakes_distinguishable(a, MARGIN) for a in answers):
+    answers = distinguishable_answers(
+        lambda: _answers(I1, I3, Mgl, beta0, omega3, alpha_dot0), MARGIN
+    )
+    if answers is None:
         return None
     params = {"I1": I1, "I3": I3, "Mgl": Mgl, "beta0": beta0, "omega3": omega3,
               "alpha_dot0": alpha_dot0}

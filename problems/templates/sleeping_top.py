@@ -36,12 +36,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from problems.answers import Answer, Mistake, mistakes_distinguishable
+from problems.answers import Answer, Mistake, distinguishable_answers
 from problems.rounding import latex_sig, round_sig
 from problems.variant import Variant, first_acceptable
 from solver.heavy_top import critical_spin, sleeping_top_stable
 from solver.inertia import centre_of_mass_offset, parallel_axis, shape_tensor
-from solver.parameters import ParameterError
 
 NAME = "sleeping_top"
 TITLE = "The sleeping top: how fast must it spin?"
@@ -220,13 +219,10 @@ def _variant(rng: np.random.Generator) -> Variant | None:
     omega3 = round_sig(critical * rng.uniform(*SPIN_RATIO), SIG)
     if abs(omega3 / critical - 1.0) < THRESHOLD_MARGIN:
         return None
-    try:
-        answers = (_spin_answer(top), _stable_answer(top, omega3))
-    except ParameterError as err:
-        if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
-            raise
-        return None
-    if not all(mistakes_distinguishable(a, MARGIN) for a in answers):
+    answers = distinguishable_answers(
+        lambda: (_spin_answer(top), _stable_answer(top, omega3)), MARGIN
+    )
+    if answers is None:
         return None
     params = {"M": top.M, "R": top.R} | ({} if top.h is None else {"h": top.h})
     if top.kind.arm_range is not None:

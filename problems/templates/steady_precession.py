@@ -40,12 +40,11 @@ import math
 
 import numpy as np
 
-from problems.answers import Answer, Mistake, mistakes_distinguishable
+from problems.answers import Answer, Mistake, distinguishable_answers
 from problems.rounding import latex_sig, round_sig
 from problems.templates.sleeping_top import G, draw_top
 from problems.variant import Variant, first_acceptable
 from solver.heavy_top import fast_top_rates, steady_precession_rates
-from solver.parameters import ParameterError
 
 NAME = "steady_precession"
 TITLE = "Steady precession of a gyroscope: exact rates and the fast-top approximation"
@@ -173,13 +172,8 @@ def _variant(rng: np.random.Generator) -> Variant | None:
     stiffness = (I3 * omega3) ** 2 / (4 * I1 * Mgl * math.cos(beta0))
     if not STIFFNESS[0] <= stiffness <= STIFFNESS[1]:  # moved out by the rounding
         return None
-    try:
-        answers = _answers(M, arm, Icm, I3, G, beta0, omega3)
-    except ParameterError as err:
-        if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
-            raise
-        return None
-    if not all(mistakes_distinguishable(a, MARGIN) for a in answers):
+    answers = distinguishable_answers(lambda: _answers(M, arm, Icm, I3, G, beta0, omega3), MARGIN)
+    if answers is None:
         return None
     params = {"M": M, "l": arm, "Icm": Icm, "I3": I3, "g": G, "omega3": omega3, "beta0": beta0}
     units = {"M": "kg", "l": "m", "Icm": "kg m^2", "I3": "kg m^2", "g": "m/s^2",

@@ -43,12 +43,11 @@ from functools import cache
 import numpy as np
 import sympy as sp
 
-from problems.answers import Answer, Mistake, mistakes_distinguishable
+from problems.answers import Answer, Mistake, distinguishable_answers
 from problems.rounding import latex_sig, round_sig
 from problems.templates.sleeping_top import draw_top
 from problems.variant import Variant, first_acceptable
 from solver.heavy_top import constants_of_motion, critical_spin
-from solver.parameters import ParameterError
 from solver.symbolic import (
     SYMBOLS,
     conjugate_momenta,
@@ -316,14 +315,12 @@ def _variant(rng: np.random.Generator) -> Variant | None:
     q, c = QUANTITIES[index], _compiled(index)
     state = _state(rng)
     params = {n: state[n] for n in q.symbols}
-    try:
-        number = _number_answer(q, c, list(params.values()))
-    except ParameterError as err:
-        if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
-            raise
+    answers = distinguishable_answers(
+        lambda: (_number_answer(q, c, list(params.values())),), MARGIN
+    )
+    if answers is None:
         return None
-    if not mistakes_distinguishable(number, MARGIN):
-        return None
+    (number,) = answers
     units = {n: _PARAM[n][2] for n in params}
     return Variant(NAME, q.title, params, units, _statement(q, params), (c.expression, number))
 

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from problems.answers import Answer, Mistake, mistakes_distinguishable
+from problems.answers import Answer, Mistake, distinguishable_answers
 from problems.rounding import latex_sig, round_sig
 from problems.variant import Variant, first_acceptable
 from solver.inertia import shape_tensor
@@ -234,13 +234,8 @@ def _statement(d: Draw) -> str:
 def _variant(d: Draw | None) -> Variant | None:
     if d is None:
         return None
-    try:
-        answers = _answers(d)
-    except ParameterError as err:
-        if err.parameter != "mistakes":  # anything else is a bug, not an unlucky draw
-            raise
-        return None  # a mistake indistinguishable from the key
-    if not all(mistakes_distinguishable(a, MARGIN) for a in answers):
+    answers = distinguishable_answers(lambda: _answers(d), MARGIN)
+    if answers is None:
         return None
     return Variant(
         family=NAME,
