@@ -219,9 +219,14 @@ def turning_points(
     return _out(beta[:, 1], shape), _out(beta[:, 0], shape)
 
 
-def _motion(cubic: NutationCubic, flat) -> NDArray[np.str_]:
+def _sleeping(flat) -> NDArray[np.bool_]:
+    """Started exactly upright and at rest in β, with a stable spin (R19): a sleeping top."""
     i1, i3, mgl, b0, _, bd, _ = flat
-    sleeping = (b0 == 0) & (bd == 0) & sleeping_top_stable(i1, i3, mgl, _omega3(flat))
+    return (b0 == 0) & (bd == 0) & sleeping_top_stable(i1, i3, mgl, _omega3(flat))
+
+
+def _motion(cubic: NutationCubic, flat) -> NDArray[np.str_]:
+    sleeping = _sleeping(flat)
     rates = np.stack([precession_rate_at(cubic, 0), precession_rate_at(cubic, 1)])
     num = cubic.Q[None, :] - cubic.a[None, :] * cubic.w[:, :2].T  # b − a u_i, no cancellation
     scale = np.abs(cubic.Q)[None, :] + np.abs(cubic.a[None, :] * cubic.w[:, :2].T)
@@ -245,7 +250,7 @@ def motion_type(
 
 
 def _period(cubic: NutationCubic, flat) -> NDArray[np.float64]:
-    still = cubic.steady | (_motion(cubic, flat) == "sleeping")
+    still = cubic.steady | _sleeping(flat)
     return np.where(still, np.nan, nutation_period_of(cubic))
 
 
@@ -263,7 +268,7 @@ def nutation_period(
 
 
 def _mean_rate(cubic: NutationCubic, flat, period) -> NDArray[np.float64]:
-    sleeping = _motion(cubic, flat) == "sleeping"
+    sleeping = _sleeping(flat)
     with np.errstate(invalid="ignore"):
         mean = precession_angle_of(cubic) / period
     steady_rate = precession_rate_at(cubic, 1)
