@@ -20,7 +20,7 @@ from typing import Any, NamedTuple
 from grader.extract import invalid_reason
 from grader.results import AnswerResult
 from problems.answers import Answer, Verdict, grade
-from problems.variant import variable_name
+from problems.generate import key_records
 
 NOT_EXTRACTED = "not graded: the notebook did not run to the end, so no answer could be read"
 
@@ -34,16 +34,10 @@ class KeyAnswer(NamedTuple):
 
 
 def key_answers(key: Mapping, student_id: str) -> tuple[KeyAnswer, ...]:
-    """A student's answers from a loaded ``key.json``, in question order.
-
-    The same records as :func:`problems.generate.student_answers`, keeping the question number
-    (for the gradebook's points per question).
-    """
-    return tuple(
-        KeyAnswer(variable_name(q["question"], a["name"]), int(q["question"]), Answer.from_dict(a))
-        for q in key["students"][student_id]["questions"]
-        for a in q["answers"]
-    )
+    """A student's answers from a loaded ``key.json``, in question order, keeping the question
+    number (for the gradebook's points per question); read by
+    :func:`problems.generate.key_records`, next to the code that writes the key."""
+    return tuple(KeyAnswer(*record) for record in key_records(key, student_id))
 
 
 def variable_names(expected: Sequence[KeyAnswer]) -> tuple[str, ...]:

@@ -51,7 +51,7 @@ import os
 import secrets
 import shutil
 import tempfile
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
@@ -220,13 +220,17 @@ def manifest_entry(variants: Sequence[Variant], reroll: int) -> dict:
     return {"reroll": reroll, "questions": [v.public_dict(k) for k, v in enumerate(variants, 1)]}
 
 
+def key_records(key: Mapping, student_id: str) -> Iterator[tuple[str, int, Answer]]:
+    """``(variable, question, Answer)`` of a student's answers in a loaded ``key.json``, in
+    question order; ``variable`` is the notebook's name (``q3_beta1``)."""
+    for q in key["students"][student_id]["questions"]:
+        for a in q["answers"]:
+            yield variable_name(q["question"], a["name"]), int(q["question"]), Answer.from_dict(a)
+
+
 def student_answers(key: Mapping, student_id: str) -> dict[str, Answer]:
     """A student's answers from a loaded ``key.json``, by notebook variable (``q3_beta1``)."""
-    return {
-        variable_name(q["question"], a["name"]): Answer.from_dict(a)
-        for q in key["students"][student_id]["questions"]
-        for a in q["answers"]
-    }
+    return {variable: answer for variable, _, answer in key_records(key, student_id)}
 
 
 def _write_student(
