@@ -180,6 +180,10 @@ class Answer:
         if len(set(names)) != len(names):
             raise ParameterError("mistakes", f"answer {self.name!r}: duplicate names {names}")
 
+    def mistake(self, name: str) -> Mistake | None:
+        """The known mistake called ``name``, or None if this answer does not list it."""
+        return next((m for m in self.mistakes if m.name == name), None)
+
     def to_dict(self) -> dict:
         """Plain JSON (lists for tuples); ``Answer.from_dict(a.to_dict()) == a``."""
         d = asdict(self)

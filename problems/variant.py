@@ -109,6 +109,13 @@ class Variant:
         if len(set(names)) != len(names):
             raise ValueError(f"{where}: duplicate answer names {names}")
 
+    def answer(self, name: str) -> Answer:
+        """The answer called ``name`` (``KeyError`` if there is none)."""
+        for a in self.answers:
+            if a.name == name:
+                return a
+        raise KeyError(f"{self.family}: no answer {name!r}")
+
     def to_dict(self) -> dict:
         """Plain JSON; ``Variant.from_dict(v.to_dict()) == v``."""
         return {

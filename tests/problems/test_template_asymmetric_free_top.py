@@ -28,10 +28,6 @@ def euler(moments: tuple[float, float, float], w: np.ndarray) -> np.ndarray:
                      (I1 - I2) * w[0] * w[1] / I3])
 
 
-def answer(variant, name):
-    return next(a for a in variant.answers if a.name == name)
-
-
 @pytest.fixture(params=SEEDS, ids=[f"seed{s}" for s in SEEDS])
 def orbit(request):
     """The variant, and its orbit integrated over 2.3 key periods with ω2's extrema."""
@@ -42,7 +38,7 @@ def orbit(request):
     def omega2_extremum(t, w):
         return w[0] * w[2]
 
-    t_end = 2.3 * answer(variant, "period").value
+    t_end = 2.3 * variant.answer("period").value
     sol = solve_ivp(lambda t, w: euler(moments, w), (0.0, t_end), w0, method="DOP853",
                     rtol=1e-12, atol=1e-13 * np.abs(w0).max(), events=omega2_extremum,
                     dense_output=True)
@@ -55,12 +51,12 @@ def test_flip_time_is_the_spacing_of_omega2_max_and_min(orbit):
     times, states = sol.t_events[0], sol.y_events[0]
     assert len(times) >= 4
     assert np.all(np.diff(np.sign(states[:, 1])) != 0)  # maxima and minima alternate
-    assert_allclose(np.diff(times), answer(variant, "t_flip").value, rtol=1e-8)
+    assert_allclose(np.diff(times), variant.answer("t_flip").value, rtol=1e-8)
 
 
 def test_period_brings_omega_back(orbit):
     variant, sol = orbit
-    period = answer(variant, "period").value
+    period = variant.answer("period").value
     times = sol.t_events[0]
     assert_allclose(times[2:] - times[:-2], period, rtol=1e-8)
     w0 = np.array(variant.params["omega0"])
@@ -73,7 +69,7 @@ def test_circled_axis_keeps_the_sign_of_its_component(orbit):
     variant, sol = orbit
     w = sol.sol(np.linspace(0.0, sol.t[-1], 2000))
     keeps_sign = [bool(np.all(np.sign(c) == np.sign(c[0]))) for c in w]
-    assert keeps_sign == [str(k + 1) == answer(variant, "circled_axis").value for k in range(3)]
+    assert keeps_sign == [str(k + 1) == variant.answer("circled_axis").value for k in range(3)]
 
 
 def test_draws_are_ordered_off_the_separatrix_and_varied():
@@ -85,6 +81,6 @@ def test_draws_are_ordered_off_the_separatrix_and_varied():
         assert np.all(np.diff(m) >= template.MIN_GAP * m[2])
         L2, two_T = np.sum((m * w) ** 2), np.sum(m * w**2)
         assert abs(L2 - two_T * m[1]) >= template.SEPARATRIX_GAP * L2
-        kinds.add((int(np.argmax(np.abs(w))) + 1, answer(v, "circled_axis").value))
+        kinds.add((int(np.argmax(np.abs(w))) + 1, v.answer("circled_axis").value))
     # flips near ê2 on both sides of the separatrix, wobbles about ê1 and ê3
     assert {(2, "1"), (2, "3"), (1, "1"), (3, "3")} <= kinds

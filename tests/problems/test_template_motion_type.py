@@ -39,10 +39,6 @@ def variants():
     return [template.generate(np.random.default_rng(seed)) for seed in SEEDS]
 
 
-def answer(variant, name):
-    return next(a for a in variant.answers if a.name == name)
-
-
 def top(p: dict) -> tuple[float, float, float]:
     """``(I1 about the tip, I3, Mgl)`` from R2 (thin disc on a light axle), typed in."""
     Mgl = p["M"] * p["g"] * p["l"]
@@ -103,12 +99,12 @@ def paths(variants):
 
 
 def test_all_three_figures_occur(variants):
-    assert {answer(v, "motion").value for v in variants} == {"waves", "loops", "cusps"}
+    assert {v.answer("motion").value for v in variants} == {"waves", "loops", "cusps"}
 
 
 def test_rates_at_the_turning_points_match_the_integration(variants, paths):
     for v, (tilts, rates, _) in zip(variants, paths, strict=True):
-        a1, a2 = answer(v, "alpha_dot1").value, answer(v, "alpha_dot2").value
+        a1, a2 = v.answer("alpha_dot1").value, v.answer("alpha_dot2").value
         scale = max(abs(a1), abs(a2))
         upper = tilts < 0.5 * (tilts.min() + tilts.max())  # the events at β1 (highest axis)
         assert upper.any() and (~upper).any()
@@ -120,7 +116,7 @@ def test_rates_at_the_turning_points_match_the_integration(variants, paths):
 
 def test_figure_matches_the_signs_of_alpha_dot_along_the_path(variants, paths):
     for v, (_, rates, along) in zip(variants, paths, strict=True):
-        figure = answer(v, "motion").value
+        figure = v.answer("motion").value
         scale = np.abs(along).max()
         if figure == "loops":
             assert along.min() < -0.04 * scale and along.max() > 0.04 * scale
@@ -136,9 +132,9 @@ def test_figure_matches_the_signs_of_alpha_dot_along_the_path(variants, paths):
 def test_cusps_are_released_tops(variants):
     for v in variants:
         released = v.params["alpha_dot0"] == 0 and v.params["beta_dot0"] == 0
-        assert (answer(v, "motion").value == "cusps") == released
+        assert (v.answer("motion").value == "cusps") == released
         if released:
-            assert answer(v, "alpha_dot1").value == 0.0
+            assert v.answer("alpha_dot1").value == 0.0
 
 
 def test_mistakes_are_named_even_with_tolerances_widened_margin_times(variants):
@@ -153,10 +149,10 @@ def test_mistakes_are_named_even_with_tolerances_widened_margin_times(variants):
 
 def test_rate_mistakes_exchange_and_flip_the_key(variants):
     for v in variants:
-        a1, a2 = answer(v, "alpha_dot1"), answer(v, "alpha_dot2")
+        a1, a2 = v.answer("alpha_dot1"), v.answer("alpha_dot2")
         for key, other in ((a1, a2), (a2, a1)):
             wrong = {m.name: m.value for m in key.mistakes}
             assert wrong["turning_points_exchanged"] == other.value
             assert wrong.get("sign_flipped", 0.0) == -key.value  # absent only for a cusp's 0
-        figure = answer(v, "motion")
+        figure = v.answer("motion")
         assert {m.value for m in figure.mistakes} == set(template.OPTIONS) - {figure.value}

@@ -36,10 +36,6 @@ def variant(request):
     return template.generate(np.random.default_rng(request.param))
 
 
-def answer(variant, name):
-    return next(a for a in variant.answers if a.name == name)
-
-
 def moments(variant) -> tuple[float, float, float]:
     return tuple(variant.params[k] for k in ("I1", "I2", "I3"))
 
@@ -57,20 +53,20 @@ def eigenvalues(variant, axis: int, spin: float) -> np.ndarray:
 def test_stability_of_each_axis_from_the_jacobian(variant):
     for axis in (1, 2, 3):
         growth = eigenvalues(variant, axis, 1.0).real.max()
-        assert answer(variant, f"stable{axis}").value == (growth < 1e-9)
+        assert variant.answer(f"stable{axis}").value == (growth < 1e-9)
 
 
 def test_only_the_intermediate_moment_is_unstable(variant):
     middle = int(np.argsort(moments(variant))[1]) + 1
     for axis in (1, 2, 3):
-        assert answer(variant, f"stable{axis}").value == (axis != middle)
+        assert variant.answer(f"stable{axis}").value == (axis != middle)
 
 
 def test_rate_is_the_jacobian_eigenvalue(variant):
     axis = spin_axis(variant)
     lam = eigenvalues(variant, axis, variant.params["omega0"][axis - 1])
-    rate = answer(variant, "rate")
-    if answer(variant, f"stable{axis}").value:
+    rate = variant.answer("rate")
+    if variant.answer(f"stable{axis}").value:
         assert rate.unit == "rad/s"
         assert_allclose(rate.value, np.abs(lam.imag).max(), rtol=1e-10)
     else:
@@ -83,7 +79,7 @@ def _stable_variants(n: int = 12) -> list:
     found = []
     for seed in range(200):
         v = template.generate(np.random.default_rng(seed))
-        if answer(v, f"stable{spin_axis(v)}").value:
+        if v.answer(f"stable{spin_axis(v)}").value:
             found.append(v)
         if len(found) == n:
             return found
@@ -94,7 +90,7 @@ def _stable_variants(n: int = 12) -> list:
 def test_stable_wobble_is_in_the_linear_regime(variant):
     """The nonlinear wobble's period (crossings of a small component) matches 2π/rate."""
     axis = spin_axis(variant)
-    rate = answer(variant, "rate").value
+    rate = variant.answer("rate").value
     other = axis % 3  # index of the next axis in cyclic order (0-based)
     w0 = np.array(variant.params["omega0"])
 

@@ -31,10 +31,6 @@ def variant(request):
     return template.generate(np.random.default_rng(request.param))
 
 
-def answer(variant, name):
-    return next(a for a in variant.answers if a.name == name)
-
-
 def constants(p: dict) -> tuple[float, float, float]:
     """(p_α, p_γ, E') from the displayed state, β̇0 = 0 (R15, R16)."""
     s2, c = math.sin(p["beta0"]) ** 2, math.cos(p["beta0"])
@@ -68,8 +64,8 @@ def r20_reference(p: dict) -> tuple[mpmath.mpf, mpmath.mpf, list]:
 
 def test_period_and_mean_rate_against_mpmath(variant):
     period, mean, _ = r20_reference(variant.params)
-    assert math.isclose(answer(variant, "T_nut").value, float(period), rel_tol=1e-10)
-    assert math.isclose(answer(variant, "mean_rate").value, float(mean), rel_tol=1e-10)
+    assert math.isclose(variant.answer("T_nut").value, float(period), rel_tol=1e-10)
+    assert math.isclose(variant.answer("mean_rate").value, float(mean), rel_tol=1e-10)
 
 
 def _reduced_rhs(p: dict):
@@ -90,7 +86,7 @@ def _reduced_rhs(p: dict):
 def test_period_and_mean_rate_from_the_equations_of_motion(seed):
     v = template.generate(np.random.default_rng(seed))
     p = v.params
-    period = answer(v, "T_nut").value
+    period = v.answer("T_nut").value
 
     def turning(t, y):
         return y[1]
@@ -101,18 +97,18 @@ def test_period_and_mean_rate_from_the_equations_of_motion(seed):
     assert len(times) >= 2
     assert math.isclose(times[1], period, rel_tol=1e-8)
     alpha = sol.sol(times[1])[2]
-    assert math.isclose(alpha / times[1], answer(v, "mean_rate").value, rel_tol=1e-7)
+    assert math.isclose(alpha / times[1], v.answer("mean_rate").value, rel_tol=1e-7)
 
 
 def test_fast_top_mistakes_are_the_fast_top_formulas(variant):
     p = variant.params
     _, p_gamma, _ = constants(p)
-    t_mistakes = {m.name: m.value for m in answer(variant, "T_nut").mistakes}
-    r_mistakes = {m.name: m.value for m in answer(variant, "mean_rate").mistakes}
+    t_mistakes = {m.name: m.value for m in variant.answer("T_nut").mistakes}
+    r_mistakes = {m.name: m.value for m in variant.answer("mean_rate").mistakes}
     assert math.isclose(t_mistakes["small_oscillation"], 2 * math.pi * p["I1"] / p_gamma,
                         rel_tol=1e-12)
     assert math.isclose(r_mistakes["fast_top"], p["Mgl"] / p_gamma, rel_tol=1e-12)
-    assert math.isclose(t_mistakes["half_period"], answer(variant, "T_nut").value / 2)
+    assert math.isclose(t_mistakes["half_period"], variant.answer("T_nut").value / 2)
 
 
 def test_ellipk_mistake_uses_the_modulus(variant):
@@ -120,8 +116,8 @@ def test_ellipk_mistake_uses_the_modulus(variant):
 
     _, _, (u1, u2, u3) = r20_reference(variant.params)
     k2 = float((u2 - u1) / (u3 - u1))
-    T = answer(variant, "T_nut").value
-    wrong = next(m.value for m in answer(variant, "T_nut").mistakes if m.name == "ellipk_of_k")
+    T = variant.answer("T_nut").value
+    wrong = next(m.value for m in variant.answer("T_nut").mistakes if m.name == "ellipk_of_k")
     assert math.isclose(wrong / T, ellipk(math.sqrt(k2)) / ellipk(k2), rel_tol=1e-9)
 
 
@@ -158,5 +154,5 @@ def test_a_students_scipy_route_is_graded_correct(variant):
         return (b - a * u) / ((1 - u * u) * math.sqrt(abs(B * (u - u1) * (u - u2) * (u - u3))))
 
     angle = 2 * quad(integrand, u1, u2, limit=200)[0]
-    assert grade(answer(variant, "T_nut"), period).status == "correct"
-    assert grade(answer(variant, "mean_rate"), angle / period).status == "correct"
+    assert grade(variant.answer("T_nut"), period).status == "correct"
+    assert grade(variant.answer("mean_rate"), angle / period).status == "correct"

@@ -34,10 +34,6 @@ def variant(request):
     return template.generate(np.random.default_rng(request.param))
 
 
-def answer(variant, name):
-    return next(a for a in variant.answers if a.name == name)
-
-
 def moments(p: dict) -> tuple[float, float, float, float]:
     """(I1 about the tip, I3, I about the centre of mass, M g l), typed from R2."""
     M, R, g = p["M"], p["R"], p["g"]
@@ -58,7 +54,7 @@ def test_c2_is_the_textbook_coefficient():
 def test_critical_spin_from_the_expansion_of_v_eff(variant):
     I1, I3, _, Mgl = moments(variant.params)
     expected = P_CRITICAL(I1, Mgl) / I3
-    assert math.isclose(answer(variant, "omega3_c").value, expected, rel_tol=1e-12)
+    assert math.isclose(variant.answer("omega3_c").value, expected, rel_tol=1e-12)
 
 
 def _v_rise(I1: float, Mgl: float, p: float, beta: float = 1e-4) -> mpmath.mpf:
@@ -71,7 +67,7 @@ def _v_rise(I1: float, Mgl: float, p: float, beta: float = 1e-4) -> mpmath.mpf:
 
 def test_v_eff_changes_curvature_at_the_key(variant):
     I1, I3, _, Mgl = moments(variant.params)
-    w = answer(variant, "omega3_c").value
+    w = variant.answer("omega3_c").value
     assert _v_rise(I1, Mgl, I3 * w * (1 + 1e-6)) > 0  # a minimum: stable
     assert _v_rise(I1, Mgl, I3 * w * (1 - 1e-6)) < 0  # a maximum: unstable
 
@@ -79,14 +75,14 @@ def test_v_eff_changes_curvature_at_the_key(variant):
 def test_stability_at_the_given_spin(variant):
     I1, I3, _, Mgl = moments(variant.params)
     w = variant.params["omega3"]
-    assert answer(variant, "stable").value == bool(_v_rise(I1, Mgl, I3 * w) > 0)
-    critical = answer(variant, "omega3_c").value
+    assert variant.answer("stable").value == bool(_v_rise(I1, Mgl, I3 * w) > 0)
+    critical = variant.answer("omega3_c").value
     assert abs(w / critical - 1) >= template.THRESHOLD_MARGIN
 
 
 def test_mistake_values_follow_the_mistaken_physics(variant):
     I1, I3, i_cm, Mgl = moments(variant.params)
-    mistakes = {m.name: m.value for m in answer(variant, "omega3_c").mistakes}
+    mistakes = {m.name: m.value for m in variant.answer("omega3_c").mistakes}
     expected = {
         "I1_about_cm": 2 * math.sqrt(Mgl * i_cm) / I3,
         "I1_I3_swapped": 2 * math.sqrt(Mgl * I3) / I1,
@@ -107,7 +103,7 @@ def test_draws_are_real_tops_and_both_outcomes_occur():
         I1, I3, _, Mgl = moments(p)
         assert 0.02 <= Mgl / (p["M"] * p["g"]) <= 0.06  # centre of mass 2–6 cm from the tip
         assert I3 <= 2 * I1
-        outcomes.add(answer(v, "stable").value)
+        outcomes.add(v.answer("stable").value)
         kinds.add(("h" in p, "l" in p))
     assert outcomes == {True, False}
     assert len(kinds) == 3

@@ -25,10 +25,6 @@ def variant(request):
     return template.generate(np.random.default_rng(request.param))
 
 
-def answer(variant, name):
-    return next(a for a in variant.answers if a.name == name)
-
-
 def top(p: dict) -> tuple[float, float, float]:
     """(I1 about the pivot, p_γ, M g l)."""
     return p["Icm"] + p["M"] * p["l"] ** 2, p["I3"] * p["omega3"], p["M"] * p["g"] * p["l"]
@@ -40,8 +36,8 @@ def test_rates_are_the_roots_of_the_quadratic(variant):
     roots = np.roots([I1 * math.cos(p["beta0"]), -p_gamma, Mgl])
     assert np.all(np.isreal(roots))
     slow, fast = sorted(np.real(roots), key=abs)
-    assert math.isclose(answer(variant, "slow").value, slow, rel_tol=1e-10)
-    assert math.isclose(answer(variant, "fast").value, fast, rel_tol=1e-10)
+    assert math.isclose(variant.answer("slow").value, slow, rel_tol=1e-10)
+    assert math.isclose(variant.answer("fast").value, fast, rel_tol=1e-10)
 
 
 def _v_eff_slope(I1: float, Mgl: float, p_gamma: float, beta0: float, rate: float) -> float:
@@ -63,7 +59,7 @@ def test_rates_make_v_eff_stationary(variant):
     p = variant.params
     I1, p_gamma, Mgl = top(p)
     for which in ("slow", "fast"):
-        rate = answer(variant, which).value
+        rate = variant.answer(which).value
         assert abs(_v_eff_slope(I1, Mgl, p_gamma, p["beta0"], rate)) < 1e-12, which
         # and a rate 0.1 % off is not stationary: the test can tell
         assert abs(_v_eff_slope(I1, Mgl, p_gamma, p["beta0"], rate * 1.001)) > 1e-6, which
@@ -73,10 +69,10 @@ def test_fast_top_approximations_and_error(variant):
     p = variant.params
     I1, p_gamma, Mgl = top(p)
     slow_approx, fast_approx = Mgl / p_gamma, p_gamma / (I1 * math.cos(p["beta0"]))
-    assert math.isclose(answer(variant, "slow_approx").value, slow_approx, rel_tol=1e-13)
-    assert math.isclose(answer(variant, "fast_approx").value, fast_approx, rel_tol=1e-13)
-    slow = answer(variant, "slow").value
-    error = answer(variant, "slow_error").value
+    assert math.isclose(variant.answer("slow_approx").value, slow_approx, rel_tol=1e-13)
+    assert math.isclose(variant.answer("fast_approx").value, fast_approx, rel_tol=1e-13)
+    slow = variant.answer("slow").value
+    error = variant.answer("slow_error").value
     assert math.isclose(error, (slow_approx - slow) / slow, rel_tol=1e-9)
     assert error < 0  # Mgl/p_γ underestimates the slow rate above the horizontal
 
@@ -85,7 +81,7 @@ def test_mistaken_moment_about_the_centre_of_mass(variant):
     p = variant.params
     _, p_gamma, Mgl = top(p)
     roots = np.roots([p["Icm"] * math.cos(p["beta0"]), -p_gamma, Mgl])
-    wrong = next(m.value for m in answer(variant, "fast").mistakes if m.name == "I1_about_cm")
+    wrong = next(m.value for m in variant.answer("fast").mistakes if m.name == "I1_about_cm")
     assert math.isclose(wrong, max(np.real(roots), key=abs), rel_tol=1e-10)
 
 
@@ -98,4 +94,4 @@ def test_draws_have_real_rates_with_margin():
         assert template.STIFFNESS[0] <= stiffness <= template.STIFFNESS[1]
         assert 0.2 < p["beta0"] < 1.4  # above the horizontal, away from cos β0 = 0
         # the fast-top approximation is off by more than the tolerance
-        assert abs(answer(v, "slow_error").value) > 5 * template.RTOL
+        assert abs(v.answer("slow_error").value) > 5 * template.RTOL

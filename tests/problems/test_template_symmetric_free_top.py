@@ -58,22 +58,18 @@ def variant(request):
     return template.generate(np.random.default_rng(request.param))
 
 
-def answer(variant, name):
-    return next(a for a in variant.answers if a.name == name)
-
-
 def test_omega_at_t_matches_integrated_euler_equations(variant):
     t = variant.params["t"]
     _, y = integrate(variant, t, n=2)
-    assert_allclose(answer(variant, "omega_t").value, y[-1], rtol=1e-9)
+    assert_allclose(variant.answer("omega_t").value, y[-1], rtol=1e-9)
 
 
 def test_body_rate_and_period_from_the_turning_of_omega_perp(variant):
-    period = answer(variant, "T_body").value
+    period = variant.answer("T_body").value
     times, y = integrate(variant, 1.5 * period)
     phase = np.unwrap(np.arctan2(y[:, 1], y[:, 0]))  # Ω > 0: from ê1 towards ê2
     slope = np.polyfit(times, phase, 1)[0]
-    assert_allclose(answer(variant, "Omega").value, slope, rtol=1e-8)
+    assert_allclose(variant.answer("Omega").value, slope, rtol=1e-8)
     _, back = integrate(variant, period, n=2)  # ω is back where it started after one period
     assert_allclose(back[-1], variant.params["omega0"], rtol=1e-9, atol=0)
 
@@ -83,7 +79,7 @@ def test_space_precession_and_cone_angle_from_the_orientation(variant):
     I1, I3 = variant.params["I1"], variant.params["I3"]
     w0 = np.array(variant.params["omega0"])
     L = np.array([I1, I1, I3]) * w0  # inertial = body components at t = 0 (R(0) = 1)
-    alpha_dot = answer(variant, "alpha_dot").value
+    alpha_dot = variant.answer("alpha_dot").value
     times, y = integrate(variant, 1.3 * 2 * math.pi / alpha_dot, with_rotation=True)
     e3 = y[:, 3:].reshape(-1, 3, 3)[:, 2, :]  # row 3 of R: ê3 in inertial components
     n = L / np.linalg.norm(L)
@@ -92,7 +88,7 @@ def test_space_precession_and_cone_angle_from_the_orientation(variant):
     v = np.cross(n, u)
     phase = np.unwrap(np.arctan2(e3 @ v, e3 @ u))
     assert_allclose(np.polyfit(times, phase, 1)[0], alpha_dot, rtol=1e-8)
-    assert_allclose(np.arccos(e3 @ n), answer(variant, "theta").value, rtol=1e-8)
+    assert_allclose(np.arccos(e3 @ n), variant.answer("theta").value, rtol=1e-8)
 
 
 def test_oblate_and_prolate_bodies_are_both_drawn():
@@ -100,7 +96,7 @@ def test_oblate_and_prolate_bodies_are_both_drawn():
     for seed in range(40):
         v = template.generate(np.random.default_rng(seed))
         oblate = v.params["I3"] > v.params["I1"]
-        assert (answer(v, "Omega").value > 0) == oblate  # ω3 > 0 in every draw
+        assert (v.answer("Omega").value > 0) == oblate  # ω3 > 0 in every draw
         assert ("oblate" if oblate else "prolate") in v.statement
         shapes.add(oblate)
     assert shapes == {True, False}

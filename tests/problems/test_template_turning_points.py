@@ -30,17 +30,15 @@ SEEDS = range(30)
 EDGE = 1e-9  # brackets stop this far from the poles, where V_eff is infinite
 
 
+def _mistaken(variant, name, mistake_name):
+    """The listed mistake's value, or None if the answer does not list it in this variant."""
+    found = variant.answer(name).mistake(mistake_name)
+    return None if found is None else found.value
+
+
 @pytest.fixture(scope="module")
 def variants():
     return [template.generate(np.random.default_rng(seed)) for seed in SEEDS]
-
-
-def answer(variant, name):
-    return next(a for a in variant.answers if a.name == name)
-
-
-def mistake(variant, name, mistake_name):
-    return next((m.value for m in answer(variant, name).mistakes if m.name == mistake_name), None)
 
 
 def top(p: dict) -> tuple[float, float, float, float | None]:
@@ -97,8 +95,8 @@ def test_V_eff_matches_R16_at_40_digits(variants):
             reference = ((p_alpha - p_gamma * mpmath.cos(beta)) ** 2
                          / (2 * I1 * mpmath.sin(beta) ** 2) + Mgl * mpmath.cos(beta))
             spin = p_gamma**2 / (2 * I3)
-        assert answer(v, "V_eff").value == pytest.approx(float(reference), rel=1e-12)
-        assert mistake(v, "V_eff", "spin_energy_included") == pytest.approx(
+        assert v.answer("V_eff").value == pytest.approx(float(reference), rel=1e-12)
+        assert _mistaken(v, "V_eff", "spin_energy_included") == pytest.approx(
             float(reference + spin), rel=1e-12)
 
 
@@ -108,15 +106,15 @@ def test_turning_points_are_the_roots_of_V_eff_minus_E_prime(variants):
         I1, I3, Mgl, _ = top(p)
         p_alpha, p_gamma, e_prime = constants(I1, I3, Mgl, p)
         beta1, beta2 = roots(I1, Mgl, p_alpha, p_gamma, e_prime)
-        assert answer(v, "beta1").value == pytest.approx(beta1, rel=1e-9)
-        assert answer(v, "beta2").value == pytest.approx(beta2, rel=1e-9)
+        assert v.answer("beta1").value == pytest.approx(beta1, rel=1e-9)
+        assert v.answer("beta2").value == pytest.approx(beta2, rel=1e-9)
         assert beta1 <= p["beta0"] + 1e-12 and p["beta0"] <= beta2 + 1e-12
 
 
 def test_motion_stays_within_the_scene(variants):
     for v in variants:
         p = v.params
-        beta1, beta2 = answer(v, "beta1").value, answer(v, "beta2").value
+        beta1, beta2 = v.answer("beta1").value, v.answer("beta2").value
         assert 0.05 <= beta1 and beta2 <= math.pi - 0.05
         assert beta2 - beta1 >= 0.02  # not nearly steady precession
         if v.title.startswith("A toy top on a table"):
@@ -133,16 +131,16 @@ def test_turning_point_mistakes_are_the_mistaken_physics(variants):
         p_alpha, p_gamma, e_prime = constants(I1, I3, Mgl, p)
         with_E = roots(I1, Mgl, p_alpha, p_gamma, e_prime + p_gamma**2 / (2 * I3))
         for name, index in (("beta1", 0), ("beta2", 1)):
-            key = answer(v, name).value
-            assert mistake(v, name, "degrees") == pytest.approx(key * 180 / math.pi, rel=1e-12)
-            other = answer(v, ("beta2", "beta1")[index]).value
-            assert mistake(v, name, "turning_points_exchanged") == other
-            value = mistake(v, name, "E_not_E_prime")
+            key = v.answer(name).value
+            assert _mistaken(v, name, "degrees") == pytest.approx(key * 180 / math.pi, rel=1e-12)
+            other = v.answer(("beta2", "beta1")[index]).value
+            assert _mistaken(v, name, "turning_points_exchanged") == other
+            value = _mistaken(v, name, "E_not_E_prime")
             assert value is None or value == pytest.approx(with_E[index], rel=1e-8)
         if I1_cm is not None:
             wrong = roots(I1_cm, Mgl, *constants(I1_cm, I3, Mgl, p))
             for name, index in (("beta1", 0), ("beta2", 1)):
-                value = mistake(v, name, "I1_about_cm")
+                value = _mistaken(v, name, "I1_about_cm")
                 if value is not None:
                     cm_seen += 1
                     assert value == pytest.approx(wrong[index], rel=1e-8)
