@@ -211,7 +211,7 @@ def _cut(text: str, width: int) -> str:
 def student_table(results: Sequence, students: Sequence) -> str:
     """One line per student: id, name, what the demo made, points, what the grader said."""
     from eulertop.sample_class import describe
-    from grader.report import number
+    from grader.gradebook import number
 
     rows = [("id", "name", "made", "points", "the grader said")]
     for s, r in zip(students, results, strict=True):

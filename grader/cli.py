@@ -87,9 +87,9 @@ def _limits(timeout: float | None):
 
 def run_grade(args: argparse.Namespace, execute=None) -> int:
     """Run ``eulertop grade``; ``execute`` replaces the execution stage (tests, benchmarks)."""
+    from grader.gradebook import summary_table
     from grader.pipeline import UsageError, grade_assignment
     from grader.progress import Progress
-    from grader.report import summary_table
 
     try:
         report = grade_assignment(

@@ -57,7 +57,7 @@ from typing import Any
 
 from grader.compare import KeyAnswer, compare, key_answers, variable_names
 from grader.discover import Problem, Submission, discover
-from grader.report import feedback_html, gradebook_csv, gradebook_rows, ran_code
+from grader.gradebook import feedback_html, gradebook_csv, gradebook_rows, ran_code
 from grader.results import (
     StudentResult,
     atomic_write_text,

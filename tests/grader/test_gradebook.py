@@ -12,7 +12,7 @@ import pytest
 
 from grader.compare import compare, key_answers
 from grader.discover import Problem
-from grader.report import feedback_html, gradebook_csv, gradebook_rows, number, summary_table
+from grader.gradebook import feedback_html, gradebook_csv, gradebook_rows, number, summary_table
 from grader.results import StudentResult
 from problems.generate import generate_assignment
 from problems.roster import Roster
