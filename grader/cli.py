@@ -51,6 +51,24 @@ def seconds_argument(text: str) -> float:
     return value
 
 
+_SIZE_UNITS = {"": 1024**2, "k": 1024, "kb": 1024, "kib": 1024, "m": 1024**2, "mb": 1024**2,
+               "mib": 1024**2, "g": 1024**3, "gb": 1024**3, "gib": 1024**3}
+
+
+def size_argument(text: str) -> int:
+    """``20`` (MiB), ``500K``, ``20M``, ``1G``, ``20MiB`` → bytes."""
+    number = text.strip().rstrip("BbIiKkMmGg")
+    unit = text.strip()[len(number):].lower()
+    try:
+        value = float(number) * _SIZE_UNITS[unit]
+    except (ValueError, KeyError):
+        raise argparse.ArgumentTypeError(f"expected a size such as 20M or 500K, got {text!r}") \
+            from None
+    if not 0 < value < float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a positive size, got {text!r}")
+    return int(value)
+
+
 def add_grade_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``eulertop grade``."""
     parser.add_argument("hw", type=Path, metavar="HW",
@@ -63,7 +81,12 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"submissions graded at once (default: cores, {os.cpu_count()})")
     parser.add_argument("--timeout", type=seconds_argument, metavar="S",
                         help="time limit for a whole notebook, kernel start included "
-                             "(default 120 s; a cell gets at most 30 s)")
+                             "(default 120 s)")
+    parser.add_argument("--cell-timeout", type=seconds_argument, metavar="S",
+                        help="time limit for one cell (default 30 s; never more than --timeout)")
+    parser.add_argument("--max-size", type=size_argument, metavar="SIZE",
+                        help="largest submission read, e.g. 20M (default 20 MiB); a larger "
+                             "one is recorded as invalid without being read")
     parser.add_argument("--force", action="store_true",
                         help="regrade every submission, even those unchanged since last run")
     parser.add_argument("--reveal", action="store_true",
@@ -77,23 +100,32 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> None:
                              "pre-imported one (slower; the same isolation)")
 
 
-def _limits(timeout: float | None):
-    """``--timeout S`` sets the whole-notebook limit; a cell then gets at most that too
-    (``Limits.effective_cell_timeout``)."""
+def _limits(args: argparse.Namespace):
+    """``--timeout``, ``--cell-timeout``, ``--max-size`` as :class:`grader.limits.Limits`; a
+    cell limit above the notebook's is clipped to it, with a note on stderr."""
     from grader.limits import Limits
 
-    return Limits() if timeout is None else Limits(total_timeout=timeout)
+    given = {"total_timeout": getattr(args, "timeout", None),
+             "cell_timeout": getattr(args, "cell_timeout", None),
+             "submission_bytes": getattr(args, "max_size", None)}
+    limits = Limits(**{k: v for k, v in given.items() if v is not None})
+    if limits.cell_timeout > limits.total_timeout and given["cell_timeout"] is not None:
+        print(f"eulertop: note: --cell-timeout {limits.cell_timeout:g} s is above --timeout "
+              f"{limits.total_timeout:g} s; a cell gets at most {limits.total_timeout:g} s",
+              file=sys.stderr)
+    return limits
 
 
 def run_grade(args: argparse.Namespace, execute=None) -> int:
     """Run ``eulertop grade``; ``execute`` replaces the execution stage (tests, benchmarks)."""
     from grader.gradebook import summary_table
     from grader.pipeline import UsageError, grade_assignment
+    from grader.plain_text import printable
     from grader.progress import Progress
 
     try:
         report = grade_assignment(
-            args.hw, args.submissions, args.out, limits=_limits(args.timeout), jobs=args.jobs,
+            args.hw, args.submissions, args.out, limits=_limits(args), jobs=args.jobs,
             force=args.force, reveal=args.reveal, execute=execute,
             on_plan=lambda n: Progress(n), cold_kernels=getattr(args, "cold_kernels", False),
             sandbox=not getattr(args, "no_sandbox", False),
@@ -108,18 +140,18 @@ def run_grade(args: argparse.Namespace, execute=None) -> int:
         if threading.active_count() > 1:
             os._exit(130)  # abandoned kernels' threads: do not wait for them at exit
         return 130
-    print(summary_table(report.results, report.problems), end="")
+    print(printable(summary_table(report.results, report.problems)), end="")
     out = args.out or args.hw / "graded"
     kept = f"; {len(report.unchanged)} unchanged, kept (--force regrades)" if report.unchanged \
         else ""
     print(f"wrote {out / 'grades.csv'}, {out / 'results'}/, {out / 'feedback'}/{kept}")
     ignored = [p.message for p in report.problems if p.ignored]
     for line in ignored:
-        print(f"eulertop grade: {line}", file=sys.stderr)
+        print(f"eulertop grade: {printable(line)}", file=sys.stderr)
     if report.not_graded:
         print(f"eulertop grade: {len(report.not_graded)} submission(s) could not be graded:",
               file=sys.stderr)
         for line in report.not_graded:
-            print(f"  {line}", file=sys.stderr)
+            print(f"  {printable(line)}", file=sys.stderr)
         return 1
     return 0

@@ -65,7 +65,8 @@ def _candidates(folder: Path) -> dict[str, list[Path]]:
     for entry in sorted(folder.iterdir()):
         if entry.name.startswith("."):
             continue
-        if entry.is_dir():
+        if entry.is_dir() or entry.is_symlink() and not entry.name.endswith(SUFFIX):
+            # a link to a folder is this student's entry too: refused in _resolve, not followed
             found.setdefault(entry.name, []).append(entry)
         elif entry.name.endswith(SUFFIX):
             found.setdefault(entry.name[: -len(SUFFIX)], []).append(entry)
@@ -75,15 +76,21 @@ def _candidates(folder: Path) -> dict[str, list[Path]]:
 
 
 def _notebooks_in(folder: Path) -> list[Path]:
+    """The notebooks in a student's folder: what is named ``*.ipynb`` and is not a folder (a
+    link or a FIFO so named is the submission, refused when it is read)."""
     try:
-        return sorted(p for p in folder.iterdir()
-                      if p.is_file() and p.name.endswith(SUFFIX) and not p.name.startswith("."))
+        return sorted(p for p in folder.iterdir() if p.name.endswith(SUFFIX)
+                      and not p.name.startswith(".") and (p.is_symlink() or not p.is_dir()))
     except OSError:  # unreadable: reported as holding no notebook the grader can read
         return []
 
 
 def _resolve(folder: Path, sid: str, entries: list[Path]) -> Submission | Problem:
     """One student's entries → their submission, or the reason there is none to grade."""
+    for entry in entries:
+        if entry.is_symlink() and not entry.name.endswith(SUFFIX):
+            return Problem(entry, f"invalid submission: {entry.name} is a symbolic link, not "
+                                  "a folder", sid)
     notebooks = sorted(n for e in entries for n in (_notebooks_in(e) if e.is_dir() else [e]))
     if len(notebooks) == 1:
         return Submission(sid, notebooks[0])

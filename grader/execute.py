@@ -28,7 +28,7 @@ Output
     Output is never graded. :class:`_CappedClient` keeps at most ``Limits.output_bytes``
     characters of it per notebook and drops the rest on arrival; display updates and widget
     (comm) messages, which nbclient would otherwise accumulate, are ignored. A single message
-    larger than :data:`MAX_IOPUB_MESSAGE` is refused by ZeroMQ before it is read
+    larger than :data:`MAX_MESSAGE` is refused by ZeroMQ before it is read
     (``MAXMSGSIZE`` on the IOPub socket only), which severs IOPub: from then on outputs are
     no longer collected, cells still run, answers are still read (they come back on the shell
     channel), and ``output_truncated`` is set.
@@ -92,8 +92,11 @@ log = logging.getLogger(__name__)
 
 STATUSES = ("ok", "invalid_notebook", "timeout", "kernel_died", "error")
 
-MAX_IOPUB_MESSAGE = 32 * 1024**2
-"""Largest single output message (bytes) the grader accepts from a kernel."""
+MAX_MESSAGE = 4 * 1024**2
+"""Largest single message (bytes) the grader accepts from a kernel, on any channel."""
+
+RECEIVE_QUEUE = 64
+"""Messages a channel's socket queues before it stops reading (``RCVHWM``)."""
 
 EXTRACTION_TIMEOUT = 10.0
 """Seconds the answer extraction may take (within what is left of the whole-notebook limit)."""
@@ -147,6 +150,11 @@ class Execution:
         Some output was dropped (over ``Limits.output_bytes``, or one message too large).
     sandboxed : bool
         The kernel ran inside the sandbox of :mod:`grader.sandbox` (issue 5).
+    retry : bool
+        The run failed for a reason that is not the submission's (no kernel could be started
+        in time): the grader runs it again, and never keeps it as a final result.
+    isolation : str
+        What confined the kernel, for the record (:meth:`grader.sandbox.Sandbox.describe`).
     """
 
     status: str
@@ -156,6 +164,8 @@ class Execution:
     duration: float
     output_truncated: bool
     sandboxed: bool = False
+    retry: bool = False
+    isolation: str = ""
 
 
 class KernelProcess(Protocol):
@@ -258,7 +268,7 @@ class LocalKernel:
     async def _connect(self, make_client: Callable[..., Any]) -> Any:
         """Open the channels of ``make_client(context=...)`` and wait until the kernel answers.
 
-        IOPub alone refuses messages over :data:`MAX_IOPUB_MESSAGE`. Ready means a
+        Every channel refuses messages over :data:`MAX_MESSAGE` (issue 11). Ready means a
         ``kernel_info`` reply on the shell channel *and* a message on IOPub (so the
         subscription is live and no output is lost); jupyter_client's ``wait_for_ready`` also
         waits for 0.2 s of IOPub silence after that, a delay on every kernel start that the
@@ -268,10 +278,11 @@ class LocalKernel:
         import zmq.asyncio
 
         self._context = zmq.asyncio.Context()
+        # every channel's socket refuses a message over MAX_MESSAGE before reading it (the
+        # connection is dropped), and queues few: one kernel cannot fill the grader's memory
+        self._context.setsockopt(zmq.MAXMSGSIZE, MAX_MESSAGE)
+        self._context.setsockopt(zmq.RCVHWM, RECEIVE_QUEUE)
         self.kc = make_client(context=self._context)
-        for channel in ("shell", "stdin", "control"):
-            getattr(self.kc, f"{channel}_channel")  # created before the size limit is set
-        self._context.setsockopt(zmq.MAXMSGSIZE, MAX_IOPUB_MESSAGE)  # applies to IOPub only
         self.kc.start_channels()
         self._watch_iopub(zmq)
         await self._ready(self.limits.total_timeout)
@@ -303,7 +314,7 @@ class LocalKernel:
                 raise RuntimeError(f"the kernel did not answer in {timeout:g} s")
 
     def _watch_iopub(self, zmq: Any) -> None:
-        """Note when IOPub is severed (a message over MAX_IOPUB_MESSAGE was refused)."""
+        """Note when IOPub is severed (a message over MAX_MESSAGE was refused)."""
         from zmq.utils.monitor import parse_monitor_message
 
         self._monitor = self.kc.iopub_channel.socket.get_monitor_socket(zmq.EVENT_DISCONNECTED)
@@ -680,8 +691,10 @@ def _execution(run: _Run, status: str, notes: Sequence[str], kernel: Any,
                       f"({run.limits.total_timeout:g} s) ran out")
     answers = run.answers if status == "ok" else {}
     message = "; ".join([*notes, _summary(run, status, kernel, errors)])
+    retry = status == "error" and run.phase == "starting"  # no kernel: not the student's doing
     return Execution(status, message, answers, tuple(errors), duration, truncated,
-                     bool(getattr(kernel, "sandboxed", False)))
+                     bool(getattr(kernel, "sandboxed", False)), retry,
+                     str(getattr(kernel, "isolation", "") or ""))
 
 
 def _summary(run: _Run, status: str, kernel: Any, errors: Sequence[str]) -> str:
@@ -707,6 +720,11 @@ def _summary(run: _Run, status: str, kernel: Any, errors: Sequence[str]) -> str:
 
 def _death(kernel: Any, limits: Limits) -> str:
     code = kernel.exit_status() if kernel is not None else None
+    held = getattr(kernel, "memory_held", None)
+    if held:
+        return (f"it was stopped when its processes together held {_gib(held)}, over the "
+                f"memory limit of {_gib(limits.memory_bytes)} for the whole notebook (all the "
+                "processes it started count together)")
     memory = f"running out of memory (the limit is {_gib(limits.memory_bytes)})"
     if code is None or code == 0:
         return f"the process ended (exit(), quit(), os._exit(), or {memory})"

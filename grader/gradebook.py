@@ -21,6 +21,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from grader.discover import Problem
+from grader.plain_text import printable
 from grader.results import StudentResult
 
 MAX_SHOWN = 400
@@ -87,7 +88,7 @@ def gradebook_rows(
 def gradebook_csv(table: Sequence[Sequence[str]]) -> str:
     """``table`` as CSV text (RFC 4180 quoting, ``\\r\\n`` line ends as spreadsheets expect)."""
     buffer = io.StringIO(newline="")
-    csv.writer(buffer).writerows(table)
+    csv.writer(buffer).writerows([[printable(cell) for cell in row] for row in table])
     return buffer.getvalue()
 
 
@@ -105,7 +106,7 @@ code { white-space: pre-wrap; word-break: break-all; }
 
 
 def _e(value: Any) -> str:
-    return html.escape(str(value), quote=True)
+    return html.escape(printable(value), quote=True)
 
 
 def _shown(value: Any) -> str:

@@ -98,8 +98,8 @@ from grader.sandbox import (
     TOOLS,
     Sandbox,
     fresh_folder,
-    kernel_uid,
     run_folder,
+    slot_uid,
     spawn,
 )
 
@@ -118,6 +118,8 @@ __all__ = [
 ]
 
 ZYGOTE_SCRIPT = Path(__file__).with_name("zygote.py")
+WORLD_FILES = tuple(Path(__file__).parent / "sandbox" / f for f in ("world.py", "seccomp.py"))
+"""Bound beside the zygote in the sandbox: each kernel's own namespaces and seccomp filter."""
 
 ZYGOTE_START_TIMEOUT = 60.0
 """Seconds a zygote may take to import its modules (a loaded machine: several seconds)."""
@@ -152,7 +154,8 @@ def child_limits(limits: Limits) -> dict[str, int]:
     limit plus :data:`CPU_MARGIN`; ``fsize``: :data:`FILE_BYTES`; ``nproc``: :data:`PROCESSES`
     more than the user already has.
     """
-    return {"as": limits.memory_bytes, "cpu": math.ceil(limits.total_timeout) + CPU_MARGIN,
+    return {"as": limits.memory_bytes, "memory": limits.memory_bytes,
+            "cpu": math.ceil(limits.total_timeout) + CPU_MARGIN,
             "fsize": FILE_BYTES, "nproc": PROCESSES}
 
 
@@ -207,27 +210,37 @@ class Zygote:
 
     def __init__(self, folder: Path, preload: Sequence[str] | None = None,
                  sandbox: Sandbox | None = None, bind: Path | None = None,
-                 marker: str | None = None) -> None:
+                 marker: str | None = None, uid: int | None = None) -> None:
         self.folder = Path(folder)
         self.folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+        if uid is not None:  # its working folder is its own
+            os.chown(self.folder, uid, uid)
         env = kernel_environment(self.folder, self.folder)
         if marker:
             env["EULERTOP_RUN"] = marker
         argv = zygote_command(die_with_parent=True, preload=preload, marker=marker)
         outer = env
-        if sandbox is not None:
+        if sandbox is not None:  # with the per-kernel world beside it (grader/sandbox/world.py)
             inside = f"{TOOLS}/{ZYGOTE_SCRIPT.name}"
             argv[1] = inside
-            argv = sandbox.command(argv, env, bind or self.folder, self.folder,
-                                   files={str(ZYGOTE_SCRIPT): inside})
+            argv.append("--world")
+            files = {str(ZYGOTE_SCRIPT): inside,
+                     **{str(f): f"{TOOLS}/{f.name}" for f in WORLD_FILES}}
+            launch = sandbox.command(argv, env, bind or self.folder, self.folder, files=files,
+                                     uid=uid)
+            argv, options = launch.argv, launch.popen_options()
             outer = {"PATH": os.defpath, **({"EULERTOP_RUN": marker} if marker else {})}
+        else:
+            options = {"start_new_session": True}
         with open(self.folder / "zygote-stderr.txt", "wb") as log:
             self.process = spawn(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                 stderr=log, env=outer, cwd=self.folder, close_fds=True)
+                                 stderr=log, env=outer, cwd=self.folder, close_fds=True,
+                                 **options)
         self._lock = threading.Lock()  # one writer at a time
         self._changed = threading.Condition()
         self._replies: dict[int, dict] = {}
         self._exits: dict[int, int] = {}
+        self.memory_held: dict[int, int] = {}  # kernel pid -> bytes, when killed for memory
         self._seq = 0
         self.ready: dict | None = None
         self.dead = False
@@ -243,6 +256,8 @@ class Zygote:
                         self.ready = message
                     elif message.get("event") == "exit":
                         self._exits[int(message["pid"])] = int(message["status"])
+                        if "memory" in message:
+                            self.memory_held[int(message["pid"])] = int(message["memory"])
                     elif "seq" in message:
                         self._replies[int(message["seq"])] = message
                     self._changed.notify_all()
@@ -342,22 +357,25 @@ class _Forked:
     connection: dict
     limits: Limits
     sandboxed: bool = False  # workdir is inside the sandbox: not a path of this machine
-    uid: int | None = None  # the kernel's own uid (sandboxed, as root)
+    uid: int | None = None  # the uid of the slot's sandbox (as root)
 
 
 class Slot:
     """One worker slot: a zygote, and at most one prewarmed kernel waiting for a submission.
 
     Sandboxed (``sandbox``), the zygote runs in a ``bwrap`` sandbox whose one writable folder
-    is the slot's folder (mode 0711 when kernels get uids of their own: each can reach its own
-    control folder, none can list the others).
+    is the slot's folder (mode 0711: the sandbox's user reaches the control folders in it, made
+    its own, without listing them); as root, as a uid of the slot's own (:func:`slot_uid`).
+    Each kernel then hides the slot folder from itself but for its own control folder
+    (:mod:`grader.sandbox.world`).
     """
 
     def __init__(self, folder: Path, preload: Sequence[str] | None = None,
                  sandbox: Sandbox | None = None, marker: str | None = None) -> None:
         self.folder = Path(folder)
         self.sandbox, self.marker = sandbox, marker
-        self.mode = 0o711 if sandbox is not None and sandbox.per_kernel_uid else 0o700
+        self.mode = 0o711 if sandbox is not None else 0o700
+        self.uid = slot_uid() if sandbox is not None and sandbox.as_root else None
         self.folder.mkdir(mode=0o700, parents=True, exist_ok=True)
         os.chmod(self.folder, self.mode)
         self.preload = preload
@@ -372,7 +390,7 @@ class Slot:
             self.zygote.close()
         self.starts += 1
         self.zygote = Zygote(self.folder / f"z{self.starts}", self.preload, self.sandbox,
-                             self.folder, self.marker)
+                             self.folder, self.marker, self.uid)
 
     def fork(self, limits: Limits) -> _Forked:
         """Fork a new kernel (restarting a dead zygote first); :class:`ZygoteError`."""
@@ -394,18 +412,12 @@ class Slot:
             env = kernel_environment(workdir, control)
             env.update(IPYTHONDIR=f"{scratch}/ipython", MPLCONFIGDIR=f"{scratch}/matplotlib")
             extra["scratch"] = scratch
-            if self.sandbox.per_kernel_uid:
-                waiting = self.waiting.uid if self.waiting is not None else None
-                uid = kernel_uid()
-                while uid == waiting:
-                    uid = kernel_uid()
-                extra.update(uid=uid, gid=uid)
+            extra["world"] = {"scratch_bytes": self.sandbox.scratch_bytes}
+            uid = self.uid
         else:
             workdir = fresh_folder(self.folder, "w")
             env = kernel_environment(workdir, control)
         rlimits = child_limits(limits)
-        if sandboxed and uid is None:  # a user namespace: its /proc does not see them all
-            rlimits["nproc_base"] = _tasks_of_user(os.getuid())
         try:
             _, info = write_connection_file(
                 str(control / "kernel.json"), ip=str(control / "k"), transport="ipc",
@@ -514,7 +526,7 @@ class KernelPool:
         if sandbox is not None and (cold or not fork_available()):
             raise ValueError("a sandboxed pool forks its kernels: not cold, and on Linux")
         self.sandbox = sandbox
-        self.prewarm = prewarm and (sandbox is None or sandbox.per_kernel_uid)
+        self.prewarm = prewarm
         self.cold = cold or not fork_available()
         self.problem: str | None = None if not self.cold or cold else "fork is not available"
         self.folder: Path | None = None
@@ -524,7 +536,7 @@ class KernelPool:
         if not self.cold:
             run = self._run.enter_context(run_folder())
             self.folder = fresh_folder(run, "p")
-            if sandbox is not None and sandbox.per_kernel_uid:
+            if sandbox is not None:
                 os.chmod(self.folder, 0o711)
             try:
                 for i in range(max(1, slots)):
@@ -645,6 +657,17 @@ class PooledKernel(LocalKernel):
     def sandboxed(self) -> bool:
         """Whether this kernel runs in the pool's sandbox."""
         return self.pool.sandbox is not None and not self.cold
+
+    @property
+    def isolation(self) -> str:
+        """What confined this kernel (:meth:`grader.sandbox.Sandbox.describe`), or ""."""
+        return self.pool.sandbox.describe() if self.sandboxed else ""
+
+    @property
+    def memory_held(self) -> int | None:
+        """Bytes its processes held together when its keeper killed it for that, or None."""
+        forked = self.forked
+        return None if forked is None else forked.zygote.memory_held.get(forked.pid)
 
     def _deliver(self) -> None:
         """Hand the submission to a sandboxed kernel's working folder through its zygote

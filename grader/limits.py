@@ -28,13 +28,17 @@ class Limits:
         kernel is then killed (a loop that ignores the interrupt ends here) and no answer is
         read.
     memory_bytes : int
-        Address-space limit (``RLIMIT_AS``) of the kernel process, bytes. An allocation beyond
-        it raises ``MemoryError`` in the student's cell (or kills the kernel if it happens in
-        native code that cannot recover).
+        Memory of the whole submission, bytes: the address-space limit (``RLIMIT_AS``) of each
+        of its processes, and, sandboxed, the resident memory of all of them together (its
+        keeper kills the kernel past it: :mod:`grader.sandbox.world`). An allocation beyond the
+        first raises ``MemoryError`` in the student's cell.
     output_bytes : int
         Characters of cell output (prints, displays, tracebacks) kept per notebook; the rest is
         dropped as it arrives and ``Execution.output_truncated`` says so. Output is never
         graded; the cap only bounds the grader's memory.
+    submission_bytes : int
+        Largest submitted file read, bytes (``--max-size``); a larger one is refused before it
+        is read (:mod:`grader.submission_file`).
 
     Raises
     ------
@@ -51,11 +55,12 @@ class Limits:
     total_timeout: float = 120.0
     memory_bytes: int = 2 * 1024**3
     output_bytes: int = 1_000_000
+    submission_bytes: int = 20 * 1024**2
 
     def __post_init__(self) -> None:
         for field in ("cell_timeout", "total_timeout"):
             object.__setattr__(self, field, _positive(field, getattr(self, field)))
-        for field in ("memory_bytes", "output_bytes"):
+        for field in ("memory_bytes", "output_bytes", "submission_bytes"):
             value = _positive(field, getattr(self, field))
             if value != int(value):
                 raise ParameterError(field, f"must be a whole number of bytes, got {value!r}")

@@ -44,11 +44,12 @@ import fcntl
 import hashlib
 import json
 import os
+import shutil
 import sys
 import threading
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor, wait
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from functools import partial
@@ -65,6 +66,7 @@ from grader.results import (
     remove_stale_temporaries,
     write_result,
 )
+from grader.submission_file import DEFAULT_MAX_BYTES, InvalidSubmission, read_submission
 
 RESULTS, FEEDBACK, GRADES, LOCK = "results", "feedback", "grades.csv", ".lock"
 
@@ -190,9 +192,14 @@ def now() -> str:
 
 def _execution_record(execution: Any) -> dict:
     # no duration: it differs on every run, and graded_at is the record's one volatile field
-    return {"status": execution.status, "message": execution.message,
-            "cell_errors": list(execution.cell_errors),
-            "output_truncated": execution.output_truncated}
+    record = {"status": execution.status, "message": execution.message,
+              "cell_errors": list(execution.cell_errors),
+              "output_truncated": execution.output_truncated}
+    if getattr(execution, "retry", False):
+        record["retry"] = True
+    if getattr(execution, "isolation", ""):
+        record["isolation"] = execution.isolation
+    return record
 
 
 def grade_submission(
@@ -212,6 +219,7 @@ def grade_submission(
 
     sha256 = sha256 or file_sha256(submission.path)
     notes = []
+    fault = False  # the grader's own failure, not the student's: graded again next time
     claim = claimed_student(submission.path)
     if claim is not None and claim != submission.student_id:
         notes.append(f"note: the notebook's metadata names student {claim!r}; it was graded as "
@@ -223,6 +231,7 @@ def grade_submission(
         notes.insert(0, f"not a valid notebook: {e}")
     except Exception as e:  # one student's fault must not stop the others
         execution = None
+        fault = True
         notes.insert(0, f"the grader could not run this notebook ({type(e).__name__}: {e})")
     extracted = execution.answers if execution is not None else {}
     answers = compare(expected, extracted)
@@ -237,7 +246,8 @@ def grade_submission(
         max_points=sum(k.answer.points for k in expected),
         submission_sha256=sha256,
         key_sha256=key_sha256,
-        execution=_execution_record(execution) if execution is not None else {},
+        execution=(_execution_record(execution) if execution is not None else
+                   {"retry": True} if fault else {}),
         sandboxed=bool(getattr(execution, "sandboxed", False)),
         graded_at=now(),
     )
@@ -280,13 +290,20 @@ def _unchanged(old: StudentResult | None, sha: str | None, key_hash: str,
                fresh: StudentResult | None = None, sandboxed: bool = False) -> bool:
     if old is None or old.submission_sha256 != sha or old.key_sha256 != key_hash:
         return False
+    if old.execution.get("retry"):
+        return False  # not the student's doing (a kernel that could not start): grade again
     if sandboxed and ran_code(old) and not old.sandboxed:
         return False  # graded without a sandbox before: grade it in one now
     return fresh is None or (old.status, old.message) == (fresh.status, fresh.message)
 
 
-def _plan(a: Assignment, found, out: Path, force: bool, sandboxed: bool = False):
-    """Split the roster: (submissions to execute with their hashes, records to write, kept)."""
+def _plan(a: Assignment, found, out: Path, force: bool, sandboxed: bool = False,
+          max_bytes: int = DEFAULT_MAX_BYTES):
+    """Split the roster: (submissions to execute with their hashes, records to write, kept).
+
+    Each submission is read once here, safely (:func:`grader.submission_file.read_submission`:
+    a regular file under ``max_bytes``), only to hash it; one that is not is recorded
+    "invalid submission: <why>"."""
     to_run, to_write, kept = [], [], []
     problems = {p.student_id: p for p in found.problems if p.student_id is not None}
     by_id = {s.student_id: s for s in found.submissions}
@@ -295,11 +312,15 @@ def _plan(a: Assignment, found, out: Path, force: bool, sandboxed: bool = False)
         expected, key_hash = key_answers(a.key, sid), a.key_hash(sid)
         if sid in by_id:
             try:
-                sha = file_sha256(by_id[sid].path)
-            except OSError as e:
-                to_write.append(ungraded_result(
-                    sid, "failed", f"cannot read {by_id[sid].path.name}: {e.strerror}",
-                    expected, key_hash))
+                sha = hashlib.sha256(read_submission(by_id[sid].path, max_bytes)).hexdigest()
+            except (OSError, InvalidSubmission) as e:
+                why = (f"invalid submission: {e}" if isinstance(e, InvalidSubmission) else
+                       f"cannot read {by_id[sid].path.name}: {e.strerror}")
+                fresh = ungraded_result(sid, "failed", why, expected, key_hash)
+                if _unchanged(old, None, key_hash, fresh):
+                    kept.append(sid)
+                else:
+                    to_write.append(fresh)
                 continue
             if _unchanged(old, sha, key_hash, sandboxed=sandboxed):
                 kept.append(sid)
@@ -402,7 +423,8 @@ def grade_assignment(
     with run_lock(out):
         remove_stale_temporaries(out, out / RESULTS, out / FEEDBACK)
         found = discover(submissions, a.ids)
-        to_run, to_write, kept = _plan(a, found, out, force, found_sandbox is not None)
+        to_run, to_write, kept = _plan(a, found, out, force, found_sandbox is not None,
+                                       getattr(limits, "submission_bytes", DEFAULT_MAX_BYTES))
         if on_plan is not None:
             progress = on_plan(len(to_run) + len(to_write)) or progress
         for result in to_write:
@@ -455,16 +477,74 @@ def _run_all(a, out, to_run, execute, limits, jobs, reveal, progress) -> None:
     """Execute and grade ``to_run`` on ``jobs`` threads; each worker publishes its own record."""
     if not to_run:
         return
+    with ExitStack() as stack:
+        _run_all_in(stack, a, out, to_run, execute, limits, jobs, reveal, progress)
+
+
+RETRIES = 2
+"""Times a submission is run again after a failure that is not its own (:func:`_grade_copy`)."""
+
+
+@contextmanager
+def _copies_folder() -> Iterator[Path]:
+    """A private folder of the run folder for the grader's own copies of submissions."""
+    from grader.sandbox import fresh_folder, run_folder
+
+    with run_folder() as run:
+        folder = fresh_folder(run, "s")
+        try:
+            yield folder
+        finally:
+            shutil.rmtree(folder, ignore_errors=True)
+
+
+def _grade_copy(submission: Submission, expected, key_hash: str, execute: Execute, limits: Any,
+                sha: str, copies: Path) -> StudentResult:
+    """Grade the grader's own copy of ``submission``, read once more as safely as in
+    :func:`_plan` (and checked to be what was hashed there). A run that failed for a reason that
+    is not the student's (``Execution.retry``: no kernel could be started) is run again, up to
+    :data:`RETRIES` times; if it still fails, its record says so and the next run grades it
+    again."""
+    max_bytes = getattr(limits, "submission_bytes", DEFAULT_MAX_BYTES)
+    try:
+        data = read_submission(submission.path, max_bytes)
+    except (OSError, InvalidSubmission) as e:
+        why = (f"invalid submission: {e}" if isinstance(e, InvalidSubmission) else
+               f"cannot read {submission.path.name}: {e.strerror}")
+        return ungraded_result(submission.student_id, "failed", why, expected, key_hash)
+    if hashlib.sha256(data).hexdigest() != sha:
+        return ungraded_result(submission.student_id, "failed", "invalid submission: the file "
+                               "changed while the class was being graded", expected, key_hash)
+    from grader.sandbox import fresh_folder
+
+    folder = fresh_folder(copies, "c")
+    copy = folder / submission.path.name
+    try:
+        fd = os.open(copy, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        own = Submission(submission.student_id, copy)
+        for _ in range(RETRIES + 1):
+            result = grade_submission(own, expected, key_hash, execute, limits, sha)
+            if not result.execution.get("retry"):
+                break
+        return result
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def _run_all_in(stack, a, out, to_run, execute, limits, jobs, reveal, progress) -> None:
     stop = threading.Event()
 
     def work(submission, expected, key_hash, sha):
         if stop.is_set():
             return
-        result = grade_submission(submission, expected, key_hash, execute, limits, sha)
+        result = _grade_copy(submission, expected, key_hash, execute, limits, sha, copies)
         _publish(a, out, result, reveal)
         if progress:
             progress(result)
 
+    copies = stack.enter_context(_copies_folder())
     pool = ThreadPoolExecutor(max_workers=jobs, thread_name_prefix="eulertop-grade")
     futures = [pool.submit(work, *task) for task in to_run]
     try:

@@ -11,6 +11,7 @@ import sys
 import threading
 from typing import TextIO
 
+from grader.plain_text import printable
 from grader.results import StudentResult
 
 BAR_WIDTH = 24
@@ -37,10 +38,11 @@ class Progress:
 
     def _line(self, r: StudentResult) -> str:
         score = f"{r.points:g}/{r.max_points:g}" if r.status == "graded" else r.status
+        who = printable(r.student_id, newlines=False)
         if not self.tty:
-            return f"[{self.done}/{self.total}] {r.student_id}: {score}\n"
+            return f"[{self.done}/{self.total}] {who}: {score}\n"
         filled = BAR_WIDTH * self.done // max(self.total, 1)
         bar = "#" * filled + "-" * (BAR_WIDTH - filled)
         failed = f", {self.failed} failed" if self.failed else ""
         end = "\n" if self.done == self.total else ""
-        return f"\r\x1b[K[{bar}] {self.done}/{self.total}{failed}  {r.student_id}: {score}{end}"
+        return f"\r\x1b[K[{bar}] {self.done}/{self.total}{failed}  {who}: {score}{end}"

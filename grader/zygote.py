@@ -63,6 +63,7 @@ import os
 import resource
 import select
 import signal
+import socket
 import sys
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS"):
@@ -78,6 +79,11 @@ KERNEL_MODULES = ("ipykernel.ipkernel", "ipykernel.zmqshell", "ipykernel.debugge
                   "tornado.platform.asyncio", "faulthandler")
 """What a kernel imports while it starts and runs its first cells (measured with ipykernel 7:
 the debugger alone, debugpy, is a third of a start); imported too, when present."""
+
+WORLD_TIMEOUT = 10.0
+"""Seconds a forked kernel may take to make its own world (mounts) before it is given up."""
+
+world = None  # grader/sandbox/world.py, bound beside this script in the sandbox
 
 PR_SET_PDEATHSIG, PR_SET_DUMPABLE, PR_SET_CHILD_SUBREAPER = 1, 4, 36
 IGNORED = (signal.SIGINT, signal.SIGHUP, signal.SIGQUIT, signal.SIGUSR1, signal.SIGUSR2)
@@ -120,6 +126,8 @@ class Zygote:
         self.kernels: set[int] = set()  # forked kernels not yet reaped
         self.folders: list[str] = []  # the kernels' folders (from the requests), removed at end
         self.own: dict[int, dict] = {}  # kernel pid -> its request (scratch, uid) while alive
+        self.links: dict[int, socket.socket] = {}  # kernel pid -> the zygote's end of its link
+        self.workdirs: dict[int, int] = {}  # kernel pid -> descriptor of its working folder
         self.pid = os.getpid()
         self.buffer = b""
         self.ending = False
@@ -173,47 +181,84 @@ class Zygote:
 
     def fork(self, request: dict) -> int:
         scratch = request.get("scratch")
-        if scratch:  # sandboxed: the kernel's folders in the sandbox's tmpfs, its own
+        in_world = request.get("world") is not None
+        if in_world and world is None:
+            raise RuntimeError("no per-kernel world here (grader/sandbox/world.py not bound)")
+        if scratch and not in_world:  # the kernel's folders in the sandbox's shared tmpfs
             made = [scratch] + [os.path.join(scratch, d) for d in ("work", "ipython",
                                                                     "matplotlib")]
             for folder in made:
                 os.mkdir(folder, 0o700)
                 if request.get("uid") is not None:
                     os.chown(folder, int(request["uid"]), int(request["gid"]))
+        link = child_link = None
+        if in_world:
+            link, child_link = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         pid = os.fork()
         if pid == 0:
             code = 1
             try:
-                _become_kernel(request, self.pid)
+                if link is not None:
+                    link.close()
+                    world.enter(request, child_link)  # returns in the kernel only
+                _become_kernel(request, self.pid, child_link)
                 code = 0
             except BaseException:
                 with contextlib.suppress(BaseException):
                     import traceback
 
-                    traceback.print_exc()  # into control/kernel-stderr.txt
+                    traceback.print_exc()  # into the kernel's stderr log
             finally:
                 os._exit(code)  # never return into the server loop
+        if child_link is not None:
+            child_link.close()
+            self.links[pid] = link
         self.kernels.add(pid)
         self.folders += [request["workdir"], request["control"]]
-        if request.get("scratch"):
-            self.folders.append(request["scratch"])
+        if scratch and not in_world:
+            self.folders.append(scratch)
         self.own[pid] = request
         return pid
+
+    def _workdir_fd(self, pid: int) -> int:
+        """The descriptor of a kernel's working folder in its own world (sent once by the
+        kernel when its mounts are made); waits for it at most :data:`WORLD_TIMEOUT`."""
+        if pid in self.workdirs:
+            return self.workdirs[pid]
+        link = self.links.get(pid)
+        if link is None:
+            raise ValueError("no such kernel")
+        link.settimeout(WORLD_TIMEOUT)
+        try:
+            _, fds, _, _ = socket.recv_fds(link, 16, 1)
+        except (OSError, TimeoutError) as err:
+            raise ValueError(f"the kernel did not make its world ({err})") from None
+        if not fds:
+            raise ValueError("the kernel ended before making its world")
+        self.workdirs[pid] = fds[0]
+        return fds[0]
 
     def deliver(self, request: dict) -> None:
         """Write one file of the submission into a sandboxed kernel's working folder."""
         import base64
 
-        own = self.own.get(int(request["pid"]))
+        pid = int(request["pid"])
+        own = self.own.get(pid)
         if own is None or not own.get("scratch"):
             raise ValueError("no such sandboxed kernel")
         name = str(request["name"])
         if os.path.basename(name) != name or name in ("", ".", ".."):
             raise ValueError(f"not a file name: {name!r}")
-        workdir = own["workdir"]
-        if os.listdir(workdir):
+        if own.get("world") is not None:  # in the kernel's own tmpfs, through its descriptor
+            where = self._workdir_fd(pid)
+            path, dir_fd = name, where
+        else:
+            where = own["workdir"]
+            path, dir_fd = os.path.join(where, name), None
+        if os.listdir(where):
             raise ValueError("the working folder is not empty")
-        fd = os.open(os.path.join(workdir, name), os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600,
+                     dir_fd=dir_fd)
         try:
             data = base64.b64decode(request["data"])
             while data:
@@ -243,8 +288,32 @@ class Zygote:
 
     def _exited(self, pid: int, status: int) -> None:
         self.kernels.discard(pid)
+        event = {"event": "exit", "pid": pid, "status": os.waitstatus_to_exitcode(status)}
+        event.update(self._close_link(pid))
         self._clear(pid)
-        _send({"event": "exit", "pid": pid, "status": os.waitstatus_to_exitcode(status)})
+        _send(event)
+
+    def _close_link(self, pid: int) -> dict:
+        """Close what the zygote holds of a kernel's world; what its keeper said (e.g.
+        ``{"memory": bytes}`` when it killed the kernel for its memory)."""
+        said: dict = {}
+        if pid in self.workdirs:
+            with contextlib.suppress(OSError):
+                os.close(self.workdirs.pop(pid))
+        link = self.links.pop(pid, None)
+        if link is not None:
+            link.setblocking(False)
+            with contextlib.suppress(OSError, ValueError):
+                while True:
+                    data, fds, _, _ = socket.recv_fds(link, 4096, 1)
+                    for fd in fds:
+                        os.close(fd)
+                    if not data:
+                        break
+                    if data != b"work":
+                        said.update(json.loads(data))
+            link.close()
+        return said
 
     def _clear(self, pid: int) -> None:
         """A sandboxed kernel ended: kill every process of its uid, remove its scratch."""
@@ -361,17 +430,26 @@ def _set_limit(which: int, value: int) -> None:
     resource.setrlimit(which, (value, value))
 
 
-def _become_kernel(request: dict, zygote_pid: int) -> None:
-    """In the forked child: confine this process, then run the kernel (returns when it ends)."""
-    os.setsid()
+def _become_kernel(request: dict, zygote_pid: int, link: socket.socket | None = None) -> None:
+    """In the forked child: confine this process, then run the kernel (returns when it ends).
+
+    With ``request["world"]`` (sandboxed) this runs in G, the kernel's own namespaces already
+    made by :func:`world.enter`; it builds the kernel's mounts (:func:`world.build`) and seals
+    them once the kernel is initialised (:func:`world.seal`)."""
     scratch, uid = request.get("scratch"), request.get("uid")
-    if uid is not None:  # its own unprivileged user: no capability left, RLIMIT_NPROC counts
-        os.setgroups([])
-        os.setgid(int(request["gid"]))
-        os.setuid(int(uid))
-    prctl(PR_SET_PDEATHSIG, signal.SIGKILL)  # after setuid, which clears it
-    if os.getppid() != zygote_pid:  # the zygote died before the line above
-        os._exit(1)
+    in_world = request.get("world") is not None
+    if in_world:
+        world.build(request, link)
+        link.close()
+    else:
+        os.setsid()
+        if uid is not None:  # its own unprivileged user: no capability left, RLIMIT_NPROC counts
+            os.setgroups([])
+            os.setgid(int(request["gid"]))
+            os.setuid(int(uid))
+        prctl(PR_SET_PDEATHSIG, signal.SIGKILL)  # after setuid, which clears it
+        if os.getppid() != zygote_pid:  # the zygote died before the line above
+            os._exit(1)
     prctl(PR_SET_DUMPABLE, 0)
     signal.set_wakeup_fd(-1)
     for signum in (signal.SIGCHLD, signal.SIGTERM, *IGNORED):
@@ -380,7 +458,7 @@ def _become_kernel(request: dict, zygote_pid: int) -> None:
     # stdio: nothing inherited stays open (fds 0 and 1 were the zygote's pipes to the grader)
     null = os.open(os.devnull, os.O_RDWR)
     log = os.open(os.path.join(scratch or request["control"], "kernel-stderr.txt"),
-                  os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+                  os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_NOFOLLOW, 0o600)
     os.dup2(null, 0)
     os.dup2(null, 1)
     os.dup2(log, 2)
@@ -390,10 +468,12 @@ def _become_kernel(request: dict, zygote_pid: int) -> None:
     _set_limit(resource.RLIMIT_AS, int(limits["as"]))
     _set_limit(resource.RLIMIT_CPU, int(limits["cpu"]))
     _set_limit(resource.RLIMIT_FSIZE, int(limits["fsize"]))
-    # RLIMIT_NPROC counts every thread of the real user: allow what exists plus a margin
-    base = limits.get("nproc_base")  # given where this /proc does not see every process
-    base = _tasks_of_user(os.getuid()) if base is None else int(base)
-    _set_limit(resource.RLIMIT_NPROC, base + int(limits["nproc"]))
+    if in_world:  # counted in its own user namespace: its own processes only
+        _set_limit(resource.RLIMIT_NPROC, int(limits["nproc"]))
+    else:  # RLIMIT_NPROC counts every thread of the real user: what exists plus a margin
+        base = limits.get("nproc_base")  # given where this /proc does not see every process
+        base = _tasks_of_user(os.getuid()) if base is None else int(base)
+        _set_limit(resource.RLIMIT_NPROC, base + int(limits["nproc"]))
     os.environ.clear()
     os.environ.update(request["env"])
     os.chdir(request["workdir"])
@@ -412,12 +492,20 @@ def _become_kernel(request: dict, zygote_pid: int) -> None:
     # possible (a prewarmed kernel waits beside a running one; the grader keeps its own copy)
     with contextlib.suppress(OSError):
         os.unlink(request["connection_file"])
+    if in_world:  # sockets bound: nothing of the world can be changed from here on
+        sealed = world.seal(request)
+        print(f"eulertop: kernel sealed ({json.dumps(sealed)})", file=sys.stderr, flush=True)
     app.start()
 
 
 def main() -> None:
     """Entry point: make the server ready (imports), then serve until the grader leaves."""
+    global world
     if sys.path and os.path.abspath(sys.path[0]) == os.path.dirname(os.path.abspath(__file__)):
+        if "--world" in sys.argv:  # sandboxed: world.py and seccomp.py are bound beside us
+            import world as world_module
+
+            world = world_module
         del sys.path[0]  # run as a script: the grader's folder is not for kernels to import
     prctl(PR_SET_DUMPABLE, 0)
     prctl(PR_SET_CHILD_SUBREAPER, 1)

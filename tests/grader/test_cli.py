@@ -212,10 +212,34 @@ def test_bad_options_are_usage_errors(option, capsys):
     assert stop.value.code == 2
 
 
+def _grade_args(*options: str):
+    return build_parser("grade").parse_args(["grade", "HW", "SUBS", *options])
+
+
 def test_timeout_sets_the_whole_notebook_limit_and_caps_the_cells():
-    limits = grader_cli._limits(5.0)
+    limits = grader_cli._limits(_grade_args("--timeout", "5"))
     assert (limits.total_timeout, limits.effective_cell_timeout) == (5.0, 5.0)
-    assert grader_cli._limits(None) == type(limits)()
+    assert grader_cli._limits(_grade_args()) == type(limits)()
+
+
+def test_a_cell_limit_above_the_notebook_limit_is_clipped_with_a_note(capsys):
+    limits = grader_cli._limits(_grade_args("--timeout", "20", "--cell-timeout", "45"))
+    assert (limits.total_timeout, limits.effective_cell_timeout) == (20.0, 20.0)
+    assert "a cell gets at most 20 s" in capsys.readouterr().err
+    assert grader_cli._limits(_grade_args("--cell-timeout", "3")).effective_cell_timeout == 3.0
+
+
+@pytest.mark.parametrize(("text", "size"), [("20", 20 * 1024**2), ("500K", 500 * 1024),
+                                            ("2MiB", 2 * 1024**2), ("1G", 1024**3)])
+def test_max_size_reads_sizes_with_units(text, size):
+    assert grader_cli._limits(_grade_args("--max-size", text)).submission_bytes == size
+
+
+@pytest.mark.parametrize("text", ["0", "-5M", "lots", "5X"])
+def test_a_bad_max_size_is_a_usage_error(text):
+    with pytest.raises(SystemExit) as stop:
+        main(["grade", "HW", "SUBS", "--max-size", text])
+    assert stop.value.code == 2
 
 
 def test_check_is_served_from_grader_cli():

@@ -80,14 +80,15 @@ __all__ = [
     "RUN_FOLDER",
     "SCRATCH",
     "SCRATCH_BYTES",
+    "Launch",
     "Sandbox",
     "SandboxUnavailable",
     "available",
     "fresh_folder",
-    "kernel_uid",
     "probe",
     "remove_stale_run_folders",
     "run_folder",
+    "slot_uid",
     "spawn",
 ]
 
@@ -111,13 +112,9 @@ ETC = ("/etc/ld.so.cache", "/etc/ld.so.conf", "/etc/ld.so.conf.d", "/etc/localti
        "/etc/fonts", "/etc/alternatives")
 """The pieces of ``/etc`` bound into the sandbox (read-only, when present)."""
 
-CAPABILITIES = ("CAP_SETUID", "CAP_SETGID", "CAP_KILL", "CAP_CHOWN", "CAP_DAC_OVERRIDE",
-                "CAP_FOWNER")
-"""What the zygote keeps as root (module docstring); every kernel drops them all."""
-
 UID_BASE, UID_SPAN = 0x60000000, 0x10000000
-"""Kernels' own uids/gids are drawn from ``[UID_BASE, UID_BASE + UID_SPAN)``: far above any
-real user (and below the 32-bit ``-1``)."""
+"""As root, each slot's sandbox runs as a uid/gid of its own drawn from
+``[UID_BASE, UID_SPAN + UID_BASE)``: far above any real user (and below the 32-bit ``-1``)."""
 
 RUN_FOLDER = re.compile(r"eulertop-(\d+)-([0-9a-f]{8})")
 """Name of a run folder: ``eulertop-<grader pid>-<8 hex digits>``."""
@@ -127,9 +124,22 @@ class SandboxUnavailable(RuntimeError):
     """No sandbox can be had here; the message says why and how to get one."""
 
 
-def kernel_uid() -> int:
-    """A fresh uid (= gid) for one kernel, from the reserved high range."""
+def slot_uid() -> int:
+    """A fresh uid (= gid) for one slot's sandbox (as root), from the reserved high range."""
     return UID_BASE + secrets.randbelow(UID_SPAN)
+
+
+@dataclass(frozen=True)
+class Launch:
+    """What starts one sandbox: ``argv`` and the uid it runs as (None: the grader's own)."""
+
+    argv: list[str]
+    uid: int | None
+
+    def popen_options(self) -> dict:
+        """Keyword arguments of ``subprocess.Popen`` for this launch: a session of its own
+        (the terminal's Ctrl-C never reaches a sandbox)."""
+        return {"start_new_session": True}
 
 
 @dataclass(frozen=True)
@@ -140,29 +150,44 @@ class Sandbox:
     ----------
     bwrap : str
         Path of the ``bwrap`` executable.
-    per_kernel_uid : bool
-        Running as root: kernels drop to uids of their own; else a user namespace is used.
+    as_root : bool
+        The grader runs as root: every sandbox runs as a uid of its own (:func:`slot_uid`),
+        never as root; otherwise as the grader's user. Either way in a user namespace.
     scratch_bytes : int
-        Size of the scratch tmpfs at :data:`SCRATCH`.
+        Size of each kernel's own tmpfs (``/tmp`` and ``/dev/shm`` together), bytes.
     """
 
     bwrap: str
-    per_kernel_uid: bool
+    as_root: bool
     scratch_bytes: int = SCRATCH_BYTES
 
+    def describe(self) -> str:
+        """One line for the run's header and every record: what confines each kernel."""
+        from grader.sandbox import seccomp
+
+        try:
+            seccomp.program()
+            filtered = f"seccomp ({len(seccomp.refused())} calls refused)"
+        except ValueError as err:
+            filtered = f"no seccomp filter ({err})"
+        who = "a uid of its own per slot, never root" if self.as_root else "your uid"
+        return (f"bubblewrap, then per kernel: own user, PID, mount, network, IPC and UTS "
+                f"namespaces, {filtered}, no capabilities, no_new_privs, "
+                f"{self.scratch_bytes // 1024**2} MiB tmpfs for /tmp and /dev/shm, read-only "
+                f"elsewhere; as {who}; limits: memory of all its processes together (watched), "
+                "processes per kernel, CPU time, file size (rlimits); no cgroups")
+
     def command(self, argv: Sequence[str], env: Mapping[str, str], folder: Path,
-                cwd: Path, files: Mapping[str, str] | None = None) -> list[str]:
-        """``bwrap`` options, then ``argv``: run ``argv`` with environment ``env`` (only), the
-        folder ``folder`` read-write, ``cwd`` as working folder, and ``files`` (host path →
-        path in the sandbox) bound read-only under :data:`TOOLS`."""
-        args = [self.bwrap, "--unshare-ipc", "--unshare-pid", "--unshare-net", "--unshare-uts",
-                "--unshare-cgroup-try", "--die-with-parent", "--new-session", "--clearenv"]
-        if self.per_kernel_uid:
-            args += ["--cap-drop", "ALL"]
-            for cap in CAPABILITIES:
-                args += ["--cap-add", cap]
-        else:
-            args += ["--unshare-user", "--disable-userns"]
+                cwd: Path, files: Mapping[str, str] | None = None,
+                uid: int | None = None) -> Launch:
+        """Run ``argv`` with environment ``env`` (only), the folder ``folder`` read-write,
+        ``cwd`` as working folder, and ``files`` (host path → path in the sandbox) bound
+        read-only under :data:`TOOLS`; as root, as ``uid`` (default: a fresh one)."""
+        if self.as_root and uid is None:
+            uid = slot_uid()
+        args = [self.bwrap, "--unshare-user", "--unshare-ipc", "--unshare-pid",
+                "--unshare-net", "--unshare-uts", "--unshare-cgroup-try", "--die-with-parent",
+                "--new-session", "--clearenv"]
         for name, value in env.items():
             args += ["--setenv", name, value]
         made: set[str] = {"/"}
@@ -187,11 +212,13 @@ class Sandbox:
                 args += ["--ro-bind", top, top]
         args += ["--ro-bind", "/usr", "/usr"]
         bound = ["/usr", "/bin", "/sbin", "/lib", "/lib32", "/lib64", "/libx32"]
+        sources = []
         for path in _python_paths():
             if any(path == b or path.startswith(b.rstrip("/") + "/") for b in bound):
                 continue
             args += [*ancestors(path, "0755"), "--ro-bind", path, path]
             bound.append(path)
+            sources.append(path)
         for path in ETC:
             if os.path.exists(path):
                 args += [*ancestors(path, "0755"), "--ro-bind", path, path]
@@ -199,11 +226,45 @@ class Sandbox:
             if not inside.startswith(TOOLS + "/"):
                 raise ValueError(f"{inside}: files go under {TOOLS}")
             args += [*ancestors(inside, "0755"), "--ro-bind", source, inside]
+            sources.append(source)
         args += ["--proc", "/proc", "--dev", "/dev"]
         folder = str(Path(folder).resolve())
         args += [*ancestors(folder, "0711"), "--bind", folder, folder]
         args += ["--chdir", str(Path(cwd).resolve()), "--", *argv]
-        return args
+        if uid is not None:
+            args = [*_as_user(uid, sources), *args]
+        return Launch(args, uid)
+
+
+def _as_user(uid: int, sources: Sequence[str]) -> list[str]:
+    """As root: what runs the sandbox's ``bwrap`` as ``uid`` instead — ``setpriv`` (no
+    capability, no other group), inside a first, root ``bwrap`` that only makes the folders
+    above ``sources`` that ``uid`` could not pass (a Python under ``/root``) passable: each such
+    folder is replaced, in that first mount namespace only, by an empty one (mode 0711) with
+    what is needed bound back."""
+    setpriv = shutil.which("setpriv") or "/usr/bin/setpriv"
+    drop = [setpriv, f"--reuid={uid}", f"--regid={uid}", "--clear-groups", "--inh-caps=-all",
+            "--"]
+    closed = sorted({str(p) for s in sources for p in Path(s).parents
+                     if not os.stat(p).st_mode & 0o001}, key=len)
+    if not closed:
+        return drop
+    outer = [shutil.which("bwrap") or "bwrap", "--dev-bind", "/", "/", "--die-with-parent",
+             "--cap-add", "CAP_SETUID", "--cap-add", "CAP_SETGID"]
+    for folder in closed:
+        if any(folder.startswith(c.rstrip("/") + "/") for c in closed if c != folder):
+            continue  # below one replaced already
+        outer += ["--perms", "0711", "--tmpfs", folder]
+        made = {folder}
+        for source in sources:
+            if source.startswith(folder.rstrip("/") + "/"):
+                for parent in reversed(Path(source).parents):
+                    if str(parent).startswith(folder.rstrip("/") + "/") and \
+                            str(parent) not in made:
+                        made.add(str(parent))
+                        outer += ["--perms", "0711", "--dir", str(parent)]
+                outer += ["--bind", source, source]
+    return [*outer, "--", *drop]
 
 
 def _python_paths() -> list[str]:
@@ -242,18 +303,20 @@ def probe() -> Sandbox:
     bwrap = shutil.which("bwrap")
     if bwrap is None:
         raise _unavailable("the bubblewrap program 'bwrap' is not installed")
-    sandbox = Sandbox(bwrap, per_kernel_uid=os.geteuid() == 0)
+    sandbox = Sandbox(bwrap, as_root=os.geteuid() == 0)
     folder = Path(tempfile.mkdtemp(prefix="eulertop-probe-"))
     try:
         code = ("import os, socket\n"
                 "try:\n    socket.create_connection(('127.0.0.1', 9), timeout=1)\n"
                 "except OSError:\n    pass\nelse:\n    raise SystemExit('network reachable')\n"
                 "assert os.getpid() < 10, 'no PID namespace'\n")
-        argv = sandbox.command([sys.executable, "-I", "-c", code], {"PATH": "/usr/bin"},
-                               folder, folder)
+        launch = sandbox.command([sys.executable, "-I", "-c", code], {"PATH": "/usr/bin"},
+                                 folder, folder)
+        if launch.uid is not None:
+            os.chown(folder, launch.uid, launch.uid)
         try:
-            done = subprocess.run(argv, capture_output=True, timeout=30, text=True,
-                                  stdin=subprocess.DEVNULL)
+            done = subprocess.run(launch.argv, capture_output=True, timeout=30, text=True,
+                                  stdin=subprocess.DEVNULL, **launch.popen_options())
         except (OSError, subprocess.TimeoutExpired) as err:
             raise _unavailable(f"bwrap could not be run ({err})") from None
         if done.returncode != 0:

@@ -1,0 +1,37 @@
+"""Student-controlled text made safe to show: no control characters (issue 11).
+
+A cell's source, an exception message or a file name can hold terminal escape sequences
+(``ESC [ 2 J`` clears an instructor's screen; ``ESC ] 8`` makes links), carriage returns that
+overwrite a line, or bidirectional overrides that reorder what is read. Before any such text
+reaches a terminal, a CSV cell or an HTML page, every control character — C0 and C1 (but tab
+and newline), DEL, and the Unicode bidirectional embeddings, overrides and isolates — is shown
+as its escape (``\\x1b``, ``\\u202e``) instead of acting.
+"""
+
+from __future__ import annotations
+
+import re
+
+_CONTROL = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u061c\u200e\u200f\u202a-\u202e\u2066-\u2069]")
+
+
+def _escape(match: re.Match) -> str:
+    code = ord(match.group())
+    return f"\\x{code:02x}" if code < 0x100 else f"\\u{code:04x}"
+
+
+def printable(text: object, newlines: bool = True) -> str:
+    """``str(text)`` with every control character written as its escape (module docstring);
+    with ``newlines=False`` newlines (and tabs) too.
+
+    Examples
+    --------
+    >>> printable("ok\\x1b[2J done\\r")
+    'ok\\\\x1b[2J done\\\\x0d'
+    >>> printable("a\\nb", newlines=False)
+    'a\\\\x0ab'
+    """
+    text = str(text)
+    if newlines:
+        return _CONTROL.sub(_escape, text)
+    return _CONTROL.sub(_escape, text.replace("\t", "\\x09").replace("\n", "\\x0a"))
