@@ -65,7 +65,7 @@ def _candidates(folder: Path) -> dict[str, list[Path]]:
     for entry in sorted(folder.iterdir()):
         if entry.name.startswith("."):
             continue
-        if entry.is_dir() or entry.is_symlink() and not entry.name.endswith(SUFFIX):
+        if entry.is_dir() or (entry.is_symlink() and not entry.name.endswith(SUFFIX)):
             # a link to a folder is this student's entry too: refused in _resolve, not followed
             found.setdefault(entry.name, []).append(entry)
         elif entry.name.endswith(SUFFIX):

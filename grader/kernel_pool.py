@@ -34,15 +34,10 @@ Why one zygote per slot (and not one per run), and how issue 5's sandbox fits
       child subreaper — before kernel *k + 1* is forked. The per-slot ``bwrap`` alone then
       isolates every kernel from every other (other slots are other sandboxes). Issue 5 can
       ship on this with no more than the wrapped command;
-    * with prewarm on, kernel *k* and the idle, prewarmed *k + 1* share the slot's sandbox.
-      While *k* runs, it could reach *k + 1*'s IPC sockets (the connection file, with the
-      key, is removed as soon as *k + 1* has loaded it, but not before) and so run code in the
-      next student's kernel before that student's notebook starts, or listen to its output.
-      Issue 5 closes this by confining each child after ``fork`` too
-      (:func:`grader.zygote._become_kernel` is the place: ``unshare`` of user, mount, PID and
-      network namespaces, then a mount view with only its own two folders) — or keeps prewarm
-      off under the sandbox. Kernels are non-dumpable, so ptrace and ``/proc/<pid>/mem`` across
-      kernels already fail for a process without ``CAP_SYS_PTRACE``;
+    * with prewarm on, kernel *k* and the idle, prewarmed *k + 1* share the slot's sandbox,
+      but never a world: each forked child makes its own namespaces before it runs anything
+      (:mod:`grader.sandbox.world`, issue 11), so *k* can neither see nor reach *k + 1* — not
+      its process, not its sockets, not its folders;
     * a kernel that kills or stops its zygote harms only its own slot: the kernel dies with its
       zygote (``PR_SET_PDEATHSIG``; that student's "kernel died" is their own doing), the slot
       starts a new zygote on its next kernel, and the other slot runs on;
@@ -56,15 +51,14 @@ Nothing secret in a zygote
     forked child shares, holds nothing of the grader's), and only ever receives paths and the
     limits of the kernel it is asked to fork. It never holds the key, results or submissions.
 
-Residual risks, and the sandbox (issue 5)
+Residual risks, and the sandbox (issues 5 and 11)
     Without a sandbox (``KernelPool(sandbox=None)``, ``eulertop grade --no-sandbox``), every
     kernel runs as the grader's user: it can signal (not ptrace: both the zygote and kernels
     are non-dumpable) the zygote and the other slot's kernel, and read any folder the user can
     — the cold path has the same exposure. With ``sandbox=`` (:mod:`grader.sandbox`, the
-    grader's default) each slot's zygote runs in ``bwrap`` (:meth:`Zygote.__init__`), kernels'
-    working folders are in the sandbox's tmpfs and the submission is handed over by the zygote
-    (``deliver``), and as root each kernel has a uid of its own (:meth:`Slot.fork`), which
-    closes the prewarm exposure above; not as root, prewarm is off under the sandbox.
+    grader's default) each slot's zygote runs in ``bwrap`` (:meth:`Zygote.__init__`), every
+    kernel in a world of its own, and the submission is handed over by the zygote
+    (``deliver``), as root and as an ordinary user alike.
 
 Fallback
     Where ``fork`` is unavailable (not Linux) or a zygote cannot be started, kernels are cold
@@ -172,19 +166,6 @@ def zygote_command(die_with_parent: bool = False,
             *(["--die-with-parent"] if die_with_parent else []),
             *([f"--preload={','.join(preload)}"] if preload is not None else []),
             *([f"--run={marker}"] if marker else [])]
-
-
-def _tasks_of_user(uid: int) -> int:
-    """Threads the user ``uid`` has on this machine (what ``RLIMIT_NPROC`` counts)."""
-    total = 0
-    for entry in os.listdir("/proc"):
-        if entry.isdigit():
-            with contextlib.suppress(OSError, ValueError):
-                status = Path(f"/proc/{entry}/status").read_text()
-                fields = dict(line.split(":", 1) for line in status.splitlines() if ":" in line)
-                if int(fields["Uid"].split()[0]) == uid:
-                    total += int(fields.get("Threads", "1"))
-    return total
 
 
 class Zygote:
@@ -465,9 +446,9 @@ class Slot:
 
 
 def _lock_control(forked: _Forked) -> None:
-    """After a sandboxed kernel bound its sockets, and before any cell of the student runs:
-    its control folder (on this machine's disk) is no longer writable by it — given back to
-    the grader's user when the kernel has a uid of its own, else made read-only."""
+    """After a sandboxed kernel bound its sockets: its control folder (on this machine's disk)
+    is given back to the grader's user (as root), else made read-only — besides the read-only
+    mount the kernel's world already put on it (:func:`grader.sandbox.world.seal`)."""
     with contextlib.suppress(OSError):
         if forked.uid is not None:
             os.chown(forked.control, os.geteuid(), os.getegid())
@@ -510,11 +491,10 @@ class KernelPool:
         Modules each zygote imports (default :data:`grader.zygote.PRELOAD`: ipykernel,
         IPython, numpy, scipy, sympy).
     sandbox : grader.sandbox.Sandbox, optional
-        Run each slot's zygote, and so every kernel, in this sandbox (issue 5;
+        Run each slot's zygote, and so every kernel, in this sandbox (issues 5 and 11;
         :mod:`grader.sandbox`). None: no sandbox (the caller decided so). Sandboxed, the pool
         never falls back to unsandboxed cold kernels: a zygote that cannot start makes that
-        submission's run fail ("error"); and without kernels of their own uid (not root),
-        prewarm is turned off, so that a slot's kernels never coexist.
+        submission's run fail ("error", retried by the grader).
 
     Use as a context manager (or call :meth:`close`): ending it kills every zygote, kernel and
     leftover process, and removes the pool's folder. The pool's folder is in the process's

@@ -27,14 +27,16 @@ Requests (``seq`` is echoed in the reply)::
     {"seq": 4, "op": "deliver", "pid": P, "name": N, "data": base64}
         -> {"seq": 4, "ok": true}        # file N into P's (still empty) scratch working folder
 
-Sandboxed (issue 5, :mod:`grader.sandbox`), a fork request also has ``"scratch"``: a folder in
-the sandbox's own size-limited tmpfs, made by the child (mode 0700) with ``work`` (the working
-folder), ``ipython`` and ``matplotlib`` in it and the kernel's stderr; and, as root,
-``"uid"``/``"gid"``: the child drops to them (``setgroups([])``, ``setgid``, ``setuid``) before
-anything else, so every kernel is its own unprivileged user. The submission then arrives by
-``deliver`` (the grader cannot see the sandbox's tmpfs). When such a kernel ends or is killed,
-every process of its uid is killed and its scratch folder removed (space for the next one).
-    events: {"event": "exit", "pid": P, "status": S}        # S as Popen.returncode
+Sandboxed (issues 5 and 11, :mod:`grader.sandbox`), a fork request also has ``"world"`` and
+``"scratch"``: the child leaves the zygote's world (:func:`world.enter`: new user, PID, mount,
+network, IPC and UTS namespaces; the kernel is PID 1 of its own, watched by a keeper outside it)
+and builds its own (:func:`world.build`: a size-limited tmpfs at ``/tmp`` holding ``scratch``
+with ``work``, ``ipython``, ``matplotlib`` and the kernel's stderr; only its own control
+folder). It sends the zygote a descriptor of its working folder over a socket pair; the
+submission then arrives by ``deliver``, written through that descriptor (the grader cannot see
+that tmpfs). The keeper reports on the same socket when it killed the kernel for its memory; the
+exit event then says so (``"memory": bytes``).
+    events: {"event": "exit", "pid": P, "status": S[, "memory": B]}  # S as Popen.returncode
             {"event": "stray", "pid": Q}                    # a leftover process was killed
 
 End of stdin (the grader ended, however it ended) or SIGTERM (sent when the grader's thread
@@ -125,7 +127,7 @@ class Zygote:
     def __init__(self) -> None:
         self.kernels: set[int] = set()  # forked kernels not yet reaped
         self.folders: list[str] = []  # the kernels' folders (from the requests), removed at end
-        self.own: dict[int, dict] = {}  # kernel pid -> its request (scratch, uid) while alive
+        self.own: dict[int, dict] = {}  # kernel pid -> its request while alive
         self.links: dict[int, socket.socket] = {}  # kernel pid -> the zygote's end of its link
         self.workdirs: dict[int, int] = {}  # kernel pid -> descriptor of its working folder
         self.pid = os.getpid()
@@ -180,17 +182,9 @@ class Zygote:
         _send(reply)
 
     def fork(self, request: dict) -> int:
-        scratch = request.get("scratch")
         in_world = request.get("world") is not None
         if in_world and world is None:
             raise RuntimeError("no per-kernel world here (grader/sandbox/world.py not bound)")
-        if scratch and not in_world:  # the kernel's folders in the sandbox's shared tmpfs
-            made = [scratch] + [os.path.join(scratch, d) for d in ("work", "ipython",
-                                                                    "matplotlib")]
-            for folder in made:
-                os.mkdir(folder, 0o700)
-                if request.get("uid") is not None:
-                    os.chown(folder, int(request["uid"]), int(request["gid"]))
         link = child_link = None
         if in_world:
             link, child_link = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
@@ -214,9 +208,8 @@ class Zygote:
             child_link.close()
             self.links[pid] = link
         self.kernels.add(pid)
-        self.folders += [request["workdir"], request["control"]]
-        if scratch and not in_world:
-            self.folders.append(scratch)
+        if not in_world:  # a world's folders are in its own tmpfs, gone with it
+            self.folders += [request["workdir"], request["control"]]
         self.own[pid] = request
         return pid
 
@@ -239,32 +232,26 @@ class Zygote:
         return fds[0]
 
     def deliver(self, request: dict) -> None:
-        """Write one file of the submission into a sandboxed kernel's working folder."""
+        """Write one file of the submission into a sandboxed kernel's (still empty) working
+        folder, in its own tmpfs, through the descriptor it sent (:meth:`_workdir_fd`)."""
         import base64
 
         pid = int(request["pid"])
         own = self.own.get(pid)
-        if own is None or not own.get("scratch"):
+        if own is None or own.get("world") is None:
             raise ValueError("no such sandboxed kernel")
         name = str(request["name"])
         if os.path.basename(name) != name or name in ("", ".", ".."):
             raise ValueError(f"not a file name: {name!r}")
-        if own.get("world") is not None:  # in the kernel's own tmpfs, through its descriptor
-            where = self._workdir_fd(pid)
-            path, dir_fd = name, where
-        else:
-            where = own["workdir"]
-            path, dir_fd = os.path.join(where, name), None
+        where = self._workdir_fd(pid)
         if os.listdir(where):
             raise ValueError("the working folder is not empty")
-        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600,
-                     dir_fd=dir_fd)
+        fd = os.open(name, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600,
+                     dir_fd=where)
         try:
             data = base64.b64decode(request["data"])
             while data:
                 data = data[os.write(fd, data):]
-            if own.get("uid") is not None:
-                os.fchown(fd, int(own["uid"]), int(own["gid"]))
         finally:
             os.close(fd)
 
@@ -316,16 +303,8 @@ class Zygote:
         return said
 
     def _clear(self, pid: int) -> None:
-        """A sandboxed kernel ended: kill every process of its uid, remove its scratch."""
-        own = self.own.pop(pid, None)
-        if own is None:
-            return
-        if own.get("uid") is not None:
-            _kill_user(int(own["uid"]))
-        if own.get("scratch"):
-            import shutil
-
-            shutil.rmtree(own["scratch"], ignore_errors=True)
+        """A kernel ended: forget its request (its world, if any, ended with it)."""
+        self.own.pop(pid, None)
 
     def reap(self) -> None:
         """Collect every ended child; after a kernel ends, kill its leftovers."""
@@ -387,26 +366,6 @@ class Zygote:
                 os.rmdir(folder)  # fails unless empty: never removes anything else
 
 
-def _kill_user(uid: int) -> None:
-    """SIGKILL every process of ``uid`` (a kernel's own user), until none is left."""
-    for _ in range(100):  # a fork bomb forks between rounds; RLIMIT_NPROC bounds it
-        found = []
-        for entry in os.listdir("/proc"):
-            if not entry.isdigit():
-                continue
-            with contextlib.suppress(OSError):
-                if os.stat(f"/proc/{entry}").st_uid == uid:
-                    found.append(int(entry))
-        if not found:
-            return
-        for pid in found:
-            with contextlib.suppress(ProcessLookupError, PermissionError):
-                os.kill(pid, signal.SIGKILL)
-        for pid in found:  # reap those that were ours (re-parented here)
-            with contextlib.suppress(ChildProcessError, OSError):
-                os.waitpid(pid, os.WNOHANG)
-
-
 def _tasks_of_user(uid: int) -> int:
     """Threads the real user ``uid`` has now (what ``RLIMIT_NPROC`` counts)."""
     total = 0
@@ -436,18 +395,14 @@ def _become_kernel(request: dict, zygote_pid: int, link: socket.socket | None = 
     With ``request["world"]`` (sandboxed) this runs in G, the kernel's own namespaces already
     made by :func:`world.enter`; it builds the kernel's mounts (:func:`world.build`) and seals
     them once the kernel is initialised (:func:`world.seal`)."""
-    scratch, uid = request.get("scratch"), request.get("uid")
+    scratch = request.get("scratch")
     in_world = request.get("world") is not None
     if in_world:
         world.build(request, link)
         link.close()
     else:
         os.setsid()
-        if uid is not None:  # its own unprivileged user: no capability left, RLIMIT_NPROC counts
-            os.setgroups([])
-            os.setgid(int(request["gid"]))
-            os.setuid(int(uid))
-        prctl(PR_SET_PDEATHSIG, signal.SIGKILL)  # after setuid, which clears it
+        prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
         if os.getppid() != zygote_pid:  # the zygote died before the line above
             os._exit(1)
     prctl(PR_SET_DUMPABLE, 0)

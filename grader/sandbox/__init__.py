@@ -1,49 +1,37 @@
-"""The sandbox around student kernels (issue 5): bubblewrap, one per worker slot.
+"""The sandbox around student kernels (issues 5 and 11): one student, one disposable world.
 
 A student notebook is untrusted code running on the instructor's machine next to the answer
-key. Every kernel runs inside a ``bwrap`` sandbox that surrounds its slot's zygote
-(:mod:`grader.kernel_pool`, :mod:`grader.zygote`): the zygote is started as
-``bwrap … -- python zygote.py``, and every kernel it forks is inside the same sandbox.
+key and next to other students' kernels. Two layers (``docs/security.md`` has the threat model
+and the attacks that test it):
 
-What the sandbox holds (:meth:`Sandbox.command`)
-    * read-only: ``/usr`` (and ``/bin``, ``/lib*``, ``/sbin`` as on the host: symlinks into
-      ``/usr`` or read-only binds), the running interpreter's ``sys.prefix``,
-      ``sys.base_prefix`` and every folder of ``sys.path`` outside them (site-packages), the
-      zygote script (one file, as ``/eulertop/zygote.py``: not the project's folder), and
-      from ``/etc`` only what the dynamic loader and fonts need (:data:`ETC`; not
-      ``resolv.conf``, ``hosts``, ``passwd``);
-    * ``--proc /proc`` (a new procfs: the sandbox's own PID namespace), ``--dev /dev``
-      (``null``, ``zero``, ``urandom`` …);
-    * a size-limited ``tmpfs`` at ``/tmp`` (:data:`SCRATCH_BYTES`, mode 0711): each kernel's
-      working folder, ``HOME``, ``TMPDIR`` and configuration folders are made there, so a
-      notebook that fills "the disk" fills this and nothing of the host;
-    * read-write: the slot's folder only (kernel control folders: the IPC sockets the grader
-      talks to, the zygote's working folder). No home folder, no assignment (key), no
-      submissions, no results, no grader source.
+1. **Per slot, bubblewrap** (:meth:`Sandbox.command`) around the slot's zygote
+   (:mod:`grader.kernel_pool`, :mod:`grader.zygote`), always in a user namespace:
 
-    Namespaces: network (no interface but an unconfigured loopback: nothing connects, no name
-    resolves), PID (the grader and the other slot's sandbox are not there), IPC, UTS, cgroup;
-    ``--new-session``, ``--die-with-parent``, ``--clearenv`` (the zygote's scrubbed
-    environment only).
+   * read-only: ``/usr`` (and ``/bin``, ``/lib*``, ``/sbin`` as on the host), the running
+     interpreter's prefixes and site-packages, the zygote with :mod:`world` and
+     :mod:`seccomp` beside it (``/eulertop``: not the project's folder), and from ``/etc``
+     only what the dynamic loader and fonts need (:data:`ETC`);
+   * ``--proc``, ``--dev``, a small ``tmpfs`` at ``/tmp``; read-write: the slot's folder only
+     (kernel control folders: the IPC sockets the grader talks to). No home folder, no
+     assignment (key), no submissions, no results, no grader source;
+   * namespaces: user, network, PID, IPC, UTS, cgroup; ``--new-session``,
+     ``--die-with-parent``, ``--clearenv``; started in a session of its own (Ctrl-C in the
+     instructor's terminal never reaches it).
 
-Per-kernel confinement inside the slot's sandbox
-    *As root* (CI; :attr:`Sandbox.per_kernel_uid`): no user namespace (so that real uids can be
-    used); the zygote keeps only ``CAP_SETUID``, ``CAP_SETGID``, ``CAP_KILL``, ``CAP_CHOWN``,
-    ``CAP_DAC_OVERRIDE``, ``CAP_FOWNER`` (bwrap sets ``no_new_privs``). Each forked kernel drops
-    to a uid/gid of its own (:func:`kernel_uid`, from a high range, never a real user's):
-    ``setgroups([])``, ``setgid``, ``setuid`` — which clears every capability. Then
-    ``RLIMIT_NPROC`` is effective (the kernel ignores it for root), the kernel cannot signal
-    or ptrace the zygote or the prewarmed next kernel (another uid, non-dumpable), cannot enter
-    their folders (0700, another owner), and its own control folder is handed back to root as
-    soon as its sockets are bound (before any cell of the student runs).
+   As root, the sandbox runs as a uid of the slot's own (:func:`slot_uid`, from a high range
+   that no real user has), never as root: ``setpriv`` drops to it, inside a first, root
+   ``bwrap`` that only makes folders above the Python it needs passable (:func:`_as_user`).
+   As an ordinary user (a laptop), as that user.
 
-    *Not root* (an instructor's laptop): bwrap needs a user namespace, in which only the
-    instructor's own uid exists, so kernels cannot get uids of their own. There the pool turns
-    *prewarm off* (:class:`grader.kernel_pool.KernelPool`): a slot's kernels then never
-    coexist, and the per-slot sandbox alone separates every kernel from every other. The
-    kernel can still signal its own zygote (only its own submission suffers) and its control
-    folder, locked read-only after start, stays its owner's (it could unlock it: the file-size
-    limit still bounds each file).
+2. **Per kernel, its own world** (:mod:`grader.sandbox.world`, made by the forked child
+   before any code of the student runs): new user, PID, mount, network, IPC and UTS
+   namespaces; the kernel is PID 1 of its own PID namespace, watched from outside by a keeper
+   that enforces the memory limit on all its processes together; its own size-limited tmpfs
+   at ``/tmp`` and ``/dev/shm``; the slot folder hidden but for its own control folder, made
+   read-only once its sockets are bound; ``/``, ``/dev``, ``/proc/sys`` read-only; no
+   capabilities; ``no_new_privs``; a seccomp filter (:mod:`grader.sandbox.seccomp`). No
+   process of the grader or of another student is visible or reachable from it, and nothing
+   it makes outlives it.
 
 Where no sandbox can be had (:func:`probe` says why): ``eulertop grade`` refuses with
 :data:`INSTALL_HINT` unless ``--no-sandbox`` is given.
@@ -106,7 +94,8 @@ SCRATCH = "/tmp"
 """Where, inside the sandbox, the size-limited tmpfs of kernels' working folders is."""
 
 SCRATCH_BYTES = 256 * 1024**2
-"""Size of each slot's scratch tmpfs (shared by a running and a prewarmed kernel), bytes."""
+"""Size of each kernel's own tmpfs (its ``/tmp`` and ``/dev/shm`` together), bytes; the
+slot's own ``/tmp`` (the zygote's) has the same bound."""
 
 ETC = ("/etc/ld.so.cache", "/etc/ld.so.conf", "/etc/ld.so.conf.d", "/etc/localtime",
        "/etc/fonts", "/etc/alternatives")
@@ -232,7 +221,7 @@ class Sandbox:
         args += [*ancestors(folder, "0711"), "--bind", folder, folder]
         args += ["--chdir", str(Path(cwd).resolve()), "--", *argv]
         if uid is not None:
-            args = [*_as_user(uid, sources), *args]
+            args = [*_as_user(uid, [*sources, folder]), *args]
         return Launch(args, uid)
 
 

@@ -6,8 +6,7 @@ library (and :mod:`seccomp` beside it).
 
 The forked child *C* (:func:`enter`) leaves the zygote's world:
 
-1. its own session; as root, its own unprivileged uid (``setgroups([])``, ``setgid``,
-   ``setuid``);
+1. its own session (it runs as the sandbox's user: as root, a uid of the slot's own);
 2. ``unshare`` of user, mount, PID, network, IPC and UTS namespaces, with its uid and gid mapped
    to themselves (no other id exists in there, so no file of any other user is writable
    whatever the capabilities in that namespace);
@@ -108,11 +107,6 @@ def enter(request: dict, link: socket.socket) -> None:
     """In the forked child C: new namespaces, then fork; returns in G (PID 1 of the new PID
     namespace) only — C keeps G (:func:`keep`) and never returns."""
     os.setsid()
-    uid = request.get("uid")
-    if uid is not None:  # as root: its own unprivileged user, no capability left
-        os.setgroups([])
-        os.setgid(int(request["gid"]))
-        os.setuid(int(uid))
     uid, gid = os.getuid(), os.getgid()
     flags = (CLONE_NEWUSER | CLONE_NEWNS | CLONE_NEWPID | CLONE_NEWNET | CLONE_NEWIPC
              | CLONE_NEWUTS)
@@ -124,28 +118,34 @@ def enter(request: dict, link: socket.socket) -> None:
     _write("/proc/self/uid_map", f"{uid} {uid} 1")
     _write("/proc/self/gid_map", f"{gid} {gid} 1")
     _check(_libc.prctl(PR_SET_DUMPABLE, 0, 0, 0, 0), "prctl")
+    # the /proc of this (the zygote's) PID namespace, kept open: G mounts its own over /proc
+    # in the mount namespace the keeper shares with it
+    proc = os.open("/proc", os.O_RDONLY | os.O_DIRECTORY)
     pid = os.fork()
     if pid == 0:
         # dies with its keeper (it cannot tell whether the keeper is already gone: its parent
         # is outside its PID namespace; the zygote then kills it as a stray)
         _check(_libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0), "prctl")
+        os.close(proc)
         return
-    keep(pid, int(request["limits"]["memory"]), link)
+    keep(pid, int(request["limits"]["memory"]), link, proc)
 
 
-def keep(pid: int, memory: int, link: socket.socket) -> None:
+def keep(pid: int, memory: int, link: socket.socket, proc: int) -> None:
     """C, the keeper: wait for the kernel ``pid``; kill it (and so its whole PID namespace)
     if its processes together hold more than ``memory`` bytes; then end as it ended."""
     for signum in (signal.SIGINT, signal.SIGHUP, signal.SIGQUIT, signal.SIGTERM):
         signal.signal(signum, signal.SIG_IGN)
+    kept = sorted({link.fileno(), proc})
     with contextlib.suppress(OSError):
-        os.closerange(3, link.fileno())
-        os.closerange(link.fileno() + 1, resource.getrlimit(resource.RLIMIT_NOFILE)[0])
+        os.closerange(3, kept[0])
+        os.closerange(kept[0] + 1, kept[1])
+        os.closerange(kept[1] + 1, resource.getrlimit(resource.RLIMIT_NOFILE)[0])
     while True:
         done, status = os.waitpid(pid, os.WNOHANG)
         if done:
             break
-        used = resident_bytes(pid)
+        used = resident_bytes(pid, proc)
         if used > memory:
             with contextlib.suppress(ProcessLookupError):
                 os.kill(pid, signal.SIGKILL)
@@ -163,17 +163,20 @@ def keep(pid: int, memory: int, link: socket.socket) -> None:
     os._exit(code if code >= 0 else 1)
 
 
-def resident_bytes(root: int) -> int:
+def resident_bytes(root: int, proc: int | str = "/proc") -> int:
     """Resident memory of process ``root`` and all its descendants together, bytes (the sum
     of their ``VmRSS``: pages shared between them counted once per process, so never less
-    than what they hold)."""
+    than what they hold). ``proc``: the procfs to read (a path, or an open descriptor)."""
     parent: dict[int, int] = {}
     rss: dict[int, int] = {}
-    for entry in os.listdir("/proc"):
+    dir_fd = proc if isinstance(proc, int) else None
+    for entry in os.listdir(proc):
         if not entry.isdigit():
             continue
         try:
-            with open(f"/proc/{entry}/status", "rb") as f:
+            path = f"{entry}/status" if dir_fd is not None else f"{proc}/{entry}/status"
+            fd = os.open(path, os.O_RDONLY, dir_fd=dir_fd)
+            with open(fd, "rb") as f:
                 fields = dict(line.split(b":", 1) for line in f if b":" in line)
         except (OSError, ValueError):
             continue

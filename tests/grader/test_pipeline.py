@@ -35,6 +35,7 @@ class FakeExecution:
     cell_errors: tuple = ()
     duration: float = 0.5
     output_truncated: bool = False
+    retry: bool = False
 
 
 class FakeExecute:
@@ -284,15 +285,53 @@ def test_usage_errors(hw, subs, case, fragment):
 def test_an_unreadable_submission_fails_alone(hw, subs, monkeypatch):
     from grader import pipeline
 
-    real = pipeline.file_sha256
+    real = pipeline.read_submission
 
-    def sha(path):
+    def read(path, max_bytes):  # root reads any file: the refusal is simulated
         if path.name == "bob.ipynb":
             raise PermissionError(13, "Permission denied")
-        return real(path)
+        return real(path, max_bytes)
 
-    monkeypatch.setattr(pipeline, "file_sha256", sha)
+    monkeypatch.setattr(pipeline, "read_submission", read)
     r = _by_id(_run(hw, subs, FakeExecute()))
     assert (r["bob"].status, r["bob"].message) == (
         "failed", "cannot read bob.ipynb: Permission denied")
     assert r["alice"].points == r["alice"].max_points
+
+
+class FlakyStart(FakeExecute):
+    """A kernel that cannot be started for alice's first ``failures`` runs (not her doing)."""
+
+    def __init__(self, failures: int):
+        super().__init__()
+        self.failures = failures
+
+    def __call__(self, path, variables, limits):
+        if Path(path).name == "alice.ipynb" and self.failures > 0:
+            with self.lock:
+                self.failures -= 1
+                self.calls.append((Path(path), tuple(variables), limits))
+            return FakeExecution("error", "could not start a Python kernel (ZygoteError: …)",
+                                 {}, retry=True)
+        return super().__call__(path, variables, limits)
+
+
+def test_a_kernel_that_could_not_start_is_retried_within_the_run(hw, subs):
+    from grader.pipeline import RETRIES
+
+    execute = FlakyStart(RETRIES)
+    r = _by_id(_run(hw, subs, execute))
+    assert r["alice"].status == "graded" and r["alice"].points == r["alice"].max_points
+    assert sum(1 for p, *_ in execute.calls if p.name == "alice.ipynb") == RETRIES + 1
+
+
+def test_a_kernel_that_never_started_is_not_kept_and_the_next_run_grades_it(hw, subs):
+    from grader.pipeline import RETRIES
+
+    first = _by_id(_run(hw, subs, FlakyStart(RETRIES + 1)))
+    assert first["alice"].status == "failed" and first["alice"].execution["retry"] is True
+    again = FakeExecute()
+    second = _by_id(_run(hw, subs, again))  # no --force
+    assert [p.name for p, *_ in again.calls] == ["alice.ipynb"]  # only the one not graded
+    assert second["alice"].status == "graded"
+    assert second["alice"].points == second["alice"].max_points
