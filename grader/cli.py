@@ -133,9 +133,12 @@ def run_grade(args: argparse.Namespace, execute=None) -> int:
     except UsageError as e:
         print(f"eulertop grade: {e}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("eulertop grade: interrupted; every finished result is saved — run the same "
-              "command again to grade the rest", file=sys.stderr, flush=True)
+    except KeyboardInterrupt as stop:
+        done = (f" after grading {stop.graded} of {stop.total} submission(s)"
+                if hasattr(stop, "graded") else "")
+        print(f"\neulertop grade: interrupted{done}; every finished result is saved, those "
+              "in flight were stopped and not recorded — run the same command again to grade "
+              "the rest", file=sys.stderr, flush=True)
         sys.stdout.flush()
         if threading.active_count() > 1:
             os._exit(130)  # abandoned kernels' threads: do not wait for them at exit

@@ -82,6 +82,15 @@ class RunInProgress(UsageError):
     """Another grading run holds the output folder's lock."""
 
 
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C: the run stopped; ``graded`` of ``total`` submissions have their records. Those
+    in flight were stopped and have none (the next run grades them)."""
+
+    def __init__(self, graded: int, total: int) -> None:
+        super().__init__(f"{graded} of {total} graded")
+        self.graded, self.total = graded, total
+
+
 @dataclass(frozen=True)
 class Assignment:
     """What grading needs from ``HW``: the roster, each student's public questions, the key."""
@@ -535,12 +544,16 @@ def _grade_copy(submission: Submission, expected, key_hash: str, execute: Execut
 
 def _run_all_in(stack, a, out, to_run, execute, limits, jobs, reveal, progress) -> None:
     stop = threading.Event()
+    published = []
 
     def work(submission, expected, key_hash, sha):
         if stop.is_set():
             return
         result = _grade_copy(submission, expected, key_hash, execute, limits, sha, copies)
+        if stop.is_set():
+            return  # stopped by Ctrl-C while it ran: no record, the next run grades it
         _publish(a, out, result, reveal)
+        published.append(result.student_id)
         if progress:
             progress(result)
 
@@ -550,16 +563,11 @@ def _run_all_in(stack, a, out, to_run, execute, limits, jobs, reveal, progress) 
     try:
         wait(futures)
     except KeyboardInterrupt:
-        # Ctrl-C: start nothing new; what runs finishes and is saved (bounded by the time
-        # limit), still under the lock. A second Ctrl-C abandons it (the caller exits).
+        # Ctrl-C: start nothing new and keep nothing of what is in flight; the caller's
+        # closing of the kernel pool stops those kernels (a second Ctrl-C exits at once)
         stop.set()
         pool.shutdown(wait=False, cancel_futures=True)
-        running = sum(not f.done() for f in futures)
-        if running:
-            sys.stderr.write(f"\ninterrupted: finishing the {running} submission(s) being "
-                             "graded (Ctrl-C again to abandon them)\n")
-        wait(futures)
-        raise
+        raise Interrupted(len(published), len(to_run)) from None
     pool.shutdown()
     for f in futures:
         f.result()  # a fault in publishing (disk full …) must not pass silently

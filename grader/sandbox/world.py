@@ -146,6 +146,8 @@ def keep(pid: int, memory: int, link: socket.socket, proc: int) -> None:
         if done:
             break
         used = resident_bytes(pid, proc)
+        if used > memory:  # over by the cheap upper bound: what do they hold in truth?
+            used = resident_bytes(pid, proc, proportional=True)
         if used > memory:
             with contextlib.suppress(ProcessLookupError):
                 os.kill(pid, signal.SIGKILL)
@@ -163,21 +165,29 @@ def keep(pid: int, memory: int, link: socket.socket, proc: int) -> None:
     os._exit(code if code >= 0 else 1)
 
 
-def resident_bytes(root: int, proc: int | str = "/proc") -> int:
-    """Resident memory of process ``root`` and all its descendants together, bytes (the sum
-    of their ``VmRSS``: pages shared between them counted once per process, so never less
-    than what they hold). ``proc``: the procfs to read (a path, or an open descriptor)."""
+def resident_bytes(root: int, proc: int | str = "/proc", proportional: bool = False) -> int:
+    """Resident memory of process ``root`` and all its descendants together, bytes.
+
+    By default the sum of their ``VmRSS`` (cheap; pages shared between them, or with the zygote
+    they were forked from, count once per process: never less than what they hold). With
+    ``proportional``, the sum of their ``Pss`` (``smaps_rollup``: each shared page divided
+    among its sharers), what they hold in truth — dearer to read, so the keeper reads it only
+    when the first sum is over the limit. ``proc``: the procfs to read (a path, or an open
+    descriptor)."""
+    dir_fd = proc if isinstance(proc, int) else None
     parent: dict[int, int] = {}
     rss: dict[int, int] = {}
-    dir_fd = proc if isinstance(proc, int) else None
+
+    def read(entry: str, name: str) -> dict[bytes, bytes]:
+        path = f"{entry}/{name}" if dir_fd is not None else f"{proc}/{entry}/{name}"
+        with open(os.open(path, os.O_RDONLY, dir_fd=dir_fd), "rb") as f:
+            return dict(line.split(b":", 1) for line in f if b":" in line)
+
     for entry in os.listdir(proc):
         if not entry.isdigit():
             continue
         try:
-            path = f"{entry}/status" if dir_fd is not None else f"{proc}/{entry}/status"
-            fd = os.open(path, os.O_RDONLY, dir_fd=dir_fd)
-            with open(fd, "rb") as f:
-                fields = dict(line.split(b":", 1) for line in f if b":" in line)
+            fields = read(entry, "status")
         except (OSError, ValueError):
             continue
         pid = int(entry)
@@ -191,7 +201,13 @@ def resident_bytes(root: int, proc: int | str = "/proc") -> int:
             if ppid in ours and pid not in ours:
                 ours.add(pid)
                 grew = True
-    return sum(rss.get(pid, 0) for pid in ours)
+    if not proportional:
+        return sum(rss.get(pid, 0) for pid in ours)
+    total = 0
+    for pid in ours:
+        with contextlib.suppress(OSError, ValueError):
+            total += int(read(str(pid), "smaps_rollup").get(b"Pss", b"0 kB").split()[0]) * 1024
+    return total
 
 
 # --------------------------------------------------------------------------------------------

@@ -324,7 +324,8 @@ def _status(pid: str) -> dict[str, str]:
 
 class Watch:
     """Samples /proc while a run goes: the grader's VmHWM, and per PID namespace of student
-    kernels (the deepest namespaces: one per kernel) the summed VmRSS."""
+    kernels (the deepest namespaces: one per kernel) the summed Pss (shared pages divided
+    among their sharers: what the processes hold)."""
 
     def __init__(self, token: str) -> None:
         self.token = token.encode()
@@ -349,7 +350,9 @@ class Watch:
                 if depth < 3:
                     continue
                 ns = os.readlink(f"/proc/{pid}/ns/pid")
-                groups[ns] = groups.get(ns, 0) + int(status["VmRSS"].split()[0]) * 1024
+                rollup = Path(f"/proc/{pid}/smaps_rollup").read_text().splitlines()
+                pss = next(int(line.split()[1]) for line in rollup if line.startswith("Pss:"))
+                groups[ns] = groups.get(ns, 0) + pss * 1024
                 depth_of[ns] = depth
         if groups:
             deepest = max(depth_of.values())
@@ -359,7 +362,7 @@ class Watch:
     def _run(self) -> None:
         while not self.stop.is_set():
             self._sample()
-            time.sleep(0.02)
+            time.sleep(0.03)
 
     def __enter__(self) -> Watch:
         self.thread.start()
