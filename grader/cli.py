@@ -56,7 +56,9 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("hw", type=Path, metavar="HW",
                         help="assignment folder written by 'eulertop generate'")
     parser.add_argument("submissions", type=Path, metavar="SUBMISSIONS",
-                        help="folder of submissions: <id>.ipynb or <id>/<one notebook>.ipynb")
+                        help="folder of submissions: <id>.ipynb or <id>/<one notebook>.ipynb; "
+                             "or the bulk download of Canvas, Moodle, Blackboard or "
+                             "Gradescope, as a folder or the .zip itself")
     parser.add_argument("--out", type=Path, metavar="DIR",
                         help="where results/, feedback/ and grades.csv go (default: HW/graded)")
     parser.add_argument("--jobs", type=whole_number_argument, metavar="N",
@@ -114,6 +116,8 @@ def run_grade(args: argparse.Namespace, execute=None) -> int:
         else ""
     print(f"wrote {out / 'grades.csv'}, {out / 'results'}/, {out / 'feedback'}/{kept}")
     ignored = [p.message for p in report.problems if p.ignored]
+    for line in report.notes:
+        print(f"eulertop grade: {line}", file=sys.stderr)
     for line in ignored:
         print(f"eulertop grade: {line}", file=sys.stderr)
     if report.not_graded:

@@ -84,6 +84,30 @@ def gradebook_rows(
     return table
 
 
+ANSWER_COLUMNS = ("id", "question", "answer", "variable", "submitted", "points", "max",
+                  "status", "mistake")
+
+
+def answers_rows(rows: Sequence[Mapping[str, str]],
+                 results: Mapping[str, StudentResult]) -> list[list[str]]:
+    """``answers.csv``, the long format: one row per student and answer, header first.
+
+    Columns :data:`ANSWER_COLUMNS`: the student id, question number, the answer's name and
+    notebook variable, the submitted value as JSON (empty when not set), points awarded and
+    possible, the verdict's status and the recognised mistake (empty when none). Students
+    without a record are left out.
+    """
+    table = [list(ANSWER_COLUMNS)]
+    for row in rows:
+        r = results.get(row["id"])
+        for a in r.answers if r is not None else ():
+            v = a.verdict
+            submitted = "" if a.submitted is None else json.dumps(a.submitted, ensure_ascii=False)
+            table.append([r.student_id, str(a.question), a.name, a.variable, submitted,
+                          number(v.points), number(v.max_points), v.status, v.mistake or ""])
+    return table
+
+
 def gradebook_csv(table: Sequence[Sequence[str]]) -> str:
     """``table`` as CSV text (RFC 4180 quoting, ``\\r\\n`` line ends as spreadsheets expect)."""
     buffer = io.StringIO(newline="")
