@@ -154,15 +154,19 @@ def settle(student_ids: Sequence[str], matched: Matched) -> Discovery:
 def _choose(sid: str, found: list[Candidate]) -> tuple[Candidate | None, str]:
     if len(found) == 1:
         return found[0], ""
-    names = ", ".join(c.path.name for c in found)
+    distinct = len({c.path.name for c in found}) == len(found)
+
+    def label(c: Candidate) -> str:
+        return c.path.name if distinct else f"{c.path.parent.name}/{c.path.name}"
+
+    names = ", ".join(label(c) for c in found)
     if any(c.newness is None for c in found):
         return None, (f"{len(found)} notebooks ({names}) and no way to tell which is newest; "
                       "not guessing which one to grade")
     ordered = sorted(found, key=lambda c: c.newness)
-    newest = ordered[-1]
-    older = ", ".join(c.path.name for c in ordered[:-1])
-    return newest, f"{sid}: {len(found)} notebooks; graded the newest, {newest.path.name} " \
-                   f"(not {older})"
+    older = ", ".join(label(c) for c in ordered[:-1])
+    return ordered[-1], (f"{sid}: {len(found)} notebooks; graded the newest, "
+                         f"{label(ordered[-1])} (not {older})")
 
 
 def discover_download(folder: Path, student_rows: Sequence[Mapping[str, str]]) -> Discovery | None:

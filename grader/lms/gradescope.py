@@ -116,7 +116,7 @@ def _submission(folder: Path, record: dict, students: Students, found: Matched) 
     for person in submitters if isinstance(submitters, list) else []:
         person = person if isinstance(person, dict) else {}
         sid, email = (str(_field(person, k) or "").strip() for k in ("sid", "email"))
-        ids, how = students.by_any([("id", sid), ("SID", sid), ("id", email), ("Email", email),
+        ids, how = students.by_any([("SID", sid), ("id", sid), ("Email", email), ("id", email),
                                     ("Email address", email)])
         who = f"{_field(person, 'name') or '?'} (SID {sid or '-'}, {email or 'no email'})"
         if len(ids) != 1:
