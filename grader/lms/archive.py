@@ -148,22 +148,28 @@ def extract_download(zip_path: Path, dest: Path, limits: ZipLimits | None = None
     """
     limits = limits or ZipLimits()
     dest = Path(dest)
+    try:
+        with zipfile.ZipFile(zip_path) as archive:
+            files = plan(archive, limits)
+            _extract(archive, files, dest)
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, NotImplementedError, EOFError) as e:
+        raise ArchiveError(f"not a readable zip archive: {e}") from None
+    except OSError as e:
+        raise ArchiveError(f"cannot extract: {e.strerror or e}") from None
+    return dest
+
+
+def _extract(archive: zipfile.ZipFile, files: list, dest: Path) -> None:
+    """Write the planned ``files`` into a temporary folder beside ``dest``, then swap it in."""
     tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.", dir=dest.parent))
     try:
-        try:
-            with zipfile.ZipFile(zip_path) as archive:
-                for info, where in plan(archive, limits):
-                    target = tmp.joinpath(*where.parts)
-                    target.parent.mkdir(parents=True, exist_ok=True)
-                    _copy(archive, info, target)
-        except (zipfile.BadZipFile, zipfile.LargeZipFile, NotImplementedError, EOFError) as e:
-            raise ArchiveError(f"not a readable zip archive: {e}") from None
-        except OSError as e:
-            raise ArchiveError(f"cannot extract: {e.strerror or e}") from None
+        for info, where in files:
+            target = tmp.joinpath(*where.parts)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            _copy(archive, info, target)
         if dest.exists():
             shutil.rmtree(dest)
         tmp.rename(dest)
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
-    return dest
