@@ -197,7 +197,7 @@ def _read_class_list(path: Path, reader, header: list[str], fmt) -> Roster:
         raise RosterError(f"{path}: the {fmt.label} lists no students")
     where = " or ".join(repr(c) for c in fmt.id_columns)
     _check_ids(path, rows, lines, column=f"{where} (the student id of a {fmt.label})")
-    notes += describe_fallbacks(fmt, used)
+    notes += describe_fallbacks(fmt, columns, used)
     names = ("id", *(c for c in columns if c != "id"))
     return Roster(columns=names, rows=tuple(rows), format=fmt.name, notes=tuple(notes))
 

@@ -99,8 +99,17 @@ def detect(header: Sequence[str], formats: Iterable[ClassListFormat]) -> ClassLi
 ID_FALLBACK_NOTE = "{count} student(s) have no {first}: their id is their {other} (lines {lines})"
 
 
-def describe_fallbacks(fmt: ClassListFormat, used: Sequence[tuple[str, int]]) -> list[str]:
-    """Notes for rows whose id came from a fallback column (``used``: (column, line) pairs)."""
+def describe_fallbacks(fmt: ClassListFormat, header: Sequence[str],
+                       used: Sequence[tuple[str, int]]) -> list[str]:
+    """Notes on ids that did not come from the format's first id column.
+
+    ``used``: the (id column, line) of every student. A first column absent from ``header``
+    altogether gives one note; otherwise each fallback column lists its lines.
+    """
+    present = [c for c in fmt.id_columns if has_columns(header, [c])]
+    if present and present[0] != fmt.id_columns[0]:
+        return [f"the class list has no {fmt.id_columns[0]} column: the student ids are "
+                f"the {present[0]}"]
     notes = []
     for column in fmt.id_columns[1:]:
         lines = [line for c, line in used if c == column]
@@ -109,7 +118,6 @@ def describe_fallbacks(fmt: ClassListFormat, used: Sequence[tuple[str, int]]) ->
                 count=len(lines), first=fmt.id_columns[0], other=column,
                 lines=", ".join(map(str, lines[:10])) + (" …" if len(lines) > 10 else "")))
     return notes
-
 
 
 @dataclass(frozen=True)
