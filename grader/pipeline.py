@@ -64,6 +64,7 @@ from grader.gradebook import (
     gradebook_rows,
     ran_code,
 )
+from grader.lms.classlist import merge_rows
 from grader.results import (
     StudentResult,
     atomic_write_text,
@@ -347,6 +348,7 @@ def grade_assignment(
     on_plan: Callable[[int], Callable[[StudentResult], None] | None] | None = None,
     cold_kernels: bool = False,
     sandbox: bool = True,
+    class_list: Sequence[Mapping[str, str]] = (),
 ) -> RunReport:
     """Grade every submission in ``submissions`` against the assignment ``hw``.
 
@@ -378,6 +380,9 @@ def grade_assignment(
     sandbox : bool
         With the default ``execute``: run every kernel in the sandbox (refused where there is
         none); False runs them unsandboxed, with a warning on stderr and in the records.
+    class_list : sequence of dict, optional
+        Rows of an LMS class list (``grade --roster``) whose columns are added to the
+        roster's, by student id, to match an LMS download (:func:`grader.lms.classlist.merge_rows`).
 
     Raises
     ------
@@ -413,7 +418,7 @@ def grade_assignment(
         remove_stale_temporaries(out, out / RESULTS, out / FEEDBACK)
         if archive:
             submissions = _unpack(submissions, out)
-        found = discover(submissions, a.ids, a.rows)
+        found = discover(submissions, a.ids, merge_rows(a.rows, class_list))
         if found.layout != "folder":
             atomic_write_text(out / LMS_SUBMISSIONS, gradebook_csv(_lms_table(found, submissions)))
         to_run, to_write, kept = _plan(a, found, out, force, found_sandbox is not None)

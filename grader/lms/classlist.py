@@ -30,9 +30,20 @@ def fold(text: str) -> str:
 
 
 def cell(row: Mapping[str, str], column: str) -> str:
-    """``row[column]`` with the column name compared by :func:`fold`; ``""`` when absent."""
+    """``row[column]`` with the column name compared by :func:`fold`; ``""`` when absent.
+
+    The roster's own key ``"id"`` answers only to ``"id"``: Canvas's ``ID`` (its user id) is
+    another column.
+
+    Examples
+    --------
+    >>> cell({"id": "jm", "ID": "4501"}, "ID"), cell({"id": "jm"}, "ID")
+    ('4501', '')
+    """
     wanted = fold(column)
     for name, value in row.items():
+        if name == "id" and column != "id":
+            continue
         if fold(name) == wanted:
             return (value or "").strip()
     return ""
@@ -118,6 +129,20 @@ def describe_fallbacks(fmt: ClassListFormat, header: Sequence[str],
                 count=len(lines), first=fmt.id_columns[0], other=column,
                 lines=", ".join(map(str, lines[:10])) + (" …" if len(lines) > 10 else "")))
     return notes
+
+
+def merge_rows(rows: Sequence[Mapping[str, str]],
+               class_list: Sequence[Mapping[str, str]]) -> tuple[dict, ...]:
+    """``rows`` with the columns of the ``class_list`` row of the same id added (a fresher
+    class list's values win); students absent from it keep their row, extra ones are ignored.
+
+    Examples
+    --------
+    >>> merge_rows([{"id": "a", "name": "A"}], [{"id": "a", "ID": "7"}, {"id": "b"}])
+    ({'id': 'a', 'name': 'A', 'ID': '7'},)
+    """
+    by_id = {r["id"]: r for r in class_list}
+    return tuple({**r, **by_id.get(r["id"], {})} for r in rows)
 
 
 @dataclass(frozen=True)

@@ -98,3 +98,23 @@ def test_an_unsafe_zip_is_one_line_and_exit_2(canvas_hw, tmp_path, capsys):
     code, out = _grade(hw, download, capsys)
     assert code == 2 and out.err.startswith("eulertop grade: ") and out.err.count("\n") == 1
     assert "'../x.ipynb': '..' in the path" in out.err
+
+
+def test_grade_roster_brings_the_lms_identifiers_to_a_plain_roster(tmp_path, capsys):
+    """Generated from a one-column roster of SIS logins; the Canvas download is matched once
+    the Canvas gradebook export is given to ``grade --roster``."""
+    (tmp_path / "ids.csv").write_text("id\njmuller\nznunez\n", encoding="utf-8")
+    hw = tmp_path / "HW"
+    assert main(["generate", "--roster", str(tmp_path / "ids.csv"), "--out", str(hw),
+                 "--problems", "inertia_tensor", "--seed", "2"]) == 0
+    download = write_zip(tmp_path / "subs.zip", {
+        canvas_file_name(MULLER, 1, "hw.ipynb"): notebook(hw, "jmuller")})
+    code, out = _grade(hw, download, capsys)
+    assert code == 1
+    assert "the roster has no Canvas 'ID' column to match Canvas user 4501" in out.err
+    (tmp_path / "gradebook.csv").write_text(canvas_gradebook(), encoding="utf-8")
+    args = build_parser("grade").parse_args(["grade", str(hw), str(download), "--roster",
+                                             str(tmp_path / "gradebook.csv")])
+    assert grader_cli.run_grade(args, execute=FakeExecute()) == 0
+    record = json.loads((hw / "graded" / "results" / "jmuller.json").read_text())
+    assert record["status"] == "graded" and record["points"] == record["max_points"] > 0
