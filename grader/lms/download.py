@@ -74,13 +74,18 @@ class Students:
     def __init__(self, rows: Sequence[Mapping[str, str]]):
         self.rows = tuple(rows)
         self.ids = tuple(r["id"] for r in self.rows)
+        self._index: dict[str, dict[str, list[str]]] = {}  # column -> folded value -> ids
 
     def by_column(self, column: str, value: str) -> list[str]:
         """Ids of the students whose ``column`` equals ``value`` (compared by ``fold``)."""
-        wanted = fold(value)
-        if column == "id":
-            return [r["id"] for r in self.rows if fold(r["id"]) == wanted]
-        return [r["id"] for r in self.rows if wanted and fold(cell(r, column)) == wanted]
+        if column not in self._index:
+            index: dict[str, list[str]] = {}
+            for r in self.rows:
+                key = fold(r["id"] if column == "id" else cell(r, column))
+                if key:
+                    index.setdefault(key, []).append(r["id"])
+            self._index[column] = index
+        return list(self._index[column].get(fold(value), [])) if value else []
 
     def has_column(self, column: str) -> bool:
         return any(cell(r, column) for r in self.rows)
