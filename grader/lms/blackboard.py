@@ -64,7 +64,7 @@ def match_download(folder: Path, students: Students) -> Matched | None:
     usernames = [cell(r, key) if key != "id" else r["id"] for r in students.rows]
     for entry in entries:
         m = ATTEMPT.search(entry.name)
-        if is_system_file(entry) or m is None or not entry.is_file():
+        if is_system_file(entry) or m is None or not entry.is_file() or entry.is_symlink():
             found.stray(entry, "a system file, not a submission" if is_system_file(entry)
                         else "not named as Blackboard names submissions")
             continue

@@ -101,11 +101,14 @@ def match_download(folder: Path, students: Students) -> Matched | None:
         "the class list to match by participant id)")
     for entry in entries:
         parts = ENTRY.match(entry.name)
+        if entry.is_symlink():
+            found.stray(entry, "a symbolic link, not followed")
+            continue
         if is_system_file(entry) or parts is None:
             found.stray(entry, "a system file, not a submission" if is_system_file(entry)
                         else "not named as Moodle names submissions")
             continue
-        files = files_under(entry) if entry.is_dir() and not entry.is_symlink() else [entry]
+        files = files_under(entry) if entry.is_dir() else [entry]
         ids, how = names.find(parts["name"], parts["pid"])
         for f in files:
             _one(f, parts, ids, how, found)
