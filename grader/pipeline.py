@@ -421,6 +421,8 @@ def grade_assignment(
         found = discover(submissions, a.ids, merge_rows(a.rows, class_list))
         if found.layout != "folder":
             atomic_write_text(out / LMS_SUBMISSIONS, gradebook_csv(_lms_table(found, submissions)))
+        else:  # a previous run's LMS table would describe other files
+            (out / LMS_SUBMISSIONS).unlink(missing_ok=True)
         to_run, to_write, kept = _plan(a, found, out, force, found_sandbox is not None)
         if on_plan is not None:
             progress = on_plan(len(to_run) + len(to_write)) or progress
