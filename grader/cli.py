@@ -74,7 +74,9 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("hw", type=Path, metavar="HW",
                         help="assignment folder written by 'eulertop generate'")
     parser.add_argument("submissions", type=Path, metavar="SUBMISSIONS",
-                        help="folder of submissions: <id>.ipynb or <id>/<one notebook>.ipynb")
+                        help="folder of submissions: <id>.ipynb or <id>/<one notebook>.ipynb; "
+                             "or the bulk download of Canvas, Moodle, Blackboard or "
+                             "Gradescope, as a folder or the .zip itself")
     parser.add_argument("--out", type=Path, metavar="DIR",
                         help="where results/, feedback/ and grades.csv go (default: HW/graded)")
     parser.add_argument("--jobs", type=whole_number_argument, metavar="N",
@@ -95,6 +97,13 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> None:
                         help="run student code WITHOUT the bubblewrap sandbox (where none can "
                              "be had); it can then read the key and your files. Every run "
                              "warns, and the records and grades.csv say so")
+    parser.add_argument("--roster", type=Path, metavar="CSV",
+                        help="an LMS class list whose identifiers match the download's files "
+                             "(default: the one the assignment was generated from); its "
+                             "student ids must be the assignment's")
+    parser.add_argument("--roster-format", metavar="FORMAT",
+                        choices=("eulertop", "canvas", "moodle", "blackboard", "gradescope"),
+                        help="read --roster as this format instead of recognising it")
     parser.add_argument("--cold-kernels", action="store_true",
                         help="start every kernel from scratch instead of forking it from a "
                              "pre-imported one (slower; the same isolation)")
@@ -122,15 +131,18 @@ def run_grade(args: argparse.Namespace, execute=None) -> int:
     from grader.pipeline import UsageError, grade_assignment
     from grader.plain_text import printable
     from grader.progress import Progress
+    from problems.roster import RosterError, read_roster
 
     try:
+        class_list = () if getattr(args, "roster", None) is None else \
+            read_roster(args.roster, args.roster_format).rows
         report = grade_assignment(
             args.hw, args.submissions, args.out, limits=_limits(args), jobs=args.jobs,
             force=args.force, reveal=args.reveal, execute=execute,
             on_plan=lambda n: Progress(n), cold_kernels=getattr(args, "cold_kernels", False),
-            sandbox=not getattr(args, "no_sandbox", False),
+            sandbox=not getattr(args, "no_sandbox", False), class_list=class_list,
         )
-    except UsageError as e:
+    except (UsageError, RosterError) as e:
         print(f"eulertop grade: {e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as stop:
@@ -149,6 +161,8 @@ def run_grade(args: argparse.Namespace, execute=None) -> int:
         else ""
     print(f"wrote {out / 'grades.csv'}, {out / 'results'}/, {out / 'feedback'}/{kept}")
     ignored = [p.message for p in report.problems if p.ignored]
+    for line in report.notes:
+        print(f"eulertop grade: {line}", file=sys.stderr)
     for line in ignored:
         print(f"eulertop grade: {printable(line)}", file=sys.stderr)
     if report.not_graded:

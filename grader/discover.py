@@ -20,7 +20,7 @@ notebooks are reported.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,6 +33,8 @@ class Submission:
 
     student_id: str
     path: Path
+    late: bool = False  # the LMS marked it late (grader/lms)
+    source: str = ""  # how an LMS download matched it to the student (grader/lms)
 
 
 @dataclass(frozen=True)
@@ -57,6 +59,8 @@ class Discovery:
     submissions: tuple[Submission, ...]
     missing: tuple[str, ...]
     problems: tuple[Problem, ...]
+    notes: tuple[str, ...] = ()  # what an LMS download's matching decided (late, newest …)
+    layout: str = "folder"  # or the LMS whose bulk download it was (grader/lms)
 
 
 def _candidates(folder: Path) -> dict[str, list[Path]]:
@@ -102,7 +106,8 @@ def _resolve(folder: Path, sid: str, entries: list[Path]) -> Submission | Proble
                                "not guessing which one to grade", sid)
 
 
-def discover(folder: Path, roster_ids: Sequence[str]) -> Discovery:
+def discover(folder: Path, roster_ids: Sequence[str],
+             roster_rows: Sequence[Mapping[str, str]] = ()) -> Discovery:
     """Sort the contents of ``folder`` (module docstring).
 
     Parameters
@@ -111,7 +116,15 @@ def discover(folder: Path, roster_ids: Sequence[str]) -> Discovery:
         The SUBMISSIONS folder (must be a readable folder: the caller checks).
     roster_ids : sequence of str
         The assignment's student ids.
+    roster_rows : sequence of dict, optional
+        The roster rows (``"id"`` and the class list's columns): a bulk download of Canvas,
+        Moodle, Blackboard or Gradescope is matched through them (:mod:`grader.lms.download`).
     """
+    from grader.lms.download import discover_download
+
+    lms = discover_download(Path(folder), roster_rows or [{"id": s} for s in roster_ids])
+    if lms is not None:
+        return lms
     found = _candidates(Path(folder))
     by_lower = {sid.lower(): sid for sid in roster_ids}
     submissions, missing, problems = [], [], []

@@ -8,7 +8,9 @@ Feedback pages are for one student each and hold only that student's own paramet
 verdicts and messages (and, with ``reveal``, that student's key values); nothing of any other
 student is passed in. Everything is HTML-escaped — not only what the student wrote (submitted
 values, exception messages their code raised, which verdict messages echo) but the instructor's
-text too — and the page loads nothing from anywhere (no scripts, no external styles).
+text too — and the page loads nothing from anywhere (no scripts, no external styles). Question
+statements are shown as mathematics: their Markdown rendered and their LaTeX turned into MathML
+(:func:`grader.statement_html.statement_html`: raw HTML in them escaped, the MathML cleaned).
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from typing import Any
 from grader.discover import Problem
 from grader.plain_text import printable
 from grader.results import StudentResult
+from grader.statement_html import statement_html
 
 MAX_SHOWN = 400
 """Characters of a submitted value or message shown before it is cut (the record keeps all)."""
@@ -85,6 +88,30 @@ def gradebook_rows(
     return table
 
 
+ANSWER_COLUMNS = ("id", "question", "answer", "variable", "submitted", "points", "max",
+                  "status", "mistake")
+
+
+def answers_rows(rows: Sequence[Mapping[str, str]],
+                 results: Mapping[str, StudentResult]) -> list[list[str]]:
+    """``answers.csv``, the long format: one row per student and answer, header first.
+
+    Columns :data:`ANSWER_COLUMNS`: the student id, question number, the answer's name and
+    notebook variable, the submitted value as JSON (empty when not set), points awarded and
+    possible, the verdict's status and the recognised mistake (empty when none). Students
+    without a record are left out.
+    """
+    table = [list(ANSWER_COLUMNS)]
+    for row in rows:
+        r = results.get(row["id"])
+        for a in r.answers if r is not None else ():
+            v = a.verdict
+            submitted = "" if a.submitted is None else json.dumps(a.submitted, ensure_ascii=False)
+            table.append([r.student_id, str(a.question), a.name, a.variable, submitted,
+                          number(v.points), number(v.max_points), v.status, v.mistake or ""])
+    return table
+
+
 def gradebook_csv(table: Sequence[Sequence[str]]) -> str:
     """``table`` as CSV text (RFC 4180 quoting, ``\\r\\n`` line ends as spreadsheets expect)."""
     buffer = io.StringIO(newline="")
@@ -99,7 +126,8 @@ _STYLE = """
 body { font-family: sans-serif; max-width: 60em; margin: 2em auto; line-height: 1.4; }
 table { border-collapse: collapse; margin: 0.5em 0 1.5em; }
 td, th { border: 1px solid #bbb; padding: 0.25em 0.6em; text-align: left; vertical-align: top; }
-.statement { white-space: pre-wrap; background: #f6f6f6; padding: 0.6em; }
+.statement { background: #f6f6f6; padding: 0.1em 0.8em; }
+math[display="block"] { margin: 0.6em 0; }
 .correct { color: #165c16; } .wrong, .invalid, .missing { color: #9c1c1c; }
 code { white-space: pre-wrap; word-break: break-all; }
 """
@@ -189,7 +217,7 @@ def feedback_html(
         parts.append(f"<p>While your notebook ran:</p><ul>{items}</ul>")
     for q in questions:
         parts.append(f"<h2>Question {_e(q['question'])}: {_e(q.get('title', ''))}</h2>")
-        parts.append(f"<div class=\"statement\">{_e(q.get('statement', ''))}</div>")
+        parts.append(f"<div class=\"statement\">{statement_html(q.get('statement', ''))}</div>")
         parts.append(_parameters(q))
         parts.append(_answers_table(q, result, key))
     parts.append(f"<p><small>graded {_e(result.graded_at)}</small></p></body></html>\n")

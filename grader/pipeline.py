@@ -58,7 +58,14 @@ from typing import Any
 
 from grader.compare import KeyAnswer, compare, key_answers, variable_names
 from grader.discover import Problem, Submission, discover
-from grader.gradebook import feedback_html, gradebook_csv, gradebook_rows, ran_code
+from grader.gradebook import (
+    answers_rows,
+    feedback_html,
+    gradebook_csv,
+    gradebook_rows,
+    ran_code,
+)
+from grader.lms.classlist import merge_rows
 from grader.results import (
     StudentResult,
     atomic_write_text,
@@ -69,6 +76,7 @@ from grader.results import (
 from grader.submission_file import DEFAULT_MAX_BYTES, InvalidSubmission, read_submission
 
 RESULTS, FEEDBACK, GRADES, LOCK = "results", "feedback", "grades.csv", ".lock"
+ANSWERS, DOWNLOAD, LMS_SUBMISSIONS = "answers.csv", "download", "submissions.csv"
 
 Execute = Callable[[Path, Sequence[str], Any], Any]
 """``execute_submission(path, variables, limits) -> Execution`` (grader/API.md)."""
@@ -119,6 +127,7 @@ class RunReport:
     graded_now: tuple[str, ...]  # ids (re)graded by this run
     unchanged: tuple[str, ...]  # ids whose existing record was kept
     problems: tuple[Problem, ...]  # everything discovery could not use
+    notes: tuple[str, ...] = ()  # what matching an LMS download decided (late, newest …)
 
     @property
     def not_graded(self) -> tuple[str, ...]:
@@ -369,6 +378,7 @@ def grade_assignment(
     on_plan: Callable[[int], Callable[[StudentResult], None] | None] | None = None,
     cold_kernels: bool = False,
     sandbox: bool = True,
+    class_list: Sequence[Mapping[str, str]] = (),
 ) -> RunReport:
     """Grade every submission in ``submissions`` against the assignment ``hw``.
 
@@ -400,6 +410,9 @@ def grade_assignment(
     sandbox : bool
         With the default ``execute``: run every kernel in the sandbox (refused where there is
         none); False runs them unsandboxed, with a warning on stderr and in the records.
+    class_list : sequence of dict, optional
+        Rows of an LMS class list (``grade --roster``) whose columns are added to the
+        roster's, by student id, to match an LMS download (:func:`grader.lms.classlist.merge_rows`).
 
     Raises
     ------
@@ -409,8 +422,10 @@ def grade_assignment(
     """
     a = load_assignment(hw)
     submissions = Path(submissions)
-    if not submissions.is_dir() or not os.access(submissions, os.R_OK | os.X_OK):
-        raise UsageError(f"{submissions}: not a readable folder of submissions")
+    archive = submissions.suffix.lower() == ".zip" and submissions.is_file()
+    if not archive and (not submissions.is_dir()
+                        or not os.access(submissions, os.R_OK | os.X_OK)):
+        raise UsageError(f"{submissions}: not a readable folder of submissions (nor a .zip)")
     out = Path(hw) / "graded" if out is None else Path(out)
     warm = execute is None and not cold_kernels
     found_sandbox = None
@@ -431,7 +446,13 @@ def grade_assignment(
         raise UsageError(f"{out}: cannot create the output folder: {e.strerror}") from None
     with run_lock(out):
         remove_stale_temporaries(out, out / RESULTS, out / FEEDBACK)
-        found = discover(submissions, a.ids)
+        if archive:
+            submissions = _unpack(submissions, out)
+        found = discover(submissions, a.ids, merge_rows(a.rows, class_list))
+        if found.layout != "folder":
+            atomic_write_text(out / LMS_SUBMISSIONS, gradebook_csv(_lms_table(found, submissions)))
+        else:  # a previous run's LMS table would describe other files
+            (out / LMS_SUBMISSIONS).unlink(missing_ok=True)
         to_run, to_write, kept = _plan(a, found, out, force, found_sandbox is not None,
                                        getattr(limits, "submission_bytes", DEFAULT_MAX_BYTES))
         if on_plan is not None:
@@ -447,7 +468,27 @@ def grade_assignment(
         results = {sid: read_result(out / RESULTS / f"{sid}.json") for sid in a.ids}
         _rebuild(a, out, results, reveal)
     graded_now = tuple(t[0].student_id for t in to_run) + tuple(r.student_id for r in to_write)
-    return RunReport(tuple(results[s] for s in a.ids), graded_now, tuple(kept), found.problems)
+    return RunReport(tuple(results[s] for s in a.ids), graded_now, tuple(kept), found.problems,
+                     found.notes)
+
+
+def _unpack(archive: Path, out: Path) -> Path:
+    """A downloaded ``.zip`` extracted, with its checks, into ``OUT/download``."""
+    from grader.lms.archive import ArchiveError, extract_download
+
+    try:
+        return extract_download(archive, out / DOWNLOAD)
+    except ArchiveError as e:
+        raise UsageError(f"{archive}: {e}") from None
+
+
+def _lms_table(found: Any, root: Path) -> list[list[str]]:
+    """``OUT/submissions.csv``: which file of an LMS download was graded for whom, and how."""
+    table = [["id", "file", "late", "matched by"]]
+    for s in found.submissions:
+        table.append([s.student_id, str(s.path.relative_to(root)), "yes" if s.late else "",
+                      s.source])
+    return table
 
 
 WITHOUT_SANDBOX = ("eulertop grade: WARNING: grading WITHOUT a sandbox (--no-sandbox): student "
@@ -580,6 +621,7 @@ def _rebuild(a: Assignment, out: Path, results: Mapping[str, StudentResult | Non
     unsandboxed = any(ran_code(r) and not r.sandboxed for r in present.values())
     table = gradebook_rows(a.columns, a.rows, a.questions, present, sandbox_column=unsandboxed)
     atomic_write_text(out / GRADES, gradebook_csv(table))
+    atomic_write_text(out / ANSWERS, gradebook_csv(answers_rows(a.rows, present)))
     for sid, r in present.items():
         key = ({k.variable: k.answer.value for k in key_answers(a.key, sid)} if reveal else None)
         page = feedback_html(a.title, r, a.students[sid]["questions"], key)

@@ -34,7 +34,13 @@ def run_problems(args: argparse.Namespace) -> int:
 def add_generate_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``eulertop generate``."""
     parser.add_argument("--roster", type=Path, metavar="CSV",
-                        help="class list: UTF-8 CSV with a header and a column 'id'")
+                        help="class list: UTF-8 CSV with a header and a column 'id', or the "
+                             "class list Canvas, Moodle, Blackboard or Gradescope exports "
+                             "(recognised from its header)")
+    parser.add_argument("--roster-format", metavar="FORMAT",
+                        choices=("eulertop", "canvas", "moodle", "blackboard", "gradescope"),
+                        help="read --roster as this format instead of recognising it: "
+                             "eulertop, canvas, moodle, blackboard, gradescope")
     parser.add_argument("--out", type=Path, required=True, metavar="HW",
                         help="assignment folder to write (must not exist, unless --force)")
     parser.add_argument("--seed", type=int, metavar="N",
@@ -81,7 +87,9 @@ def run_generate(args: argparse.Namespace) -> int:
             if args.roster is None:
                 raise GenerateError("--roster CSV is required (or --reroll ID on an existing HW)")
             problems = None if args.problems is None else args.problems.split(",")
-            roster = read_roster(args.roster)
+            roster = read_roster(args.roster, getattr(args, "roster_format", None))
+            for note in roster.notes:
+                print(f"eulertop generate: {note}", file=sys.stderr)
             summary = generate_assignment(
                 roster, args.out, FAMILIES, problems=problems, seed=args.seed,
                 title=args.title, force=args.force, progress=_progress,

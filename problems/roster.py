@@ -1,4 +1,12 @@
-"""Reading the class roster: a UTF-8 CSV with a header and at least a column ``id``.
+"""Reading the class roster: a UTF-8 CSV with a header and at least a column ``id`` — or the
+class list of an LMS (Canvas, Moodle, Blackboard, Gradescope) as the LMS exports it.
+
+An LMS class list is recognised from its header (or named with ``--roster-format``); its
+format (:mod:`grader.lms.classlist`) says which of its columns gives the student id, and rows
+that are not students (Canvas's ``Points Possible`` row, its Test Student) are left out, with a
+note. The id is added as a first column ``id``; the LMS's own columns are kept unchanged, for
+matching submissions and for the gradebook the LMS imports (``eulertop export``). UTF-16 files
+and tab-delimited files (Blackboard's ``.xls`` download) are read too.
 
 A student id becomes a file name (``release/<id>.ipynb``, ``SUBMISSIONS/<id>.ipynb``) and the
 key the grader uses to pick a student's variant, so it is checked strictly here, once, before
@@ -49,6 +57,8 @@ class Roster:
 
     columns: tuple[str, ...]
     rows: tuple[dict[str, str], ...]
+    format: str = ""  # "" for an eulertop roster, else the LMS's (grader.lms.registry)
+    notes: tuple[str, ...] = ()  # rows left out, ids from a fallback column (not stored)
 
     @property
     def ids(self) -> tuple[str, ...]:
@@ -57,12 +67,16 @@ class Roster:
 
     def to_dict(self) -> dict:
         """Plain JSON: ``{"columns": [...], "rows": [{...}, ...]}``."""
-        return {"columns": list(self.columns), "rows": [dict(r) for r in self.rows]}
+        d = {"columns": list(self.columns), "rows": [dict(r) for r in self.rows]}
+        if self.format:
+            d["format"] = self.format
+        return d
 
     @classmethod
     def from_dict(cls, d: dict) -> Roster:
-        """Inverse of :meth:`to_dict`."""
-        return cls(columns=tuple(d["columns"]), rows=tuple(dict(r) for r in d["rows"]))
+        """Inverse of :meth:`to_dict` (``notes`` are not stored)."""
+        return cls(columns=tuple(d["columns"]), rows=tuple(dict(r) for r in d["rows"]),
+                   format=d.get("format", ""))
 
 
 def id_problem(student_id: str) -> str | None:
@@ -86,14 +100,23 @@ def id_problem(student_id: str) -> str | None:
     return None
 
 
-def read_roster(path: Path | str) -> Roster:
+ROSTER_FORMATS = ("eulertop", "canvas", "moodle", "blackboard", "gradescope")
+"""``--roster-format`` values: ``eulertop`` is the CSV with a column ``id``."""
+
+
+def read_roster(path: Path | str, roster_format: str | None = None) -> Roster:
     """Read and check a roster CSV.
 
     Parameters
     ----------
     path : path-like
-        A UTF-8 CSV file (a byte-order mark, as Excel writes it, is accepted) with a header
-        row that has a column ``id`` (any case, surrounding spaces ignored).
+        A UTF-8 CSV file (a byte-order mark, as Excel writes it, is accepted; UTF-16 with its
+        byte-order mark too; tab-delimited when the header holds more tabs than commas) with a
+        header row that has a column ``id`` (any case, surrounding spaces ignored) — or an LMS
+        class list (module docstring).
+    roster_format : str, optional
+        One of :data:`ROSTER_FORMATS`; default: recognised from the header (an LMS's class
+        list when its columns are there, else a column ``id``).
 
     Returns
     -------
@@ -107,12 +130,20 @@ def read_roster(path: Path | str) -> Roster:
         their lines).
     """
     path = Path(path)
+    if roster_format is not None and roster_format not in ROSTER_FORMATS:
+        raise RosterError(f"unknown roster format {roster_format!r} (choose from "
+                          f"{', '.join(ROSTER_FORMATS)})")
     text = _read_text(path)
-    reader = csv.reader(io.StringIO(text, newline=""))
+    first = next((line for line in text.splitlines() if line.strip()), "")
+    delimiter = "\t" if first.count("\t") > first.count(",") else ","
+    reader = csv.reader(io.StringIO(text, newline=""), delimiter=delimiter)
     try:
         header = next((r for r in reader if any(f.strip() for f in r)), None)
         if header is None:
             raise RosterError(f"{path}: the roster is empty (expected a header with a column 'id')")
+        lms = _lms_format(path, header, roster_format)
+        if lms is not None:
+            return _read_class_list(path, reader, header, lms)
         columns = _columns(f"{path}, line {reader.line_num}", header)
         rows, lines = _rows(path, reader, columns)
     except csv.Error as e:
@@ -123,11 +154,64 @@ def read_roster(path: Path | str) -> Roster:
     return Roster(columns=columns, rows=tuple(rows))
 
 
+def _lms_format(path: Path, header: list[str], roster_format: str | None):
+    """The LMS class-list format of ``header`` (None: an eulertop roster)."""
+    from grader.lms.registry import CLASS_LISTS
+
+    if roster_format == "eulertop":
+        return None
+    if roster_format is None:
+        return next((f for f in CLASS_LISTS.values() if f.matches(header)), None)
+    fmt = CLASS_LISTS[roster_format]
+    if not fmt.matches(header):
+        found = ", ".join(repr(c.strip()) for c in header)
+        raise RosterError(f"{path}, line 1: not a {fmt.label}: it needs the columns "
+                          f"{', '.join(map(repr, fmt.required))} (found: {found})")
+    return fmt
+
+
+def _read_class_list(path: Path, reader, header: list[str], fmt) -> Roster:
+    """An LMS class list (module docstring): rows that are students, each with its ``id``."""
+    from grader.lms.classlist import describe_fallbacks
+
+    keep = [i for i, c in enumerate(header) if c.strip()]
+    columns = [header[i].strip() for i in keep]
+    seen = sorted({c for c in columns if columns.count(c) > 1})
+    if seen:
+        raise RosterError(f"{path}, line 1: duplicate column names: {seen}")
+    rows, lines, notes, used = [], [], [], []
+    for fields in reader:
+        if not any(f.strip() for f in fields):
+            continue
+        padded = [*fields, *[""] * (len(header) - len(fields))]
+        row = {c: padded[i] for c, i in zip(columns, keep, strict=True)}
+        reason = fmt.skip(row)
+        if reason:
+            notes.append(f"{path}, line {reader.line_num}: left out {reason}")
+            continue
+        sid, column = fmt.student_id(row)
+        used.append((column, reader.line_num))
+        rows.append({"id": sid, **{c: v for c, v in row.items() if c != "id"}})
+        lines.append(reader.line_num)
+    if not rows:
+        raise RosterError(f"{path}: the {fmt.label} lists no students")
+    where = " or ".join(repr(c) for c in fmt.id_columns)
+    _check_ids(path, rows, lines, column=f"{where} (the student id of a {fmt.label})")
+    notes += describe_fallbacks(fmt, columns, used)
+    names = ("id", *(c for c in columns if c != "id"))
+    return Roster(columns=names, rows=tuple(rows), format=fmt.name, notes=tuple(notes))
+
+
 def _read_text(path: Path) -> str:
     try:
         data = path.read_bytes()
     except OSError as e:
         raise RosterError(f"{path}: cannot read the roster: {e.strerror or e}") from None
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        try:
+            return data.decode("utf-16")
+        except UnicodeDecodeError:
+            raise RosterError(f"{path}: starts as UTF-16 but is not valid UTF-16") from None
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as e:
@@ -174,11 +258,11 @@ def _rows(path: Path, reader, columns: tuple[str, ...]) -> tuple[list[dict], lis
     return rows, lines
 
 
-def _check_ids(path: Path, rows: list[dict], lines: list[int]) -> None:
+def _check_ids(path: Path, rows: list[dict], lines: list[int], column: str = "'id'") -> None:
     for row, line in zip(rows, lines, strict=True):
         problem = id_problem(row[ID_COLUMN])
         if problem:
-            raise RosterError(f"{path}, line {line}, column 'id': {problem}")
+            raise RosterError(f"{path}, line {line}, column {column}: {problem}")
     by_folded: dict[str, list[tuple[str, int]]] = {}
     for row, line in zip(rows, lines, strict=True):
         by_folded.setdefault(row[ID_COLUMN].casefold(), []).append((row[ID_COLUMN], line))
@@ -188,6 +272,6 @@ def _check_ids(path: Path, rows: list[dict], lines: list[int]) -> None:
             " and ".join(f"{sid!r} (line {line})" for sid, line in group) for group in clashes
         )
         raise RosterError(
-            f"{path}, column 'id': duplicate ids (compared ignoring case, since they name "
+            f"{path}, column {column}: duplicate ids (compared ignoring case, since they name "
             f"files): {described}"
         )

@@ -1,0 +1,100 @@
+"""Blackboard Learn (Original): Grade Center export as a class list, assignment download, upload.
+
+Class list — Grade Center → Work Offline → Download (user information)
+    Header ``Last Name, First Name, Username, Student ID, Last Access, Availability, …``,
+    tab-delimited UTF-16 (``.xls``) or comma-delimited (``.csv``). **Student id**: the
+    Username (Blackboard's own key for a student). The course's preview user
+    (``…_previewuser``) is left out.
+
+Bulk download — Grade Center column → Assignment File Download (a zip)
+    ``<assignment>_<username>_attempt_<YYYY-MM-DD-HH-MM-SS>_<file name>`` per file, and
+    ``<assignment>_<username>_attempt_<time>.txt``, the submission's receipt. **Matched** by
+    the Username; of several attempts the newest (its time) is graded.
+
+Upload — Grade Center → Work Offline → Upload
+    ``Last Name, First Name, Username, <title> [Total Pts: <N> Score] |<column id>``, every
+    field quoted; Blackboard matches students by Username and the column by its
+    ``|<column id>`` (``--assignment-id``) — without one it creates a new column.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from pathlib import Path
+
+from grader.lms.classlist import ClassListFormat, Grades, ImportError_, cell
+from grader.lms.download import NOTEBOOK, Candidate, Matched, Students, is_system_file
+
+
+def _skip(row: Mapping[str, str]) -> str | None:
+    if cell(row, "Username").endswith("_previewuser"):
+        return "Blackboard's preview user"
+    return None
+
+
+CLASS_LIST = ClassListFormat(
+    name="blackboard",
+    label="Blackboard Grade Center export",
+    required=("Last Name", "First Name", "Username"),
+    id_columns=("Username",),
+    name_columns=("First Name", "Last Name"),
+    skip=_skip,
+)
+
+ATTEMPT = re.compile(r"_attempt_(?P<time>\d{4}-\d{2}-\d{2}-\d{2}-\d{2}-\d{2})"
+                     r"(?:_(?P<file>.+)|\.txt)$")
+
+
+def _username(name: str, usernames: list[str]) -> str | None:
+    """The username in ``<assignment>_<username>_attempt_…`` (the longest roster one that fits;
+    assignment names and usernames may both hold ``_``)."""
+    head = name[: ATTEMPT.search(name).start()]
+    fits = [u for u in usernames if head.endswith(f"_{u}") or head == u]
+    return max(fits, key=len) if fits else None
+
+
+def match_download(folder: Path, students: Students) -> Matched | None:
+    """Blackboard's layout in ``folder``, or None."""
+    entries = sorted(folder.iterdir())
+    if not any(e.is_file() and ATTEMPT.search(e.name) for e in entries):
+        return None
+    found = Matched("blackboard")
+    key = "Username" if students.has_column("Username") else "id"
+    usernames = [cell(r, key) if key != "id" else r["id"] for r in students.rows]
+    for entry in entries:
+        m = ATTEMPT.search(entry.name)
+        if is_system_file(entry) or m is None or not entry.is_file() or entry.is_symlink():
+            found.stray(entry, "a system file, not a submission" if is_system_file(entry)
+                        else "not named as Blackboard names submissions")
+            continue
+        user = _username(entry.name, usernames)
+        if m["file"] is None:
+            continue  # the attempt's receipt (.txt): what Blackboard says, not a submission
+        if not entry.name.endswith(NOTEBOOK):
+            found.stray(entry, f"not a notebook (.ipynb) — {user or 'unknown user'}'s attempt")
+        elif user is None:
+            found.unmatched(entry, "its username is not on the roster")
+        else:
+            ids = students.by_column(key, user)
+            found.candidates.append(Candidate(ids[0], entry, (m["time"],),
+                                              how=f"Blackboard username {user!r}"))
+    return found
+
+
+def write_import(grades: Grades) -> list[list[str]]:
+    """Rows of the Grade Center upload (module docstring); the writer quotes every field."""
+    lacking = [r["id"] for r in grades.rows if not cell(r, "Username")]
+    if lacking:
+        raise ImportError_(
+            "Blackboard matches students by Username, and the roster has none for "
+            f"{', '.join(lacking[:5])}{' …' if len(lacking) > 5 else ''}: export with "
+            "--roster <Blackboard Grade Center export>")
+    column = f"{grades.title} [Total Pts: {grades.max_points:.10g} Score]"
+    if grades.column_id:
+        column += f" |{grades.column_id}"
+    table = [["Last Name", "First Name", "Username", column]]
+    for r in grades.rows:
+        table.append([cell(r, "Last Name"), cell(r, "First Name"), cell(r, "Username"),
+                      grades.scores[r["id"]]])
+    return table

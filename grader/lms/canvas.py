@@ -1,0 +1,134 @@
+"""Canvas: its gradebook export as a class list, "Download Submissions", and gradebook import.
+
+Class list — the gradebook export (Grades → Export → CSV)
+    Header ``Student, ID, SIS User ID, SIS Login ID, Section, <assignment> (<id>), …`` (a TA's
+    export may lack the two SIS columns), then a ``Points Possible`` row (older exports indent
+    it with spaces, and may have a ``Muted`` row), then one row per student, the course's
+    ``Test Student`` (``Student, Test``) last. **Student id**: the SIS Login ID, or — where it
+    is empty — the Canvas user ID (the ``ID`` column).
+
+Bulk download — "Download Submissions" (a zip of flat files)
+    ``<sortable name>[_LATE]_<canvas user id>_<attachment id>_<file name>``: the sortable name
+    lower-cased with every non-word character removed, ``LATE`` (``late`` in older Canvas)
+    when the submission was late, the user id, then the id and display name of the uploaded
+    file — a re-uploaded file name gains ``-1``, ``-2`` before its extension, and a later
+    upload a larger attachment id. Anonymous grading writes ``anon_<id>`` for the user id.
+    **Matched** by the Canvas user id against the class list's ``ID`` column; of several
+    notebooks the one with the largest attachment id (the newest upload) is graded.
+
+Import — Grades → Import
+    ``Student, ID, SIS User ID, SIS Login ID, Section, <title> (<assignment id>)``, a
+    ``Points Possible`` row, then one row per student; Canvas matches students by ID (then the
+    SIS columns) and the column by its ``(<assignment id>)`` — or, without it, by title,
+    creating a new assignment when none has that title.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from pathlib import Path
+
+from grader.lms.classlist import ClassListFormat, Grades, ImportError_, cell, fold
+from grader.lms.download import NOTEBOOK, Candidate, Matched, Students, is_system_file
+
+
+def _skip(row: Mapping[str, str]) -> str | None:
+    student = fold(cell(row, "Student"))
+    if student == "points possible":
+        return "Canvas's 'Points Possible' row"
+    if not student and any(fold(v or "") == "muted" for v in row.values()):
+        return "Canvas's 'Muted' row"
+    if student in ("student, test", "test student"):
+        return "Canvas's Test Student (the course's student view)"
+    return None
+
+
+CLASS_LIST = ClassListFormat(
+    name="canvas",
+    label="Canvas gradebook export",
+    required=("Student", "ID", "Section"),
+    id_columns=("SIS Login ID", "ID"),
+    name_columns=("Student",),
+    skip=_skip,
+)
+
+FILE_NAME = re.compile(
+    r"^(?:(?P<name>.*?)_)??(?:(?P<late>LATE|late)_)?"
+    r"(?P<user>\d+|anon_[A-Za-z0-9]+)_(?P<attachment>\d+)_(?P<original>.+)$")
+"""A file of "Download Submissions" (module docstring)."""
+
+
+def parse_file_name(name: str) -> dict | None:
+    """The parts of a Canvas download file name, or None.
+
+    Examples
+    --------
+    >>> parse_file_name("müllerjürgen_LATE_4521_99001_hw3-1.ipynb")["user"]
+    '4521'
+    >>> parse_file_name("alice.ipynb") is None
+    True
+    """
+    m = FILE_NAME.match(name)
+    return m.groupdict() if m else None
+
+
+def match_download(folder: Path, students: Students) -> Matched | None:
+    """Canvas's layout in ``folder`` (flat files named as above), or None."""
+    entries = sorted(folder.iterdir())
+    if not any(e.is_file() and "_assignsubmission_" not in e.name and parse_file_name(e.name)
+               for e in entries):
+        return None
+    if any(e.name.endswith(NOTEBOOK) and e.stem in students.ids for e in entries):
+        return None  # an eulertop folder of <id>.ipynb, not a Canvas download
+    found = Matched("canvas")
+    have_ids = students.has_column("ID")
+    for entry in entries:
+        _one(entry, students, have_ids, found)
+    return found
+
+
+def _one(entry: Path, students: Students, have_ids: bool, found: Matched) -> None:
+    parts = parse_file_name(entry.name)
+    if is_system_file(entry):
+        return found.stray(entry, "a system file, not a submission")
+    if entry.is_dir() or entry.is_symlink() or parts is None:
+        kind = "a folder" if entry.is_dir() else "a file"
+        return found.stray(entry, f"{kind} not named as Canvas names submissions")
+    if not entry.name.endswith(NOTEBOOK):
+        return found.stray(entry, f"not a notebook (.ipynb) — Canvas user {parts['user']}")
+    user = parts["user"]
+    if user.startswith("anon_"):
+        return found.unmatched(entry, "anonymous grading hides who submitted it (turn "
+                                      "anonymity off in Canvas, then download again)")
+    if not have_ids:
+        return found.unmatched(entry, "the roster has no Canvas 'ID' column to match Canvas "
+                                      f"user {user}: generate with the Canvas gradebook "
+                                      "export as --roster")
+    ids = students.by_column("ID", user)
+    if len(ids) != 1:
+        why = "is on the roster twice" if ids else "is not on the roster"
+        return found.unmatched(entry, f"Canvas user {user} {why}")
+    found.candidates.append(Candidate(ids[0], entry, (int(parts["attachment"]),),
+                                      late=parts["late"] is not None,
+                                      how=f"Canvas user id {user}"))
+
+
+IMPORT_KEYS = ("ID", "SIS User ID", "SIS Login ID")
+
+
+def write_import(grades: Grades) -> list[list[str]]:
+    """Rows of the file Canvas's gradebook import takes (module docstring)."""
+    lacking = [r["id"] for r in grades.rows if not any(cell(r, k) for k in IMPORT_KEYS)]
+    if lacking:
+        raise ImportError_(
+            f"Canvas matches students by ID, SIS User ID or SIS Login ID, and the roster has "
+            f"none of them for {', '.join(lacking[:5])}{' …' if len(lacking) > 5 else ''}: "
+            "export with --roster <Canvas gradebook export>")
+    column = f"{grades.title} ({grades.column_id})" if grades.column_id else grades.title
+    table = [["Student", *IMPORT_KEYS, "Section", column],
+             ["Points Possible", "", "", "", "", f"{grades.max_points:.10g}"]]
+    for r in grades.rows:
+        table.append([cell(r, "Student"), *(cell(r, k) for k in IMPORT_KEYS),
+                      cell(r, "Section"), grades.scores[r["id"]]])
+    return table

@@ -1,0 +1,76 @@
+"""Blackboard, end to end without kernels: Grade Center export + assignment download → upload."""
+
+from __future__ import annotations
+
+import pytest
+
+from grader.gradebook import number
+from grader.lms.export import write_export
+from problems.roster import read_roster
+from tests.grader.lms.conftest import generate, grade, read_csv, results
+from tests.grader.lms.exports import (
+    blackboard_file_name,
+    blackboard_grade_center,
+    notebook,
+    write_zip,
+)
+
+USERS = ("jmuller", "znunez", "agarcia1", "agarcia2", "lwei", "soneil")
+
+
+@pytest.fixture(scope="module")
+def blackboard(tmp_path_factory):
+    """Two attempts by one student, receipts, a PDF, a missing student; the Grade Center
+    export as Blackboard writes it (tab-delimited UTF-16, with the preview user)."""
+    root = tmp_path_factory.mktemp("blackboard")
+    hw = generate(root, "gc_export.xls", blackboard_grade_center())
+
+    def attempt(user, time, right=True, original="hw.ipynb"):
+        data = notebook(hw, user, right) if original.endswith(".ipynb") else b"%PDF-1.4\n"
+        return {blackboard_file_name("HW_1", user, time, original): data,
+                blackboard_file_name("HW_1", user, time, None): "Name: …\nDate Submitted: …\n"}
+
+    download = write_zip(root / "gradebook_HW1.zip", {
+        **attempt("jmuller", "2024-03-01-10-00-00"),
+        **attempt("znunez", "2024-03-01-09-00-00", right=False),
+        **attempt("znunez", "2024-03-01-11-30-00"),
+        **attempt("agarcia1", "2024-03-01-08-00-00"),
+        **attempt("agarcia1", "2024-03-01-08-00-00", original="work.pdf"),
+        **attempt("agarcia2", "2024-03-01-08-00-00", right=False),
+        **attempt("lwei", "2024-03-02-23-59-59"),
+    })
+    return hw, grade(hw, download)
+
+
+def test_the_grade_center_export_is_read_with_usernames_as_ids(tmp_path):
+    (tmp_path / "gc.xls").write_bytes(blackboard_grade_center())
+    roster = read_roster(tmp_path / "gc.xls")
+    assert (roster.format, roster.ids) == ("blackboard", USERS)
+    assert any("left out Blackboard's preview user" in n for n in roster.notes)
+    assert roster.rows[0]["First Name"] == "Jürgen"
+
+
+def test_attempts_are_matched_by_username_and_the_newest_graded(blackboard):
+    _, report = blackboard
+    got = results(report)
+    for sid in ("jmuller", "znunez", "agarcia1", "lwei"):
+        assert got[sid].points == got[sid].max_points > 0, sid
+    assert got["agarcia2"].points == 0 and got["soneil"].status == "missing"
+    newest = "HW_1_znunez_attempt_2024-03-01-11-30-00_hw.ipynb"
+    assert any(n.startswith(f"znunez: 2 notebooks; graded the newest, {newest}")
+               for n in report.notes)
+    assert [p.path.name for p in report.problems if p.ignored] == [
+        "HW_1_agarcia1_attempt_2024-03-01-08-00-00_work.pdf"]
+    assert report.not_graded == ()
+
+
+def test_export_is_the_grade_center_upload(blackboard):
+    hw, report = blackboard
+    out, _ = write_export(hw, "blackboard", column_id="3301")
+    text = out.read_text(encoding="utf-8")
+    full = number(results(report)["jmuller"].max_points)
+    assert text.splitlines()[0] == \
+        f'"Last Name","First Name","Username","Homework 1 [Total Pts: {full} Score] |3301"'
+    table = read_csv(out)
+    assert [r[2] for r in table[1:]] == list(USERS)
+    assert [r[3] for r in table[1:]] == [full, full, full, "0", full, ""]
