@@ -419,6 +419,7 @@ class _Run:
     answers: dict[str, Any] = field(default_factory=dict)
     problem: str | None = None
     truncated: bool = False
+    out_of_time: CodeCell | None = None  # the cell running when the notebook's time ran out
 
 
 class _KernelDied(Exception):
@@ -501,10 +502,19 @@ def _default_factory(sandbox: bool | None, stack: contextlib.ExitStack) -> Kerne
 
 
 async def _supervise(run: _Run, kernel: KernelProcess, variables: tuple[str, ...]) -> str:
-    """Run the session under the whole-notebook deadline; the status. Kills the kernel."""
+    """Run the session under the whole-notebook deadline; the status. Kills the kernel.
+
+    When the notebook's time runs out while a cell runs, that cell is interrupted, no later
+    cell runs, and the answers set so far are read — all within :data:`EXTRACTION_TIMEOUT`
+    more seconds; a cell that does not yield to the interrupt then, or time running out in any
+    other phase, ends the run ("timeout", no answers)."""
     task = asyncio.ensure_future(_session(run, kernel, variables))
     try:
         done, _ = await asyncio.wait({task}, timeout=run.limits.total_timeout)
+        if not done and run.phase == "running":
+            run.out_of_time = run.running or run.cells[-1]
+            await kernel.interrupt()
+            done, _ = await asyncio.wait({task}, timeout=EXTRACTION_TIMEOUT)
         if not done:
             await kernel.stop()  # first: whatever the session awaits then fails fast
             task.cancel()
@@ -537,11 +547,15 @@ async def _session(run: _Run, kernel: KernelProcess, variables: tuple[str, ...])
         kernel.on_iopub_lost = lambda: setattr(client, "iopub_timeout", 0)
     run.phase = "running"
     for index, cell in enumerate(run.cells):
+        if run.out_of_time is not None:
+            break  # the notebook's time ran out: no more cells, read what was set
         await _run_cell(client, run, index, cell)
     run.phase = "extracting"
     run.answers, run.problem = await _extract(kc, kernel, variables, run.limits)
     run.phase = "done"
-    return "ok" if run.problem is None else "error"
+    if run.problem is not None:
+        return "error"
+    return "ok" if run.out_of_time is None else "timeout"
 
 
 async def _run_cell(client: Any, run: _Run, index: int, cell: CodeCell) -> None:
@@ -553,7 +567,11 @@ async def _run_cell(client: Any, run: _Run, index: int, cell: CodeCell) -> None:
     except DeadKernelError:
         raise _KernelDied from None
     reply = client.replies.get(index) or {}
-    if cell.position in run.timed_out:
+    if run.out_of_time is cell:
+        run.errors.append(f"{cell.label}: the notebook's time limit "
+                          f"({run.limits.total_timeout:g} s) ran out while it ran; it was "
+                          "interrupted and the cells after it were not run")
+    elif cell.position in run.timed_out:
         run.errors.append(f"{cell.label}: timed out after "
                           f"{run.limits.effective_cell_timeout:g} s and was interrupted")
     elif reply.get("status") == "error":
@@ -686,10 +704,11 @@ def _execution(run: _Run, status: str, notes: Sequence[str], kernel: Any,
     truncated = run.truncated or bool(getattr(kernel, "iopub_lost", False))
     if status == "kernel_died" and run.running is not None:
         errors.append(f"{run.running.label}: the kernel died while it ran")
-    if status == "timeout" and run.running is not None:
+    answered = run.phase == "done"  # read after the time ran out, too
+    if status == "timeout" and run.running is not None and not answered:
         errors.append(f"{run.running.label}: still running when the time limit "
                       f"({run.limits.total_timeout:g} s) ran out")
-    answers = run.answers if status == "ok" else {}
+    answers = run.answers if status == "ok" or (status == "timeout" and answered) else {}
     message = "; ".join([*notes, _summary(run, status, kernel, errors)])
     retry = status == "error" and run.phase == "starting"  # no kernel: not the student's doing
     return Execution(status, message, answers, tuple(errors), duration, truncated,
@@ -704,6 +723,10 @@ def _summary(run: _Run, status: str, kernel: Any, errors: Sequence[str]) -> str:
         if not errors:
             return f"ran all {cells} without an error"
         return f"ran all {cells}; {len(errors)} did not finish normally: " + "; ".join(errors)
+    if status == "timeout" and run.phase == "done":
+        return (f"stopped at the time limit for the whole notebook ({run.limits.total_timeout:g}"
+                f" s) while {run.out_of_time.label} was running: it was interrupted, the cells "
+                "after it were not run, and the answers set before it were read")
     if status == "timeout":
         where = f" while {run.running.label} was running" if run.running else ""
         if run.phase == "extracting":
