@@ -136,7 +136,7 @@ def _failed(key, sid, message) -> StudentResult:
 
 
 def test_gradebook_keeps_graded_missing_and_failed_apart_with_a_reason(files):
-    manifest, key = files
+    _, key = files
     alice = _record(key, "alice", _key_values(key, "alice"))
     bob = StudentResult(**{**_record(key, "bob", None, status="missing").__dict__,
                            "message": "no submission"})
