@@ -75,6 +75,7 @@ __all__ = [
     "Verdict",
     "check_form",
     "check_spec",
+    "comparison_rule",
     "grade",
 ]
 
@@ -320,6 +321,53 @@ def grade(answer: Answer, submitted: Any) -> Verdict:
         if _matches(answer, value, _read_key(form, mistake.value, "mistakes")):
             return _verdict(form, "wrong", mistake.feedback, mistake=mistake.name)
     return _verdict(form, "wrong", f"{_show(form, value)}: {_not_within(answer)}")
+
+
+def comparison_rule(answer: Answer) -> str:
+    """How ``answer`` is compared, in words for the student, from its own kind and tolerances.
+
+    Nothing of the key is in it (only ``rtol``, ``atol``, ``unit``, ``period`` and the kind).
+
+    Examples
+    --------
+    >>> comparison_rule(Answer("T", "scalar", 2.0, unit="J"))
+    'within 0.1 % (relative)'
+    >>> comparison_rule(Answer("w", "scalar", 2.0, unit="rad/s", atol=0.005))
+    'within 0.1 % (relative) + 0.005 rad/s (absolute, for values near zero)'
+    >>> comparison_rule(Answer("L", "vector", [1.0, 2.0]))
+    'within 0.1 % of its length (on the length of the difference)'
+    >>> comparison_rule(Answer("b", "angle", 1.0, unit="rad"))
+    'in radians, within 0.1 % (relative); not taken modulo 2π'
+    >>> comparison_rule(Answer("b", "angle", 1.0, unit="rad", period=2 * math.pi))
+    'in radians, within 0.1 % (relative), modulo 2π'
+    """
+    kind = answer.kind
+    if kind == "boolean":
+        return "True or False, exactly"
+    if kind == "choice":
+        return "one of the options, exactly (case ignored)"
+    relative = f"{_percent(answer.rtol)} (relative)" if answer.rtol else ""
+    absolute = ""
+    if answer.atol:
+        unit = f" {answer.unit}" if answer.unit else ""
+        absolute = f"{answer.atol:.3g}{unit} (absolute, for values near zero)"
+    within = "within " + " + ".join(part for part in (relative, absolute) if part)
+    if kind == "vector":
+        within = within.replace(" (relative)", " of its length")
+        return f"{within} (on the length of the difference)"
+    if kind == "expression":
+        return f"by its values at random points of its symbols, each {within}"
+    if kind == "angle":
+        if answer.period is None:
+            return f"in radians, {within}; not taken modulo 2π"
+        period = "2π" if math.isclose(answer.period, 2 * math.pi) else f"{answer.period:.6g}"
+        return f"in radians, {within}, modulo {period}"
+    return within
+
+
+def _percent(rtol: float) -> str:
+    """``0.001`` → ``'0.1 %'``; ``1e-6`` → ``'0.0001 %'``."""
+    return f"{rtol * 100:.3g} %"
 
 
 # --------------------------------------------------------------------------------------------

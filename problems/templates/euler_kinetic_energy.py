@@ -66,12 +66,8 @@ _RATES = (
     "The Euler-angle rates are not the components of ω: ω = α̇ ẑ + β̇ ê'₂ + γ̇ ê₃ along three "
     "non-orthogonal axes; take its body components from R12 before using T = ½ Σ I_i ω_i²."
 )
-_CONVENTION = (
-    "Conventions (as in the lecture): $R = R_\\gamma R_\\beta R_\\alpha$ ($\\alpha$ about the "
-    "lab $z$, $\\beta$ about the new $y'$, $\\gamma$ about the body $\\hat e_3$), $\\beta$ "
-    "from the upward vertical, $V' = R\\,V$; the body axes $\\hat e_1, \\hat e_2, \\hat e_3$ "
-    "are the principal axes with moments $I_1, I_2, I_3$. Angles in radians, rates in rad/s."
-)
+CONVENTIONS = ("euler_angles",)
+"""Topics of :mod:`problems.conventions` stated at the top of the notebook."""
 _EXPRESSION_TASK = (
     "For a **symmetric** body ($I_2 = I_1$), write the kinetic energy as an expression in "
     "`I1, I3, beta, alpha_dot, beta_dot, gamma_dot` (a sympy expression or a string, e.g. "
@@ -192,10 +188,9 @@ def _draw(rng: np.random.Generator) -> Variant | None:
     shown = ", ".join(f"${s} = {latex_sig(params[n], 3)}$ {units[n]} (`{n}`)"
                       for s, n in zip(symbols, names, strict=True))
     statement = (
-        f"{text} At one instant its Euler angles and their rates are {shown}.\n\n"
-        f"{_CONVENTION}\n\n"
-        "1. Find its rotational kinetic energy $T$ at that instant (relative tolerance "
-        "$10^{-3}$).\n"
+        f"{text} At one instant its Euler angles and their rates are {shown}; its body axes "
+        "$\\hat e_1, \\hat e_2, \\hat e_3$ are the principal axes of $I_1, I_2, I_3$.\n\n"
+        "1. Find its rotational kinetic energy $T$ at that instant.\n"
         f"2. {_EXPRESSION_TASK}"
     )
     return Variant(NAME, title, params, units, statement, (energy, _expression_answer()))

@@ -53,6 +53,8 @@ NAME = "nutation_precession"
 TITLE = "Nutation period and mean precession rate of a heavy top"
 SUMMARY = "heavy top let go at a tilt: exact nutation period and mean precession rate (elliptic)"
 RESULTS = ("R15", "R17", "R20")
+CONVENTIONS = ('euler_angles', 'heavy_top')
+"""Topics of :mod:`problems.conventions` stated at the top of the notebook."""
 
 SIG = 3
 """Significant figures of every displayed parameter."""
@@ -164,14 +166,11 @@ def _statement(noun: str, p: dict[str, float]) -> str:
         f"{show('I1', 'I_1', 'kg m²')} about any axis through the tip perpendicular to the "
         f"symmetry axis and {show('I3', 'I_3', 'kg m²')} about the symmetry axis; its weight "
         f"times the distance from the tip to its centre of mass is "
-        f"{show('Mgl', 'Mgl', 'J')}. The axis's tilt $\\beta$ is measured from the upward "
-        "vertical and $\\alpha$ is the azimuth of the axis about the vertical (Euler angles "
-        "of the lecture).\n\n"
+        f"{show('Mgl', 'Mgl', 'J')}.\n\n"
         f"The top is let go at the tilt {beta0} with $\\dot\\beta = 0$, spinning at "
         f"{omega3} about its symmetry axis, {how}{alpha_dot0}"
         ". The tilt then oscillates (nutates) between two turning angles $\\beta_1$ and "
-        "$\\beta_2$. Find, exactly (not in the fast-top approximation; relative tolerance "
-        "$10^{-3}$):\n\n"
+        "$\\beta_2$. Find, exactly (not in the fast-top approximation):\n\n"
         "1. `T_nut`: the nutation period (s), the time for $\\beta$ to go from $\\beta_1$ to "
         "$\\beta_2$ and back;\n"
         "2. `mean_rate`: the mean precession rate $\\langle\\dot\\alpha\\rangle$ over one "
