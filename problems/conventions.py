@@ -16,8 +16,9 @@ GENERAL = """\
 **Conventions for every question**
 
 - **Units**: SI throughout (kg, m, s, N, J); angles in **radians**, rates in rad/s.
-- **Answers** go into the variables `q{k}_{name}` of question k's answer cell (the table \
-below lists them). Vectors are lists or arrays in the stated order.
+- **Answers** go into the variables `q{k}_{name}` of question k's answer cell, where each \
+line's comment gives its unit and what it is. Vectors are lists or arrays in the stated \
+order. Each answer is worth 1 point unless its line says otherwise.
 - **How answers are compared** (each question states its tolerances): a number is correct \
 within a *relative* tolerance, |yours − key| ≤ rtol·|key|; where a question also gives an \
 *absolute* tolerance (for values that may be near zero) the two add. A vector is compared \

@@ -7,10 +7,11 @@ id                  type      content
 ==================  ========  ==========================================================
 ``title``           markdown  the assignment title, and how to run ``eulertop check``
 ``rules``           markdown  the student's id, the rules, the conventions shared by every
-                              question (:mod:`problems.conventions`), the answer table
+                              question (:mod:`problems.conventions`)
 ``parameters``      code      the student's parameters, ``q{k}_{name} = value  # unit``
 ``q{k}-statement``  markdown  question k: title, statement, how each answer is compared
 ``q{k}-answer``     code      one line per answer, ``q{k}_{name} = None  # unit — what``
+                              (its form where not a plain number, its points where not 1)
 ==================  ========  ==========================================================
 
 All cells but the answer cells are marked ``"editable": false`` (and every generated cell
@@ -76,10 +77,6 @@ notebook runs top to bottom in a fresh kernel; what you print or plot does not c
 expressions (or strings) in the named symbols.
 
 {conventions}
-
-| variable | kind | unit | points | what |
-| --- | --- | --- | --- | --- |
-{table}
 """
 
 
@@ -123,9 +120,18 @@ def kind_hint(spec: Mapping[str, Any]) -> str:
 
 
 def answer_line(spec: Mapping[str, Any], value: Any = None) -> str:
-    """``q3_beta1 = None  # rad — β₁, the upper turning point`` (value None in the release)."""
-    notes = [spec["unit"] or kind_hint(spec), _one_line(spec["description"])]
-    comment = " — ".join(n for n in notes if n)
+    """``q3_beta1 = None  # rad — β₁, the upper turning point`` (value None in the release).
+
+    The comment gives the unit, and the form where it is not a plain number (``kg m^2, a list
+    of 3 numbers``); the points when they are not 1 (the notebook's conventions say so).
+    """
+    form = spec["unit"] or kind_hint(spec)
+    if spec["unit"] and spec["kind"] not in ("scalar", "angle"):
+        form = f"{spec['unit']}, {kind_hint(spec)}"
+    points = spec.get("points", 1.0)
+    worth = f" ({points:g} point{'' if points == 1 else 's'})" if points != 1 else ""
+    notes = [form, _one_line(spec["description"]) + worth]
+    comment = " — ".join(n for n in notes if n.strip())
     return f"{spec['variable']} = {python_literal(value)}  # {comment}"
 
 
@@ -162,18 +168,11 @@ def notebook_conventions(variants: Sequence[Variant]) -> str:
     return conventions_text(topics)
 
 
-def _rules_cell(student: Mapping[str, str], specs: Sequence[dict],
-                conventions: str = "") -> str:
+def _rules_cell(student: Mapping[str, str], conventions: str = "") -> str:
     sid = student["id"]
     name = student.get("name", "").strip()
     who = f"`{sid}`" + (f" ({html.escape(name, quote=False)})" if name else "")
-    rows = [
-        f"| `{s['variable']}` | {kind_hint(s)} | {s['unit'] or '—'} | {s['points']:g} | "
-        f"{html.escape(_one_line(s['description']), quote=False).replace('|', '&#124;')} |"
-        for s in specs
-    ]
-    return RULES.format(who=who, conventions=conventions,
-                        table="\n".join(rows)).rstrip("\n")
+    return RULES.format(who=who, conventions=conventions).rstrip("\n")
 
 
 def build_notebook(
@@ -204,9 +203,8 @@ def build_notebook(
          "answers": [answer_spec(a, k) for a in v.answers]}
         for k, v in enumerate(variants, start=1)
     ]
-    specs = [s for q in questions for s in q["answers"]]
     heading = TITLE_CELL.format(title=_one_line(title), file=f"{student['id']}.ipynb")
-    rules = _rules_cell(student, specs, notebook_conventions(variants))
+    rules = _rules_cell(student, notebook_conventions(variants))
     cells = [
         _cell("markdown", "title", heading, _READ_ONLY),
         _cell("markdown", "rules", rules, _READ_ONLY),

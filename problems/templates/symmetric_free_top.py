@@ -212,7 +212,7 @@ def _statement(d: Draw) -> str:
         "moments about the centre of mass are "
         f"$I_1 = I_2 = {latex_sig(d.I1, SIG_MOMENTS)}$ kg m² (any axis perpendicular to the "
         f"symmetry axis) and $I_3 = {latex_sig(d.I3, SIG_MOMENTS)}$ kg m² (the symmetry axis "
-        "$\\hat e_3$). Use these moments as given (`I1`, `I3`).\n\n"
+        "$\\hat e_3$) (`I1`, `I3`; use them as given).\n\n"
         "At $t = 0$ the body-frame components of the angular velocity are "
         "$\\boldsymbol\\omega(0) = "
         f"(\\omega_1, \\omega_2, \\omega_3) = ({w1},\\ {w2},\\ {w3})$ rad/s (`omega0`).\n\n"
@@ -226,8 +226,8 @@ def _statement(d: Draw) -> str:
         "4. `alpha_dot`: the rate (rad/s, positive) at which the symmetry axis $\\hat e_3$ "
         "precesses about the fixed angular momentum $\\mathbf L$, *seen from the inertial "
         "frame*.\n"
-        "5. `theta`: the half-angle $\\theta$ (rad) of the cone that $\\hat e_3$ sweeps around "
-        "$\\mathbf L$, i.e. the angle between $\\hat e_3$ and $\\mathbf L$."
+        "5. `theta`: the angle $\\theta$ (rad) between $\\hat e_3$ and $\\mathbf L$, the "
+        "half-angle of the cone that $\\hat e_3$ sweeps."
     )
 
 

@@ -54,7 +54,7 @@ def test_cell_layout_and_read_only_marks(hw):
     rules = nb.cells[1].source
     assert "`alice` (Alice Ng)" in rules
     assert "**Conventions for every question**" in rules
-    assert "| `q2_I_expr` | an expression in m, L, theta |" in rules
+    assert "q2_I_expr = None  # an expression in m, L, theta" in nb.cells[6].source
 
 
 def test_answer_cells_have_one_line_per_answer(hw):
