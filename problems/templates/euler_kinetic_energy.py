@@ -68,6 +68,10 @@ _RATES = (
 )
 CONVENTIONS = ("euler_angles",)
 """Topics of :mod:`problems.conventions` stated at the top of the notebook."""
+_OMEGA3_IS_GAMMA_DOT = (
+    "ω₃ = γ̇ + α̇ cos β (R12): this value takes ω₃ = γ̇, leaving out the precession's "
+    "component α̇ cos β along ê₃."
+)
 _EXPRESSION_TASK = (
     "For a **symmetric** body ($I_2 = I_1$), write the kinetic energy as an expression in "
     "`I1, I3, beta, alpha_dot, beta_dot, gamma_dot` (a sympy expression or a string, e.g. "
@@ -132,6 +136,13 @@ def _energy_answer(moments, angles, rates, swap: tuple[int, int]) -> Answer | No
     gaps = np.abs(values[:, None] - values[None, :])
     if np.min(gaps[~np.eye(len(values), dtype=bool)]) <= SEPARATION * RTOL * abs(T):
         return None
+    # ω3 taken to be γ̇ (R12): the state whose ω3 = γ̇' + α̇ cos β equals the given γ̇. Kept
+    # where it is clear of the key and the other mistakes; the draw is not rejected for it.
+    alpha_dot, beta_dot, gamma_dot = rates
+    spin_only = float(kinetic_energy_euler(*moments, beta, gamma, alpha_dot, beta_dot,
+                                           gamma_dot - alpha_dot * np.cos(beta)))
+    if np.min(np.abs(values - spin_only)) > SEPARATION * RTOL * abs(T):
+        mistakes += (("omega3_is_gamma_dot", spin_only, _OMEGA3_IS_GAMMA_DOT),)
     return Answer("T", "scalar", T, unit="J", rtol=RTOL, description="kinetic energy",
                   mistakes=tuple(Mistake(n, v, f) for n, v, f in mistakes))
 

@@ -120,7 +120,23 @@ def _omega_answer(alpha, beta, gamma, rates) -> Answer | None:
          "These are the lab components of ω; the question asks for its body components "
          "(ω₁, ω₂, ω₃) along ê₁, ê₂, ê₃ (R12)."),
         ("degree_mode", omega_body(*np.radians([beta, gamma]), *rates), _DEGREE_MODE),
+        *_spin_mistake(w, beta, rates),
     ], "rad/s", "body components (ω1, ω2, ω3) of the angular velocity")
+
+
+_OMEGA3_IS_GAMMA_DOT = (
+    "ω₃ = γ̇ + α̇ cos β (R12): the spin-angle rate γ̇ alone is not the component along ê₃; the "
+    "precession α̇ ẑ contributes α̇ cos β to it."
+)
+
+
+def _spin_mistake(w: np.ndarray, beta: float, rates: np.ndarray) -> list[tuple]:
+    """``omega3_is_gamma_dot`` (ω₃ taken to be γ̇), where it is clear of the key by more than
+    ``SEPARATION`` tolerances; otherwise none (the draw is not rejected for it)."""
+    wrong = np.array([w[0], w[1], rates[2]])
+    if np.linalg.norm(wrong - w) <= 2 * SEPARATION * RTOL * np.linalg.norm(w):
+        return []
+    return [("omega3_is_gamma_dot", wrong, _OMEGA3_IS_GAMMA_DOT)]
 
 
 def _draw(rng: np.random.Generator) -> Variant | None:

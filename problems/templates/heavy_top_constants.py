@@ -307,8 +307,9 @@ def mistaken_states(top: Top, state: State) -> dict[str, tuple[float, ...]]:
 
     ``I1_about_cm`` (scenes where the student shifts ``I1``), ``I1_I3_swapped`` (only if the
     swapped moments are still a rigid body's about its tip, ``I1 ≤ 2 I3``, which the solver
-    requires; for the constants of motion :func:`_swapped_constants` writes the swap out) and
-    ``degree_mode`` (``β0`` read as degrees).
+    requires; for the constants of motion :func:`_swapped_constants` writes the swap out),
+    ``degree_mode`` (``β0`` read as degrees) and, when ``α̇0 ≠ 0``, ``omega3_is_gamma_dot``
+    (``γ̇0`` taken for ``ω3 = γ̇0 + α̇0 cos β0``, so ``p_γ = I3 γ̇0``).
     """
     args = state_args(top, state)
     mistaken = {}
@@ -317,6 +318,9 @@ def mistaken_states(top: Top, state: State) -> dict[str, tuple[float, ...]]:
     if top.I1 <= 2 * top.I3:
         mistaken["I1_I3_swapped"] = (top.I3, top.I1, *args[2:])
     mistaken["degree_mode"] = (*args[:3], math.radians(state.beta0), *args[4:])
+    if state.alpha_dot0 != 0.0:  # p_γ = I3 γ̇0: the state whose ω3 = γ̇' + α̇0 cos β0 is γ̇0
+        spin_only = state.gamma_dot0 - state.alpha_dot0 * math.cos(state.beta0)
+        mistaken["omega3_is_gamma_dot"] = (*args[:6], spin_only)
     return mistaken
 
 
