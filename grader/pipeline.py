@@ -314,8 +314,9 @@ def require_out_outside(out: Path, submissions: Path) -> None:
     """:class:`UsageError` when the output folder is SUBMISSIONS or inside it."""
     inside = Path(os.path.realpath(out)).is_relative_to(os.path.realpath(submissions))
     if inside:
-        raise UsageError(f"--out {out}: the output folder is inside the submissions folder "
-                         f"{submissions}; choose a folder outside it (default: HW/graded)")
+        raise UsageError(f"the output folder {out} is inside the submissions folder "
+                         f"{submissions}, where the gradebook would be taken for submissions; "
+                         "pass --out DIR outside it")
 
 
 def require_submissions(submissions: Path, found: Any, ids: Sequence[str]) -> None:

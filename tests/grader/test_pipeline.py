@@ -362,3 +362,19 @@ def test_a_run_that_locked_a_removed_lock_file_takes_the_new_one(hw, subs, first
             with run_lock(hw / "graded"):
                 pass
     assert not lock.exists()
+
+
+@pytest.mark.parametrize("case", ["empty", "out inside"])
+def test_the_command_exits_2_with_one_line(hw, subs, tmp_path, capsys, case):
+    from eulertop.cli import main
+
+    if case == "empty":
+        (tmp_path / "empty").mkdir()
+        argv = ["grade", str(hw), str(tmp_path / "empty")]
+        expected = f"eulertop grade: no submissions found in {tmp_path / 'empty'}"
+    else:
+        argv = ["grade", str(hw), str(subs), "--out", str(subs / "graded")]
+        expected = "eulertop grade: the output folder"
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(expected) and err.count("\n") == 1 and "Traceback" not in err
