@@ -57,7 +57,7 @@ _AXIS_NOTE = (
     "An eigenvector is defined only up to its sign: give the **unit** vector with a **positive "
     "$z$ component**."
 )
-_SIGN_NOTE = "Products of inertia carry their minus sign: $I_{xy} = -\\sum m\\,x y$."
+_SIGN_NOTE = "with their minus sign, $I_{xy} = -\\sum m\\,x y$"
 
 
 def _positive_z(v: np.ndarray) -> np.ndarray:
@@ -172,8 +172,8 @@ def _point_masses(rng: np.random.Generator) -> Variant | None:
         "| weight | mass | position |\n| --- | --- | --- |\n"
         f"{rows}\n\n"
         "Find the inertia tensor of the weights about $O$ in the frame's axes: its diagonal "
-        "$(I_{xx}, I_{yy}, I_{zz})$ and its products of inertia $(I_{xy}, I_{xz}, I_{yz})$ "
-        f"({_SIGN_NOTE}) "
+        "$(I_{xx}, I_{yy}, I_{zz})$ and its products of inertia $(I_{xy}, I_{xz}, I_{yz})$, "
+        f"{_SIGN_NOTE}. "
         "Then find the principal moments about $O$, in ascending order, and the principal axis "
         f"of the largest one. {_AXIS_NOTE}"
     )
@@ -210,8 +210,8 @@ def _box_corner(rng: np.random.Generator) -> Variant | None:
         "$x, y, z$ from $O$ along the edges $a, b, c$, so that the box fills "
         "$0 \\le x \\le a$, $0 \\le y \\le b$, $0 \\le z \\le c$.\n\n"
         "Find the inertia tensor of the box about $O$ in these axes: its diagonal "
-        "$(I_{xx}, I_{yy}, I_{zz})$ and its products of inertia $(I_{xy}, I_{xz}, I_{yz})$ "
-        f"({_SIGN_NOTE}) "
+        "$(I_{xx}, I_{yy}, I_{zz})$ and its products of inertia $(I_{xy}, I_{xz}, I_{yz})$, "
+        f"{_SIGN_NOTE}. "
         "Then find the principal moments about $O$, in ascending order, and the principal axis "
         f"of the largest one. {_AXIS_NOTE}"
     )
