@@ -7,7 +7,9 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
+from importlib import metadata
 
 # subcommand -> (module, one-line help). The module defines `add_<name>_arguments(parser)` and
 # `run_<name>(args) -> int` (exit status), so one module may serve several subcommands.
@@ -24,12 +26,21 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
+def version() -> str:
+    """The installed eulertop version (``0+unknown`` when run from a source tree not installed)."""
+    try:
+        return metadata.version("eulertop")
+    except metadata.PackageNotFoundError:
+        return "0+unknown"
+
+
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The parser; only ``command``'s module is imported (the others just list their help)."""
     parser = argparse.ArgumentParser(
         prog="eulertop",
         description="Autograder and problem generator for rigid-body rotation.",
     )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (module, help_text) in SUBCOMMANDS.items():
         sp = sub.add_parser(name, help=help_text, description=help_text)
@@ -40,7 +51,22 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else list(argv)
+    """Run one subcommand; its exit status (130 on Ctrl-C, 141 when stdout's reader left)."""
+    try:
+        status = _dispatch(sys.argv[1:] if argv is None else list(argv))
+        sys.stdout.flush()  # a closed pipe shows here, not in the interpreter's exit flush
+        return status
+    except BrokenPipeError:
+        # `eulertop problems | head -1`: the reader closed the pipe. Say nothing (there is no
+        # one to say it to), and point stdout at /dev/null so the interpreter's final flush at
+        # exit does not raise again; 141 = 128 + SIGPIPE, what a shell reports for such a cut.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+        return 141
+
+
+def _dispatch(argv: list[str]) -> int:
     parser = build_parser(next((a for a in argv if a in SUBCOMMANDS), None))
     args = parser.parse_args(argv)
     if args.command is None:

@@ -19,6 +19,7 @@ import csv
 import html
 import io
 import json
+import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -65,26 +66,33 @@ def gradebook_rows(
     """The gradebook as rows of strings, header first.
 
     Columns: ``id``, the roster's other columns (as in the roster), ``q1`` … ``qN`` (points per
-    question), ``total``, ``maximum``, ``status``; with ``sandbox_column`` (the pipeline sets it
-    when some submission was graded without a sandbox, ``--no-sandbox``) a last column
-    ``sandboxed``: ``yes`` / ``no`` (``""`` when nothing was executed). A student without a
-    result record (only after an interrupted run) gets empty points and status
-    ``not graded yet``.
+    question), ``total``, ``maximum``, ``status``, ``reason``; with ``sandbox_column`` (the
+    pipeline sets it when some submission was graded without a sandbox, ``--no-sandbox``) a last
+    column ``sandboxed``: ``yes`` / ``no`` (``""`` when nothing was executed).
+
+    ``status`` keeps three kinds of student apart: ``graded`` (the notebook ran and its answers
+    were compared; ``reason`` is empty, or a note such as a cell that raised), ``missing`` (no
+    submission; ``reason`` says so) and ``failed`` (a submission that could not be run or read;
+    ``reason`` says why, e.g. "the kernel died"). A student without a result record (only after
+    an interrupted run) gets empty points and status ``not graded yet``. Every cell is one line
+    free of control characters (:func:`csv_cell`).
     """
     others = [c for c in columns if c != "id"]
     table = [["id", *others, *(f"q{k}" for k in questions), "total", "maximum", "status",
-              *(["sandboxed"] if sandbox_column else [])]]
+              "reason", *(["sandboxed"] if sandbox_column else [])]]
     for row in rows:
         r = results.get(row["id"])
         if r is None:
-            cells = [""] * (len(questions) + 2) + ["not graded yet"]
+            cells = [""] * (len(questions) + 2) + ["not graded yet", ""]
         else:
             per_question = r.question_points()
             cells = [number(per_question.get(k, 0.0)) for k in questions]
-            cells += [number(r.points), number(r.max_points), r.status]
+            cells += [number(r.points), number(r.max_points), r.status, reason(r)]
         if sandbox_column:
-            cells.append("yes" if r.sandboxed else "no" if ran_code(r) else "")
-        table.append([row["id"], *(row.get(c, "") for c in others), *cells])
+            cells.append("" if r is None else "yes" if r.sandboxed else "no" if ran_code(r)
+                         else "")
+        table.append([csv_cell(c) for c in [row["id"], *(row.get(c, "") for c in others),
+                                            *cells]])
     return table
 
 
@@ -110,6 +118,32 @@ def answers_rows(rows: Sequence[Mapping[str, str]],
             table.append([r.student_id, str(a.question), a.name, a.variable, submitted,
                           number(v.points), number(v.max_points), v.status, v.mistake or ""])
     return table
+
+
+def reason(result: StudentResult) -> str:
+    """Why a student has the status they have, in one line: the record's message (its first
+    line for a failed one, every line joined for notes on a graded one)."""
+    if result.status == "failed":
+        lines = [line for line in result.message.splitlines() if line.strip()]
+        return lines[0] if lines else "could not be graded"
+    if result.status == "missing":
+        return result.message or "no submission"
+    return "; ".join(line.strip() for line in result.message.splitlines() if line.strip())
+
+
+_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]+")
+
+
+def csv_cell(text: str, limit: int = MAX_SHOWN) -> str:
+    """One spreadsheet cell: control characters (line breaks, tabs, escapes, NUL) become a
+    space, and the text is cut at ``limit`` characters.
+
+    Examples
+    --------
+    >>> csv_cell("cell 3 raised\nZeroDivisionError:\x1b[31m boom")
+    'cell 3 raised ZeroDivisionError: [31m boom'
+    """
+    return _cut(_CONTROL.sub(" ", str(text)).strip(), limit)
 
 
 def gradebook_csv(table: Sequence[Sequence[str]]) -> str:
@@ -240,8 +274,43 @@ def summary_table(results: Sequence[StudentResult], problems: Sequence[Problem] 
     counts = {s: sum(r.status == s for r in results) for s in ("graded", "missing", "failed")}
     out.append("")
     out.append(", ".join(f"{n} {s}" for s, n in counts.items()) + f" of {len(results)} students")
+    out += answer_counts(results)
     stray = [p for p in problems if p.student_id is None]
     if stray:
         out.append(f"not graded ({len(stray)}):")
         out += [f"  {p.message}" for p in stray]
     return "\n".join(out) + "\n"
+
+
+OUTCOMES = ("correct", "wrong", "known mistake", "invalid", "unanswered")
+"""The columns of :func:`answer_counts`: a wrong answer matching a known mistake is counted
+as ``known mistake`` (not also as ``wrong``); ``unanswered`` is the verdict ``missing``."""
+
+
+def outcome(verdict: Any) -> str:
+    """Which of :data:`OUTCOMES` a verdict is."""
+    if verdict.status == "wrong":
+        return "known mistake" if verdict.mistake else "wrong"
+    return "unanswered" if verdict.status == "missing" else verdict.status
+
+
+def answer_counts(results: Sequence[StudentResult]) -> list[str]:
+    """Lines of a table: per answer variable (question order), how many graded submissions had
+    it correct / wrong / a known mistake / invalid / unanswered. Students whose notebook was
+    missing or could not be run are left out (they answered nothing); no lines when none was
+    graded."""
+    graded = [r for r in results if r.status == "graded"]
+    if not graded:
+        return []
+    counts: dict[str, dict[str, int]] = {}
+    for r in graded:
+        for a in r.answers:
+            row = counts.setdefault(a.variable, dict.fromkeys(OUTCOMES, 0))
+            row[outcome(a.verdict)] += 1
+    width = max(len("answer"), *map(len, counts))
+    head = "  ".join(f"{c:>{len(c)}}" for c in OUTCOMES)
+    lines = ["", f"per answer, over {len(graded)} graded submission(s):",
+             f"{'answer':<{width}}  {head}"]
+    for variable, row in counts.items():
+        lines.append(f"{variable:<{width}}  " + "  ".join(f"{row[c]:>{len(c)}}" for c in OUTCOMES))
+    return lines

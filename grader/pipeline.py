@@ -35,7 +35,12 @@ progress: a run killed at any moment loses at most the submissions in flight.
 
 Concurrency between runs: a run holds ``fcntl.flock`` on ``OUT/.lock`` from start to end; a
 second run on the same folder is refused (:class:`RunInProgress`). The lock goes with the
-process, so a killed run never leaves a stale lock behind.
+process, so a killed run never leaves a stale lock behind; a run that ends removes the file
+(:func:`run_lock` says why that is safe).
+
+Refused before anything is written (:class:`UsageError`, exit 2): a SUBMISSIONS folder that
+holds no submission for any roster student (:func:`require_submissions`), and an output folder
+inside SUBMISSIONS (:func:`require_out_outside`), where the gradebook would become a submission.
 """
 
 from __future__ import annotations
@@ -287,21 +292,74 @@ def ungraded_result(
 
 @contextmanager
 def run_lock(out: Path) -> Iterator[None]:
-    """Hold ``OUT/.lock`` (``fcntl.flock``) for the run, or raise :class:`RunInProgress`."""
-    fd = os.open(out / LOCK, os.O_RDWR | os.O_CREAT, 0o644)
-    try:
+    """Hold ``OUT/.lock`` (``fcntl.flock``) for the run, or raise :class:`RunInProgress`.
+
+    The file is removed when the run ends. Removing a lock file races with a run that opened it
+    just before: that run could then lock the removed file while a third run creates and locks
+    a new one. So a run that gets the lock checks that the path still names the file it locked
+    (same device and inode) and otherwise opens it again; the holder removes it only while it
+    still holds the lock.
+    """
+    path = out / LOCK
+    for _ in range(100):
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             holder = os.pread(fd, 64, 0).decode(errors="replace").strip()
+            os.close(fd)
             who = f" (pid {holder})" if holder.isdigit() else ""
             raise RunInProgress(f"{out}: another 'eulertop grade' run{who} is in progress on "
                                 "this folder; wait for it to finish") from None
+        if _same_file(fd, path):
+            break
+        os.close(fd)  # locked a file that its holder removed meanwhile: take the new one
+    else:
+        raise RunInProgress(f"{out}: cannot take the lock {path} (it keeps being replaced)")
+    try:
         os.ftruncate(fd, 0)
         os.pwrite(fd, str(os.getpid()).encode(), 0)
         yield
     finally:
-        os.close(fd)  # releases the lock
+        try:
+            if _same_file(fd, path):
+                os.unlink(path)
+        finally:
+            os.close(fd)  # releases the lock
+
+
+def _same_file(fd: int, path: Path) -> bool:
+    """Does ``path`` still name the open file ``fd``?"""
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        return False
+    mine = os.fstat(fd)
+    return (st.st_dev, st.st_ino) == (mine.st_dev, mine.st_ino)
+
+
+def require_out_outside(out: Path, submissions: Path) -> None:
+    """:class:`UsageError` when the output folder is SUBMISSIONS or inside it."""
+    inside = Path(os.path.realpath(out)).is_relative_to(os.path.realpath(submissions))
+    if inside:
+        raise UsageError(f"the output folder {out} is inside the submissions folder "
+                         f"{submissions}, where the gradebook would be taken for submissions; "
+                         "pass --out DIR outside it")
+
+
+def require_submissions(submissions: Path, found: Any, ids: Sequence[str]) -> None:
+    """:class:`UsageError` when ``found`` (a discovery of ``submissions``) has no submission,
+    nor anything else, for any roster student: an empty or wrong folder, not a class where
+    nobody handed in (that folder would hold at least one roster name)."""
+    if found.submissions or any(p.student_id is not None for p in found.problems):
+        return
+    shown = ", ".join(f"{sid}.ipynb" for sid in ids[:3]) + (", …" if len(ids) > 3 else "")
+    strays = [p.path.name for p in found.problems]
+    seen = f"; it holds {', '.join(strays[:5])}{', …' if len(strays) > 5 else ''}" \
+        if strays else ""
+    raise UsageError(f"no submissions found in {submissions}: expected one notebook per "
+                     f"student named by roster id, <id>.ipynb or <id>/<notebook>.ipynb "
+                     f"({shown}){seen}")
 
 
 def _unchanged(old: StudentResult | None, sha: str | None, key_hash: str,
@@ -427,6 +485,8 @@ def grade_assignment(
                         or not os.access(submissions, os.R_OK | os.X_OK)):
         raise UsageError(f"{submissions}: not a readable folder of submissions (nor a .zip)")
     out = Path(hw) / "graded" if out is None else Path(out)
+    require_out_outside(out, submissions)
+    require_submissions(submissions, discover(submissions, a.ids), a.ids)
     warm = execute is None and not cold_kernels
     found_sandbox = None
     if execute is None:

@@ -46,7 +46,8 @@ kernels' folders (only those named in its fork requests), and exits. Pids are th
 kernels through the zygote, never directly.
 
 A forked child (:func:`_become_kernel`) starts its own session, asks to be SIGKILLed when the
-zygote dies (``PR_SET_PDEATHSIG``), becomes non-dumpable, closes every inherited descriptor
+zygote dies (``PR_SET_PDEATHSIG``), becomes non-dumpable (in its own world it stays dumpable,
+for its keeper to read its memory; seccomp refuses ``ptrace``), closes every inherited fd
 (the zygote's pipes to the grader included), applies the resource limits, replaces its
 environment, chdirs into its private working folder, sends stdin/stdout to ``/dev/null`` and
 stderr to ``control/kernel-stderr.txt``, reseeds what fork would otherwise share (numpy's
@@ -405,7 +406,10 @@ def _become_kernel(request: dict, zygote_pid: int, link: socket.socket | None = 
         prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
         if os.getppid() != zygote_pid:  # the zygote died before the line above
             os._exit(1)
-    prctl(PR_SET_DUMPABLE, 0)
+    prctl(PR_SET_DUMPABLE, 1 if in_world else 0)
+    # In its own world a kernel stays dumpable: its keeper must read its processes' memory
+    # (smaps_rollup). Nothing untrusted can name it — other kernels are in other PID
+    # namespaces — and its own processes cannot ptrace anything (seccomp).
     signal.set_wakeup_fd(-1)
     for signum in (signal.SIGCHLD, signal.SIGTERM, *IGNORED):
         signal.signal(signum, signal.SIG_DFL)

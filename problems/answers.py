@@ -51,7 +51,7 @@ import math
 import numbers
 from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, fields, replace
-from functools import lru_cache
+from functools import lru_cache, partial
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -75,6 +75,7 @@ __all__ = [
     "Verdict",
     "check_form",
     "check_spec",
+    "comparison_rule",
     "grade",
 ]
 
@@ -319,7 +320,132 @@ def grade(answer: Answer, submitted: Any) -> Verdict:
     for mistake in answer.mistakes:
         if _matches(answer, value, _read_key(form, mistake.value, "mistakes")):
             return _verdict(form, "wrong", mistake.feedback, mistake=mistake.name)
+    rounded = rounded_too_far(answer, value)
+    if rounded is not None:
+        return _verdict(form, "wrong", f"{_show(form, value)}: {rounded}", mistake=TOO_FEW_FIGURES)
     return _verdict(form, "wrong", f"{_show(form, value)}: {_not_within(answer)}")
+
+
+TOO_FEW_FIGURES = "too_few_figures"
+"""The ``mistake`` of a verdict on a value that is the key rounded to too few figures."""
+
+MAX_ROUNDED_FIGURES = 6
+"""Most significant figures (or decimals + 1) tried when recognising a rounded answer."""
+
+
+def rounded_too_far(answer: Answer, value: Any) -> str | None:
+    """Feedback when a wrong ``value`` is the key rounded (or cut) to too few figures, else None.
+
+    Recognised for scalars, angles and vectors when every number of ``value`` has at most ``n``
+    significant figures, ``n ≥ 2`` (or, for a vector, ``d ≥ 1`` decimals), and is what
+    rounding the key to them gives (within half a unit of the last figure) or cutting it
+    (towards zero, within one unit). The message says so, and how many
+    figures the tolerance needs (from the key's magnitude and the tolerance only).
+    """
+    if answer.kind not in ("scalar", "angle", "vector"):
+        return None
+    x = np.atleast_1d(np.asarray(value, dtype=float))
+    v = np.atleast_1d(np.asarray(answer.value, dtype=float))
+    if x.shape != v.shape or not np.all(np.isfinite(x)):
+        return None
+    need = _figures_needed(answer, v) + 1  # one more than rounding alone needs: working errs too
+    for n in range(2, MAX_ROUNDED_FIGURES + 1):  # one figure: any small integer would match
+        if _all_rounded(x, v, partial(_sig_unit, n=n)):
+            return (f"not correct: it looks rounded to {_count(n, 'significant figure')}, too "
+                    f"few for the tolerance ({comparison_rule(answer)}); keep at least {need} "
+                    "figures — round only the value you write, never the working")
+    for d in range(1, MAX_ROUNDED_FIGURES):
+        if x.size > 1 and _all_rounded(x, v, partial(_decimal_unit, d=d)):
+            return (f"not correct: its components look rounded to {_count(d, 'decimal')}, too "
+                    f"few for the tolerance ({comparison_rule(answer)}); keep at least {need} "
+                    "significant figures")
+    return None
+
+
+def _sig_unit(c: float, n: int) -> float:
+    """One unit in the ``n``-th significant figure of ``c`` (0 for ``c == 0``)."""
+    return 0.0 if c == 0 else 10.0 ** (math.floor(math.log10(abs(c))) - n + 1)
+
+
+def _decimal_unit(c: float, d: int) -> float:
+    """One unit in the ``d``-th decimal (whatever ``c``)."""
+    return 10.0 ** -d
+
+
+def _all_rounded(x: NDArray, v: NDArray, unit: Callable[[float], float]) -> bool:
+    """Every ``x_i`` is a multiple of ``unit(v_i)`` within one such unit of ``v_i``."""
+    for xi, vi in zip(x, v, strict=True):
+        u = unit(vi)
+        if u == 0.0:
+            if xi != 0.0:
+                return False
+            continue
+        steps = xi / u
+        if abs(steps - round(steps)) > 1e-6:
+            return False  # more figures than that
+        rounded = abs(xi - vi) <= 0.5 * u * (1 + 1e-6)
+        cut = abs(xi) <= abs(vi) and xi * vi >= 0 and abs(xi - vi) < u
+        if not (rounded or cut):
+            return False
+    return True
+
+
+def _figures_needed(answer: Answer, v: NDArray) -> int:
+    """Fewest significant figures whose rounding error (half a unit) fits the tolerance."""
+    scale = float(np.linalg.norm(v)) if answer.kind == "vector" else float(abs(v[0]))
+    tolerance = answer.atol + answer.rtol * scale
+    biggest = float(np.max(np.abs(v)))
+    for n in range(1, 17):
+        if 0.5 * _sig_unit(biggest, n) * (math.sqrt(v.size)) <= tolerance:
+            return n
+    return 17
+
+
+def comparison_rule(answer: Answer) -> str:
+    """How ``answer`` is compared, in words for the student, from its own kind and tolerances.
+
+    Nothing of the key is in it (only ``rtol``, ``atol``, ``unit``, ``period`` and the kind).
+
+    Examples
+    --------
+    >>> comparison_rule(Answer("T", "scalar", 2.0, unit="J"))
+    'within 0.1 % (relative)'
+    >>> comparison_rule(Answer("w", "scalar", 2.0, unit="rad/s", atol=0.005))
+    'within 0.1 % (relative) + 0.005 rad/s (absolute, for values near zero)'
+    >>> comparison_rule(Answer("L", "vector", [1.0, 2.0]))
+    'within 0.1 % of its length (on the length of the difference)'
+    >>> comparison_rule(Answer("b", "angle", 1.0, unit="rad"))
+    'in radians, within 0.1 % (relative); not taken modulo 2π'
+    >>> comparison_rule(Answer("b", "angle", 1.0, unit="rad", period=2 * math.pi))
+    'in radians, within 0.1 % (relative), modulo 2π'
+    """
+    kind = answer.kind
+    if kind == "boolean":
+        return "True or False, exactly"
+    if kind == "choice":
+        return "one of the options, exactly (case ignored)"
+    relative = f"{_percent(answer.rtol)} (relative)" if answer.rtol else ""
+    absolute = ""
+    if answer.atol:
+        unit = f" {answer.unit}" if answer.unit else ""
+        absolute = f"{answer.atol:.3g}{unit} (absolute, for values near zero)"
+    within = "within " + " + ".join(part for part in (relative, absolute) if part)
+    if kind == "vector":
+        within = within.replace(" (relative)", " of its length")
+        return f"{within} (on the length of the difference)"
+    if kind == "expression":
+        return f"by its values at random points of its symbols, each {within}"
+    if kind == "angle":
+        if answer.period is None:
+            return f"in radians, {within}; not taken modulo 2π"
+        period = "2π" if math.isclose(answer.period, 2 * math.pi) else f"{answer.period:.6g}"
+        return f"in radians, {within}, modulo {period}"
+    return within
+
+
+def _percent(rtol: float) -> str:
+    """``0.001`` → ``'0.1 %'``; ``1e-6`` → ``'0.0001 %'``."""
+    return f"{rtol * 100:.3g} %"
 
 
 # --------------------------------------------------------------------------------------------

@@ -105,4 +105,18 @@ def run_generate(args: argparse.Namespace) -> int:
     verb = "rerolled" if args.reroll else "generated"
     print(f"{verb} {len(summary.students)} student(s) × {len(summary.problems)} question(s) "
           f"in {summary.out} (seed {summary.seed})")
+    print(where_things_are(summary.out))
     return 0
+
+
+def where_things_are(out: Path) -> str:
+    """The lines ``eulertop generate`` ends with: what is in ``out``, and what to hand out."""
+    from problems.generate import KEY, RELEASE, SOLUTIONS
+
+    return "\n".join([
+        f"  student notebooks: {out / RELEASE}/  <- hand out this folder: each student gets "
+        "their own <id>.ipynb",
+        f"  solutions:         {out / SOLUTIONS}/  (instructor only: answers filled in)",
+        f"  answer key:        {out / KEY}  (instructor only: keep it for "
+        f"'eulertop grade {out} SUBMISSIONS')",
+    ])

@@ -5,11 +5,13 @@ Layout (cell ids are fixed names, so the same inputs give byte-identical files):
 ==================  ========  ==========================================================
 id                  type      content
 ==================  ========  ==========================================================
-``title``           markdown  the assignment title
-``rules``           markdown  the student's id, the rules, the table of answer variables
+``title``           markdown  the assignment title, and how to run ``eulertop check``
+``rules``           markdown  the student's id, the rules, the conventions shared by every
+                              question (:mod:`problems.conventions`)
 ``parameters``      code      the student's parameters, ``q{k}_{name} = value  # unit``
-``q{k}-statement``  markdown  question k: title and statement
+``q{k}-statement``  markdown  question k: title, statement, how each answer is compared
 ``q{k}-answer``     code      one line per answer, ``q{k}_{name} = None  # unit — what``
+                              (its form where not a plain number, its points where not 1)
 ==================  ========  ==========================================================
 
 All cells but the answer cells are marked ``"editable": false`` (and every generated cell
@@ -38,6 +40,8 @@ from typing import Any
 import nbformat
 from nbformat import v4
 
+from problems.answers import comparison_rule
+from problems.conventions import conventions_text
 from problems.variant import Variant, answer_spec, variable_name
 
 FORMAT_VERSION = 1
@@ -50,24 +54,29 @@ _KIND_HINTS = {
     "boolean": "True or False",
 }
 
+TITLE_CELL = """\
+# {title}
+
+**Check your notebook before you submit.** On JupyterHub or Colab, run in a new cell, once: \
+`%pip install eulertop` (or the address your instructor gives), then \
+`!eulertop check {file}` — save the notebook first. In a terminal: `eulertop check {file}`. \
+It runs the notebook top to bottom as the grader will and lists each answer as ok, missing or \
+malformed; it never says whether an answer is right.\
+"""
+
 RULES = """\
 **Student:** {who}
 
 Your numbers differ from your classmates': this notebook is yours alone.
 
-- Use the parameters in the cell below as given (SI units, angles in radians unless a \
-question says otherwise): the key is computed from exactly these values.
-- Write each answer into its variable in the question's answer cell; add cells for your \
-working anywhere. Leave a variable as `None` to skip it.
-- Only these variables are graded, after the whole notebook runs top to bottom in a fresh \
-kernel; what you print or plot does not count. Numbers may be Python or numpy numbers, vectors \
-lists or arrays, expressions sympy expressions (or strings) in the named symbols.
-- Before you submit, check the form of your answers (not whether they are right) with \
-`eulertop check {file}` — it runs the notebook and lists missing or malformed answers.
+- Use the parameters in the cell below as given: the key is computed from exactly these values.
+- Write each answer into its variable in the question's answer cell (leave `None` to skip it); \
+add cells for your working anywhere. Only these variables are graded, after the whole \
+notebook runs top to bottom in a fresh kernel; what you print or plot does not count.
+- Numbers may be Python or numpy numbers, vectors lists or arrays, expressions sympy \
+expressions (or strings) in the named symbols.
 
-| variable | kind | unit | points | what |
-| --- | --- | --- | --- | --- |
-{table}
+{conventions}
 """
 
 
@@ -111,9 +120,18 @@ def kind_hint(spec: Mapping[str, Any]) -> str:
 
 
 def answer_line(spec: Mapping[str, Any], value: Any = None) -> str:
-    """``q3_beta1 = None  # rad — β₁, the upper turning point`` (value None in the release)."""
-    notes = [spec["unit"] or kind_hint(spec), _one_line(spec["description"])]
-    comment = " — ".join(n for n in notes if n)
+    """``q3_beta1 = None  # rad — β₁, the upper turning point`` (value None in the release).
+
+    The comment gives the unit, and the form where it is not a plain number (``kg m^2, a list
+    of 3 numbers``); the points when they are not 1 (the notebook's conventions say so).
+    """
+    form = spec["unit"] or kind_hint(spec)
+    if spec["unit"] and spec["kind"] not in ("scalar", "angle"):
+        form = f"{spec['unit']}, {kind_hint(spec)}"
+    points = spec.get("points", 1.0)
+    worth = f" ({points:g} point{'' if points == 1 else 's'})" if points != 1 else ""
+    notes = [form, _one_line(spec["description"]) + worth]
+    comment = " — ".join(n for n in notes if n.strip())
     return f"{spec['variable']} = {python_literal(value)}  # {comment}"
 
 
@@ -128,16 +146,33 @@ def _parameter_cell(variants: Sequence[Variant]) -> str:
     return "\n".join(lines)
 
 
-def _rules_cell(student: Mapping[str, str], specs: Sequence[dict]) -> str:
+def comparison_line(variants_answers: Sequence[Any], question: int) -> str:
+    """The line under a question saying how each of its answers is compared, e.g.
+    ``*Compared:* `q1_T`, `q1_L`: within 0.1 % (relative).``; answers compared alike share
+    one entry. Derived from each answer's own kind and tolerances
+    (:func:`problems.answers.comparison_rule`), never typed into a template."""
+    groups: dict[str, list[str]] = {}
+    for answer in variants_answers:
+        rule = comparison_rule(answer)
+        groups.setdefault(rule, []).append(f"`{variable_name(question, answer.name)}`")
+    parts = [f"{', '.join(names)}: {rule}" for rule, names in groups.items()]
+    return "*Compared:* " + "; ".join(parts) + "."
+
+
+def notebook_conventions(variants: Sequence[Variant]) -> str:
+    """The conventions paragraph of a notebook: the general rules and the topics its questions'
+    families list in their ``CONVENTIONS`` (:mod:`problems.conventions`)."""
+    from problems.templates import FAMILIES
+
+    topics = [t for v in variants for t in getattr(FAMILIES.get(v.family), "CONVENTIONS", ())]
+    return conventions_text(topics)
+
+
+def _rules_cell(student: Mapping[str, str], conventions: str = "") -> str:
     sid = student["id"]
     name = student.get("name", "").strip()
     who = f"`{sid}`" + (f" ({html.escape(name, quote=False)})" if name else "")
-    rows = [
-        f"| `{s['variable']}` | {kind_hint(s)} | {s['unit'] or '—'} | {s['points']:g} | "
-        f"{html.escape(_one_line(s['description']), quote=False).replace('|', '&#124;')} |"
-        for s in specs
-    ]
-    return RULES.format(who=who, file=f"{sid}.ipynb", table="\n".join(rows)).rstrip("\n")
+    return RULES.format(who=who, conventions=conventions).rstrip("\n")
 
 
 def build_notebook(
@@ -168,14 +203,16 @@ def build_notebook(
          "answers": [answer_spec(a, k) for a in v.answers]}
         for k, v in enumerate(variants, start=1)
     ]
-    specs = [s for q in questions for s in q["answers"]]
+    heading = TITLE_CELL.format(title=_one_line(title), file=f"{student['id']}.ipynb")
+    rules = _rules_cell(student, notebook_conventions(variants))
     cells = [
-        _cell("markdown", "title", f"# {_one_line(title)}", _READ_ONLY),
-        _cell("markdown", "rules", _rules_cell(student, specs), _READ_ONLY),
+        _cell("markdown", "title", heading, _READ_ONLY),
+        _cell("markdown", "rules", rules, _READ_ONLY),
         _cell("code", "parameters", _parameter_cell(variants), _READ_ONLY),
     ]
     for k, variant in enumerate(variants, start=1):
-        statement = f"## Question {k}: {_one_line(variant.title)}\n\n{variant.statement.strip()}"
+        statement = (f"## Question {k}: {_one_line(variant.title)}\n\n"
+                     f"{variant.statement.strip()}\n\n{comparison_line(variant.answers, k)}")
         lines = [
             answer_line(answer_spec(a, k), a.value if solutions else None) for a in variant.answers
         ]

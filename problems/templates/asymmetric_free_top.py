@@ -43,6 +43,8 @@ NAME = "asymmetric_free_top"
 TITLE = "The tumbling asymmetric body: exact period and intermediate-axis flip"
 SUMMARY = "exact asymmetric top (elliptic functions): period of ω(t), Dzhanibekov flip time"
 RESULTS = ("R7", "R10")
+CONVENTIONS = ('free_body',)
+"""Topics of :mod:`problems.conventions` stated at the top of the notebook."""
 
 SIG = 3
 """Significant figures of ω(0)."""
@@ -169,10 +171,8 @@ def _statement(d: Draw) -> str:
            if s == 2 else f"mainly about $\\hat e_{s}$, with a large wobble")
     return (
         f"{b.noun[0].upper()}{b.noun[1:]} ({b.description}) is tossed into the air spinning "
-        f"{how}; no torque acts about its centre of mass (ignore air). Its principal axes "
-        f"and moments about the centre of mass, **ordered** $I_1 < I_2 < I_3$, are: {axes} "
-        "(`I1`, `I2`, `I3`; use them as given). The frame $(\\hat e_1, \\hat e_2, \\hat e_3)$ is "
-        "right-handed.\n\n"
+        f"{how}. Its principal axes and moments about the centre of mass, **ordered** "
+        f"$I_1 < I_2 < I_3$, are: {axes} (`I1`, `I2`, `I3`; use them as given).\n\n"
         "At $t = 0$ the body-frame components of the angular velocity are "
         f"$(\\omega_1, \\omega_2, \\omega_3) = ({w})$ rad/s (`omega0`). Solve Euler's "
         "equations exactly (Jacobi elliptic functions), not in the small-amplitude "

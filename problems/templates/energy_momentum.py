@@ -36,6 +36,8 @@ NAME = "energy_momentum"
 TITLE = "Kinetic energy and angular momentum"
 SUMMARY = "T and L for a given ω and inertia tensor; the angle between L and ω"
 RESULTS = ("R3", "R5")
+CONVENTIONS = ('inertia',)
+"""Topics of :mod:`problems.conventions` stated at the top of the notebook."""
 
 RTOL = 1e-3
 MIN_ANGLE = 0.03  # rad; below it the angle between L and ω is a small difference of directions
@@ -48,10 +50,6 @@ DISCS = {
     "circular saw blade": ((0.09, 0.125), (0.3, 0.8), (400.0, 520.0)),
 }
 
-_TOLERANCE_NOTE = (
-    "Answers are graded to a relative tolerance of $10^{-3}$ (vectors: on their length); keep "
-    "at least four significant figures in your working."
-)
 _HALF = "T = ½ ω·I·ω (R3): the factor ½ is missing."
 _DEGREES = "The angle is asked in radians; this is the angle in degrees."
 
@@ -131,7 +129,7 @@ def _tumbling_satellite(rng: np.random.Generator) -> Variant | None:
         "(`omega`).\n\n"
         "Find the rotational kinetic energy $T$, the angular momentum $\\mathbf L$ about the "
         "centre of mass (body components), and the angle between $\\mathbf L$ and "
-        f"$\\boldsymbol\\omega$ in radians.\n\n{_TOLERANCE_NOTE}"
+        f"$\\boldsymbol\\omega$ in radians (between 0 and π)."
     )
     return Variant(NAME, "Energy and angular momentum of a tumbling satellite", params, units,
                    statement, answers)
@@ -172,7 +170,7 @@ def _askew_disc(rng: np.random.Generator) -> Variant | None:
         "axis in the $xz$ plane, along $(\\sin\\theta, 0, \\cos\\theta)$, at the instant "
         "shown. Find the kinetic energy $T$, the angular momentum $\\mathbf L$ about the "
         "centre (components along $x, y, z$), and the angle between $\\mathbf L$ and "
-        f"$\\boldsymbol\\omega$ in radians.\n\n{_TOLERANCE_NOTE}"
+        f"$\\boldsymbol\\omega$ in radians (between 0 and π)."
     )
     return Variant(NAME, f"A {kind} mounted askew", params, units, statement, answers)
 

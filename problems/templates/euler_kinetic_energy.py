@@ -66,11 +66,11 @@ _RATES = (
     "The Euler-angle rates are not the components of ω: ω = α̇ ẑ + β̇ ê'₂ + γ̇ ê₃ along three "
     "non-orthogonal axes; take its body components from R12 before using T = ½ Σ I_i ω_i²."
 )
-_CONVENTION = (
-    "Conventions (as in the lecture): $R = R_\\gamma R_\\beta R_\\alpha$ ($\\alpha$ about the "
-    "lab $z$, $\\beta$ about the new $y'$, $\\gamma$ about the body $\\hat e_3$), $\\beta$ "
-    "from the upward vertical, $V' = R\\,V$; the body axes $\\hat e_1, \\hat e_2, \\hat e_3$ "
-    "are the principal axes with moments $I_1, I_2, I_3$. Angles in radians, rates in rad/s."
+CONVENTIONS = ("euler_angles",)
+"""Topics of :mod:`problems.conventions` stated at the top of the notebook."""
+_OMEGA3_IS_GAMMA_DOT = (
+    "ω₃ = γ̇ + α̇ cos β (R12): this value takes ω₃ = γ̇, leaving out the precession's "
+    "component α̇ cos β along ê₃."
 )
 _EXPRESSION_TASK = (
     "For a **symmetric** body ($I_2 = I_1$), write the kinetic energy as an expression in "
@@ -136,6 +136,13 @@ def _energy_answer(moments, angles, rates, swap: tuple[int, int]) -> Answer | No
     gaps = np.abs(values[:, None] - values[None, :])
     if np.min(gaps[~np.eye(len(values), dtype=bool)]) <= SEPARATION * RTOL * abs(T):
         return None
+    # ω3 taken to be γ̇ (R12): the state whose ω3 = γ̇' + α̇ cos β equals the given γ̇. Kept
+    # where it is clear of the key and the other mistakes; the draw is not rejected for it.
+    alpha_dot, beta_dot, gamma_dot = rates
+    spin_only = float(kinetic_energy_euler(*moments, beta, gamma, alpha_dot, beta_dot,
+                                           gamma_dot - alpha_dot * np.cos(beta)))
+    if np.min(np.abs(values - spin_only)) > SEPARATION * RTOL * abs(T):
+        mistakes += (("omega3_is_gamma_dot", spin_only, _OMEGA3_IS_GAMMA_DOT),)
     return Answer("T", "scalar", T, unit="J", rtol=RTOL, description="kinetic energy",
                   mistakes=tuple(Mistake(n, v, f) for n, v, f in mistakes))
 
@@ -192,10 +199,9 @@ def _draw(rng: np.random.Generator) -> Variant | None:
     shown = ", ".join(f"${s} = {latex_sig(params[n], 3)}$ {units[n]} (`{n}`)"
                       for s, n in zip(symbols, names, strict=True))
     statement = (
-        f"{text} At one instant its Euler angles and their rates are {shown}.\n\n"
-        f"{_CONVENTION}\n\n"
-        "1. Find its rotational kinetic energy $T$ at that instant (relative tolerance "
-        "$10^{-3}$).\n"
+        f"{text} At one instant its Euler angles and their rates are {shown}; its body axes "
+        "$\\hat e_1, \\hat e_2, \\hat e_3$ are the principal axes of $I_1, I_2, I_3$.\n\n"
+        "1. Find its rotational kinetic energy $T$ at that instant.\n"
         f"2. {_EXPRESSION_TASK}"
     )
     return Variant(NAME, title, params, units, statement, (energy, _expression_answer()))

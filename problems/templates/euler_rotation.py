@@ -44,24 +44,9 @@ BODIES = {
     "a quadcopter drone in a turn": ((0.05, 0.6), (-1.5, 1.5), (-1.0, 1.0), (-2.0, 2.0)),
 }
 
-_CONVENTION = r"""Conventions (as in the lecture): the body frame is obtained from the lab frame by
-turning through $\alpha$ about the lab $z$ axis, then through $\beta$ about the new $y'$ axis,
-then through $\gamma$ about the body axis $\hat e_3$; $\beta$ is measured from the upward
-vertical. A vector with lab components $V$ has body components $V' = R\,V$ with
-$R = R_\gamma R_\beta R_\alpha$,
+CONVENTIONS = ("euler_angles",)
+"""Topics of :mod:`problems.conventions` stated at the top of the notebook."""
 
-$$R_\alpha = \begin{pmatrix} \cos\alpha & \sin\alpha & 0 \\ -\sin\alpha & \cos\alpha & 0 \\
-0 & 0 & 1 \end{pmatrix},\quad
-R_\beta = \begin{pmatrix} \cos\beta & 0 & -\sin\beta \\ 0 & 1 & 0 \\
-\sin\beta & 0 & \cos\beta \end{pmatrix},\quad
-R_\gamma = \begin{pmatrix} \cos\gamma & \sin\gamma & 0 \\ -\sin\gamma & \cos\gamma & 0 \\
-0 & 0 & 1 \end{pmatrix}.$$
-
-Angles are in radians, rates in rad/s."""
-
-_TOLERANCE_NOTE = (
-    "Answers are graded to a relative tolerance of $10^{-3}$ on the length of each vector."
-)
 _DEGREE_MODE = (
     "The angles are in radians, but this value comes from reading them as degrees (a calculator "
     "in degree mode, or numpy.deg2rad applied to radians)."
@@ -135,7 +120,23 @@ def _omega_answer(alpha, beta, gamma, rates) -> Answer | None:
          "These are the lab components of ω; the question asks for its body components "
          "(ω₁, ω₂, ω₃) along ê₁, ê₂, ê₃ (R12)."),
         ("degree_mode", omega_body(*np.radians([beta, gamma]), *rates), _DEGREE_MODE),
+        *_spin_mistake(w, beta, rates),
     ], "rad/s", "body components (ω1, ω2, ω3) of the angular velocity")
+
+
+_OMEGA3_IS_GAMMA_DOT = (
+    "ω₃ = γ̇ + α̇ cos β (R12): the spin-angle rate γ̇ alone is not the component along ê₃; the "
+    "precession α̇ ẑ contributes α̇ cos β to it."
+)
+
+
+def _spin_mistake(w: np.ndarray, beta: float, rates: np.ndarray) -> list[tuple]:
+    """``omega3_is_gamma_dot`` (ω₃ taken to be γ̇), where it is clear of the key by more than
+    ``SEPARATION`` tolerances; otherwise none (the draw is not rejected for it)."""
+    wrong = np.array([w[0], w[1], rates[2]])
+    if np.linalg.norm(wrong - w) <= 2 * SEPARATION * RTOL * np.linalg.norm(w):
+        return []
+    return [("omega3_is_gamma_dot", wrong, _OMEGA3_IS_GAMMA_DOT)]
 
 
 def _draw(rng: np.random.Generator) -> Variant | None:
@@ -160,13 +161,11 @@ def _draw(rng: np.random.Generator) -> Variant | None:
     )
     statement = (
         f"The orientation of {body} is described by Euler angles. At one instant: {shown}.\n\n"
-        f"{_CONVENTION}\n\n"
         "1. Find the rotation matrix $R$; give its nine entries row by row, "
         "$[R_{11}, R_{12}, R_{13}, R_{21}, \\dots, R_{33}]$ (e.g. `R.ravel()`).\n"
         f"2. {vector_text}\n"
         "3. Find the body components $(\\omega_1, \\omega_2, \\omega_3)$ of the angular "
-        "velocity.\n\n"
-        f"{_TOLERANCE_NOTE}"
+        "velocity."
     )
     return Variant(NAME, f"Euler angles of {body}", params, units, statement, answers)
 

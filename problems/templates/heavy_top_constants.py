@@ -87,16 +87,9 @@ STATE_NAMES = ("beta0", "alpha_dot0", "beta_dot0", "gamma_dot0")
 STATE_UNITS = {"beta0": "rad", "alpha_dot0": "rad/s", "beta_dot0": "rad/s", "gamma_dot0": "rad/s"}
 _STATE_SYMBOLS = (r"\beta_0", r"\dot\alpha_0", r"\dot\beta_0", r"\dot\gamma_0")
 
-CONVENTIONS = (
-    "Conventions (as in the lecture): the symmetry axis $\\hat e_3$ points from the fixed point "
-    "to the centre of mass; Euler angles with $\\beta$ the tilt of $\\hat e_3$ from the "
-    "**upward** vertical, $\\alpha$ the azimuth of the axis about the vertical (precession, "
-    "positive counter-clockwise seen from above) and $\\gamma$ the spin angle about "
-    "$\\hat e_3$ (right-handed); $I_1$ is the moment of inertia about an axis through the "
-    "**fixed point** perpendicular to the symmetry axis, $I_3$ the moment about the symmetry "
-    "axis; the potential energy is $Mgl\\cos\\beta$ (zero at the height of the fixed point). "
-    "SI units, angles in radians."
-)
+CONVENTIONS = ("euler_angles", "heavy_top")
+"""Topics of :mod:`problems.conventions` stated at the top of the notebook (shared with
+turning_points and motion_type)."""
 
 FEEDBACK = {
     "I1_about_cm": (
@@ -314,8 +307,9 @@ def mistaken_states(top: Top, state: State) -> dict[str, tuple[float, ...]]:
 
     ``I1_about_cm`` (scenes where the student shifts ``I1``), ``I1_I3_swapped`` (only if the
     swapped moments are still a rigid body's about its tip, ``I1 ≤ 2 I3``, which the solver
-    requires; for the constants of motion :func:`_swapped_constants` writes the swap out) and
-    ``degree_mode`` (``β0`` read as degrees).
+    requires; for the constants of motion :func:`_swapped_constants` writes the swap out),
+    ``degree_mode`` (``β0`` read as degrees) and, when ``α̇0 ≠ 0``, ``omega3_is_gamma_dot``
+    (``γ̇0`` taken for ``ω3 = γ̇0 + α̇0 cos β0``, so ``p_γ = I3 γ̇0``).
     """
     args = state_args(top, state)
     mistaken = {}
@@ -324,6 +318,9 @@ def mistaken_states(top: Top, state: State) -> dict[str, tuple[float, ...]]:
     if top.I1 <= 2 * top.I3:
         mistaken["I1_I3_swapped"] = (top.I3, top.I1, *args[2:])
     mistaken["degree_mode"] = (*args[:3], math.radians(state.beta0), *args[4:])
+    if state.alpha_dot0 != 0.0:  # p_γ = I3 γ̇0: the state whose ω3 = γ̇' + α̇0 cos β0 is γ̇0
+        spin_only = state.gamma_dot0 - state.alpha_dot0 * math.cos(state.beta0)
+        mistaken["omega3_is_gamma_dot"] = (*args[:6], spin_only)
     return mistaken
 
 
@@ -433,8 +430,8 @@ def _answers(top: Top, state: State) -> tuple[Answer, ...] | None:
 
 def _statement(top: Top, state: State) -> str:
     return (
-        f"{top.text}\n\n{state_text(state)}\n\n{CONVENTIONS}\n\n"
-        "Find the constants of the motion (relative tolerance $10^{-3}$):\n\n"
+        f"{top.text}\n\n{state_text(state)}\n\n"
+        "Find the constants of the motion:\n\n"
         "1. `p_gamma`: the momentum $p_\\gamma$ conjugate to $\\gamma$, in kg m²/s;\n"
         "2. `p_alpha`: the momentum $p_\\alpha$ conjugate to $\\alpha$, in kg m²/s;\n"
         "3. `E_prime`: the reduced energy $E' = E - p_\\gamma^2/(2 I_3)$, in J."

@@ -39,6 +39,8 @@ SUMMARY = "inertia tensor of point masses or of a box about its corner; principa
 RESULTS = ("R2", "R4")
 
 RTOL = 1e-3
+CONVENTIONS = ("inertia",)
+"""Topics of :mod:`problems.conventions` stated at the top of the notebook."""
 MIN_GAP = 0.05  # reject (I3 − I2)/I3 below this: the largest axis would be ill-conditioned
 MIN_AXIS_Z = 0.2  # reject |n_z| below this: the sign convention n_z > 0 would be fragile
 SEPARATION = 5.0  # key and mistakes at least this many tolerances apart (no overlapping balls)
@@ -55,10 +57,7 @@ _AXIS_NOTE = (
     "An eigenvector is defined only up to its sign: give the **unit** vector with a **positive "
     "$z$ component**."
 )
-_TOLERANCE_NOTE = (
-    "Answers are graded to a relative tolerance of $10^{-3}$ (vectors: on their length); keep "
-    "at least four significant figures in your working."
-)
+_SIGN_NOTE = "with their minus sign, $I_{xy} = -\\sum m\\,x y$"
 
 
 def _positive_z(v: np.ndarray) -> np.ndarray:
@@ -173,9 +172,10 @@ def _point_masses(rng: np.random.Generator) -> Variant | None:
         "| weight | mass | position |\n| --- | --- | --- |\n"
         f"{rows}\n\n"
         "Find the inertia tensor of the weights about $O$ in the frame's axes: its diagonal "
-        "$(I_{xx}, I_{yy}, I_{zz})$ and its products of inertia $(I_{xy}, I_{xz}, I_{yz})$. "
+        "$(I_{xx}, I_{yy}, I_{zz})$ and its products of inertia $(I_{xy}, I_{xz}, I_{yz})$, "
+        f"{_SIGN_NOTE}. "
         "Then find the principal moments about $O$, in ascending order, and the principal axis "
-        f"of the largest one. {_AXIS_NOTE}\n\n{_TOLERANCE_NOTE}"
+        f"of the largest one. {_AXIS_NOTE}"
     )
     return Variant(NAME, "Inertia tensor of point masses", params, units, statement,
                    tuple(answers))
@@ -210,9 +210,10 @@ def _box_corner(rng: np.random.Generator) -> Variant | None:
         "$x, y, z$ from $O$ along the edges $a, b, c$, so that the box fills "
         "$0 \\le x \\le a$, $0 \\le y \\le b$, $0 \\le z \\le c$.\n\n"
         "Find the inertia tensor of the box about $O$ in these axes: its diagonal "
-        "$(I_{xx}, I_{yy}, I_{zz})$ and its products of inertia $(I_{xy}, I_{xz}, I_{yz})$. "
+        "$(I_{xx}, I_{yy}, I_{zz})$ and its products of inertia $(I_{xy}, I_{xz}, I_{yz})$, "
+        f"{_SIGN_NOTE}. "
         "Then find the principal moments about $O$, in ascending order, and the principal axis "
-        f"of the largest one. {_AXIS_NOTE}\n\n{_TOLERANCE_NOTE}"
+        f"of the largest one. {_AXIS_NOTE}"
     )
     return Variant(NAME, f"Inertia tensor of a {kind} about a corner", params, units, statement,
                    tuple(answers))

@@ -41,7 +41,9 @@ import numpy as np
 
 from problems.answers import Answer, Mistake
 from problems.templates.heavy_top_constants import (
-    CONVENTIONS,
+    CONVENTIONS as CONVENTIONS,  # the same convention topics (problems.conventions)
+)
+from problems.templates.heavy_top_constants import (
     FEEDBACK,
     RTOL,
     State,
@@ -160,12 +162,11 @@ def _figure_answer(figure: str) -> Answer:
 
 def _statement(top: Top, state: State) -> str:
     return (
-        f"{top.text}\n\n{state_text(state)}\n\n{CONVENTIONS}\n\n"
+        f"{top.text}\n\n{state_text(state)}\n\n"
         "The axis nods (nutates) between the turning points $\\beta_1 \\le \\beta_2$ while it "
         "precesses. Find:\n\n"
         "1. `alpha_dot1`, `alpha_dot2`: the precession rate $\\dot\\alpha$, in rad/s, at the "
-        "instants when the tilt is $\\beta_1$ and $\\beta_2$ respectively (tolerance "
-        "$10^{-3}$ relative, or $10^{-3}$ of the larger $|\\dot\\alpha|$);\n"
+        "instants when the tilt is $\\beta_1$ and $\\beta_2$ respectively;\n"
         "2. `motion`: the figure that the symmetry axis traces on a sphere centred on the "
         'fixed point, one of `"waves"`, `"loops"` or `"cusps"`.'
     )

@@ -35,6 +35,8 @@ NAME = "near_axis_stability"
 TITLE = "Spin about a principal axis: which axes are stable?"
 SUMMARY = "asymmetric top near a principal axis: stability of each axis, wobble frequency or growth"
 RESULTS = ("R7", "R9")
+CONVENTIONS = ('free_body',)
+"""Topics of :mod:`problems.conventions` stated at the top of the notebook."""
 
 SIG = 3
 """Significant figures of ω(0) and of the body's dimensions."""
@@ -226,12 +228,16 @@ def _rate_answer(d: Draw) -> Answer:
         mistakes.append(Mistake("axis3_formula", wrong, f"The spin is about ê{s}, not ê3: "
                                 "relabel R9's axes cyclically so that the spin axis plays "
                                 "the role of ê3."))
-    unit = "rad/s" if stable else "1/s"
-    what = "angular frequency of the wobble" if stable else "growth rate of the deviation"
-    return Answer("rate", "scalar", rate, unit=unit, rtol=RTOL, mistakes=tuple(mistakes),
-                  description=f"{what} for the spin about ê{s} (linear, R9)")
+    # Unit and description are the same whether the spin is stable or not: the text of the
+    # question must not tell which (rad/s and 1/s are one unit; the wobble's angular frequency
+    # and the growth rate are both √|Ω1Ω2|).
+    return Answer("rate", "scalar", rate, unit="1/s", rtol=RTOL, mistakes=tuple(mistakes),
+                  description=RATE_DESCRIPTION.format(axis=s))
 
 
+RATE_DESCRIPTION = ("R9 rate for the spin about ê{axis}: wobble angular frequency if stable, "
+                    "growth rate if not")
+"""The ``rate`` answer's description: identical for a stable and an unstable spin."""
 
 
 def _statement(d: Draw) -> str:
@@ -243,22 +249,17 @@ def _statement(d: Draw) -> str:
     )
     w = ",\\ ".join(latex_sig(x, SIG) for x in d.omega0)
     return (
-        f"{b.noun[0].upper()}{b.noun[1:]} ({b.description}) is tossed into the air spinning "
-        "about one of its principal axes; no torque acts about its centre of mass (ignore "
-        f"air). Its principal axes and moments about the centre of mass are: {axes} "
-        "(`I1`, `I2`, `I3`; use them as given). The labels follow the body's axes: the "
-        "moments are **not** necessarily in increasing order. The frame "
-        "$(\\hat e_1, \\hat e_2, \\hat e_3)$ is right-handed.\n\n"
+        f"{b.noun[0].upper()}{b.noun[1:]} ({b.description}) is tossed into the air. Its "
+        f"principal axes and moments about the centre of mass are: {axes} (`I1`, `I2`, `I3`; "
+        "use them as given), **not** necessarily in increasing order.\n\n"
         f"It is spun mainly about $\\hat e_{s}$: at $t = 0$ the body-frame components of the "
         f"angular velocity are $(\\omega_1, \\omega_2, \\omega_3) = ({w})$ rad/s (`omega0`).\n\n"
-        "1. `stable1`, `stable2`, `stable3`: for each principal axis $\\hat e_k$, is a steady "
-        "spin about $\\hat e_k$ stable against small perturbations (`True`) or unstable "
-        "(`False`)?\n"
-        f"2. `rate`: for the spin about $\\hat e_{s}$ given here, in the linear "
-        "(small-perturbation) approximation of Euler's equations: if the spin is stable, the "
-        "angular frequency (rad/s) at which the small components of $\\boldsymbol\\omega$ "
-        "oscillate; if it is unstable, the rate $\\gamma$ (1/s, positive) at which they grow, "
-        "as $e^{\\gamma t}$."
+        "1. `stable1`, `stable2`, `stable3`: is a steady spin about $\\hat e_k$ stable against "
+        "small perturbations (`True`) or not (`False`)?\n"
+        f"2. `rate`: for the spin about $\\hat e_{s}$ given here, in the linear approximation "
+        "of Euler's equations (R9): if it is stable, the angular frequency at which the small "
+        "components of $\\boldsymbol\\omega$ oscillate; if not, the rate $\\gamma > 0$ at "
+        "which they grow as $e^{\\gamma t}$ (1/s, the same as rad/s)."
     )
 
 

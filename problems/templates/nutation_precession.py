@@ -53,6 +53,8 @@ NAME = "nutation_precession"
 TITLE = "Nutation period and mean precession rate of a heavy top"
 SUMMARY = "heavy top let go at a tilt: exact nutation period and mean precession rate (elliptic)"
 RESULTS = ("R15", "R17", "R20")
+CONVENTIONS = ('euler_angles', 'heavy_top')
+"""Topics of :mod:`problems.conventions` stated at the top of the notebook."""
 
 SIG = 3
 """Significant figures of every displayed parameter."""
@@ -102,12 +104,26 @@ def _values(states: dict[str, tuple]) -> dict[str, tuple[float, float]]:
             for i, k in enumerate(states)}
 
 
+_GAMMA_DOT_IS_OMEGA3 = (
+    "ω3 is the given spin about the symmetry axis; the spin-angle rate is γ̇ = ω3 − α̇ cos β "
+    "(R12), not ω3: with the precession pushed in, the two differ."
+)
+
+
+def _apart(value: float, others: list[float]) -> bool:
+    """``value`` lies ``MARGIN`` tolerances from each of ``others`` (the key and mistakes)."""
+    return math.isfinite(value) and all(
+        abs(value - o) > MARGIN * RTOL * max(abs(value), abs(o)) for o in others)
+
+
 def _answers(I1, I3, Mgl, beta0, omega3, alpha_dot0) -> tuple[Answer, Answer]:
     state = _state(I1, I3, Mgl, beta0, omega3, alpha_dot0)
     states = {"key": state, "degrees": _state(I1, I3, Mgl, math.radians(beta0), omega3,
                                               alpha_dot0)}
     if I1 <= 2 * I3:  # the swapped moments still describe a body (R4)
         states["swapped"] = _state(I3, I1, Mgl, beta0, omega3, alpha_dot0)
+    if alpha_dot0 != 0.0:  # the given ω3 taken for γ̇0 (R12): γ̇0 = ω3, so ω3 would be larger
+        states["spin"] = (I1, I3, Mgl, beta0, alpha_dot0, 0.0, omega3)
     values = _values(states)
     T, mean = values["key"]
     _, p_gamma, _ = constants_of_motion(*state)
@@ -142,6 +158,11 @@ def _answers(I1, I3, Mgl, beta0, omega3, alpha_dot0) -> tuple[Answer, Answer]:
         r_mistakes.append(Mistake("I1_I3_swapped", values["swapped"][1], swapped))
     t_mistakes = [m for m in t_mistakes if math.isfinite(m.value)]
     r_mistakes = [m for m in r_mistakes if math.isfinite(m.value)]
+    if "spin" in values:  # kept only where it moves the answer clear of the others
+        for mistakes, value in zip((t_mistakes, r_mistakes), values["spin"], strict=True):
+            if _apart(value, [T if mistakes is t_mistakes else mean,
+                              *(m.value for m in mistakes)]):
+                mistakes.append(Mistake("gamma_dot_is_omega3", value, _GAMMA_DOT_IS_OMEGA3))
     return (
         Answer("T_nut", "scalar", T, unit="s", rtol=RTOL, mistakes=tuple(t_mistakes),
                description="nutation period (exact)"),
@@ -164,14 +185,11 @@ def _statement(noun: str, p: dict[str, float]) -> str:
         f"{show('I1', 'I_1', 'kg m²')} about any axis through the tip perpendicular to the "
         f"symmetry axis and {show('I3', 'I_3', 'kg m²')} about the symmetry axis; its weight "
         f"times the distance from the tip to its centre of mass is "
-        f"{show('Mgl', 'Mgl', 'J')}. The axis's tilt $\\beta$ is measured from the upward "
-        "vertical and $\\alpha$ is the azimuth of the axis about the vertical (Euler angles "
-        "of the lecture).\n\n"
+        f"{show('Mgl', 'Mgl', 'J')}.\n\n"
         f"The top is let go at the tilt {beta0} with $\\dot\\beta = 0$, spinning at "
         f"{omega3} about its symmetry axis, {how}{alpha_dot0}"
         ". The tilt then oscillates (nutates) between two turning angles $\\beta_1$ and "
-        "$\\beta_2$. Find, exactly (not in the fast-top approximation; relative tolerance "
-        "$10^{-3}$):\n\n"
+        "$\\beta_2$. Find, exactly (not in the fast-top approximation):\n\n"
         "1. `T_nut`: the nutation period (s), the time for $\\beta$ to go from $\\beta_1$ to "
         "$\\beta_2$ and back;\n"
         "2. `mean_rate`: the mean precession rate $\\langle\\dot\\alpha\\rangle$ over one "

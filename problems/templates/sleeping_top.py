@@ -46,6 +46,8 @@ NAME = "sleeping_top"
 TITLE = "The sleeping top: how fast must it spin?"
 SUMMARY = "sleeping top: least spin for a stable upright top; stable or not at a given spin"
 RESULTS = ("R2", "R19")
+CONVENTIONS = ('euler_angles', 'heavy_top')
+"""Topics of :mod:`problems.conventions` stated at the top of the notebook."""
 
 SIG = 3
 """Significant figures of every displayed parameter."""
@@ -202,11 +204,9 @@ def _statement(top: Top, omega3: float) -> str:
                 "centre of mass is $3h/4$ from the apex)")
     return (
         f"A top, {top.kind.noun}, spins on a fixed frictionless tip: {body}. Take "
-        f"$g = {g}$ m/s² (`g`). The angle $\\beta$ of the symmetry axis is measured from the "
-        "upward vertical; $\\beta = 0$ is the top standing upright (sleeping).\n\n"
+        f"$g = {g}$ m/s² (`g`). At $\\beta = 0$ the top stands upright (sleeping).\n\n"
         "1. `omega3_c`: the least spin $\\omega_3$ about the symmetry axis (rad/s) for which "
-        "the upright spinning top is stable against small tilts (relative tolerance "
-        "$10^{-3}$).\n"
+        "the upright spinning top is stable against small tilts.\n"
         f"2. `stable`: the top is set spinning upright at $\\omega_3 = "
         f"{latex_sig(omega3, SIG)}$ rad/s (`omega3`). Does it keep sleeping (`True`) or does a "
         "small disturbance make it wobble away from the vertical (`False`)?"

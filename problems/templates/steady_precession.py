@@ -50,6 +50,8 @@ NAME = "steady_precession"
 TITLE = "Steady precession of a gyroscope: exact rates and the fast-top approximation"
 SUMMARY = "steady precession: slow and fast rates, fast-top approximations and their error"
 RESULTS = ("R2", "R15", "R21")
+CONVENTIONS = ('euler_angles', 'heavy_top')
+"""Topics of :mod:`problems.conventions` stated at the top of the notebook."""
 
 SIG = 3
 """Significant figures of every displayed parameter."""
@@ -153,8 +155,7 @@ def _statement(noun: str, p: dict[str, float]) -> str:
         f"symmetry axis, which is tilted at {beta0} from the upward "
         "vertical.\n\n"
         "With the right precession rate $\\dot\\alpha$ the axis precesses steadily at the "
-        "constant tilt $\\beta_0$, without nutation. Find (rad/s unless stated; relative "
-        "tolerance $10^{-3}$):\n\n"
+        "constant tilt $\\beta_0$, without nutation. Find (rad/s unless stated):\n\n"
         "1. `slow` and `fast`: the exact slow and fast steady precession rates at $\\beta_0$;\n"
         "2. `slow_approx` and `fast_approx`: their fast-top approximations;\n"
         "3. `slow_error`: the relative error of the slow approximation, "

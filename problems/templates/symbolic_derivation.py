@@ -60,6 +60,8 @@ NAME = "symbolic_derivation"
 TITLE = "A heavy-top derivation in symbols"
 SUMMARY = "heavy top in symbols: p_α, p_γ, E', V_eff, α̇(β) or the sleeping-top β² coefficient"
 RESULTS = ("R14", "R15", "R16", "R18", "R19")
+CONVENTIONS = ('euler_angles', 'heavy_top')
+"""Topics of :mod:`problems.conventions` stated at the top of the notebook."""
 
 SIG = 3
 """Significant figures of every displayed parameter."""
@@ -298,15 +300,13 @@ def _statement(q: Quantity, params: dict[str, float]) -> str:
     shown = ", ".join(f"${_PARAM[n][0]} = {latex_sig(v, SIG)}$ {_PARAM[n][1]} (`{n}`)"
                       for n, v in params.items())
     return (
-        "A heavy symmetric top spins on a fixed tip. Its Lagrangian (R14, Euler angles of the "
-        "lecture, $\\beta$ from the upward vertical, $I_1$ about the tip) is\n\n"
+        "A heavy symmetric top spins on a fixed tip. Its Lagrangian (R14) is\n\n"
         "$$L = \\tfrac12 I_1 (\\dot\\alpha^2 \\sin^2\\beta + \\dot\\beta^2) + \\tfrac12 I_3 "
         "(\\dot\\alpha\\cos\\beta + \\dot\\gamma)^2 - Mgl\\cos\\beta .$$\n\n"
         f"1. `{q.name}_expr`: derive {q.task}. Give a sympy expression or a string in the "
         f"symbols {names}{mgl}; the functions `sin`, `cos`, `sqrt` and the constant `pi` "
         "may appear, e.g. `\"I1*sin(beta)**2\"`.\n"
-        f"2. `{q.name}`: its value ({q.unit.replace('^2', '²')}) for a top with {shown} "
-        "(relative tolerance $10^{-3}$)."
+        f"2. `{q.name}`: its value ({q.unit.replace('^2', '²')}) for a top with {shown}."
     )
 
 

@@ -38,6 +38,8 @@ NAME = "symmetric_free_top"
 TITLE = "A tossed symmetric body: precession in the body frame and in space"
 SUMMARY = "torque-free symmetric top: body rate Ω and its period, ω(t), space rate L/I1, cone angle"
 RESULTS = ("R7", "R8")
+CONVENTIONS = ('free_body',)
+"""Topics of :mod:`problems.conventions` stated at the top of the notebook."""
 
 SIG = 3
 """Significant figures of ω(0), t and the body's dimensions."""
@@ -202,19 +204,17 @@ def _answers(d: Draw) -> tuple[Answer, ...]:
 def _statement(d: Draw) -> str:
     b = d.body
     w1, w2, w3 = (latex_sig(w, SIG) for w in d.omega0)
-    shape = "oblate" if d.I3 > d.I1 else "prolate"
     return (
         f"{b.noun[0].upper()}{b.noun[1:]} (a uniform cylinder of mass "
         f"${latex_sig(d.mass, SIG)}$ kg, "
         f"radius ${latex_sig(d.radius, SIG)}$ m and height (along its axis) "
-        f"${latex_sig(d.height, SIG)}$ m) {b.story}. In flight no torque acts about its centre "
-        "of mass (ignore air). It is a symmetric top, here "
-        f"{shape}: its principal moments about the centre of mass are "
+        f"${latex_sig(d.height, SIG)}$ m) {b.story}. It is a symmetric top: its principal "
+        "moments about the centre of mass are "
         f"$I_1 = I_2 = {latex_sig(d.I1, SIG_MOMENTS)}$ kg m² (any axis perpendicular to the "
         f"symmetry axis) and $I_3 = {latex_sig(d.I3, SIG_MOMENTS)}$ kg m² (the symmetry axis "
-        "$\\hat e_3$). Use these moments as given (`I1`, `I3`).\n\n"
-        "At $t = 0$ the components of the angular velocity in the right-handed principal body "
-        f"frame $(\\hat e_1, \\hat e_2, \\hat e_3)$ are $\\boldsymbol\\omega(0) = "
+        "$\\hat e_3$) (`I1`, `I3`; use them as given).\n\n"
+        "At $t = 0$ the body-frame components of the angular velocity are "
+        "$\\boldsymbol\\omega(0) = "
         f"(\\omega_1, \\omega_2, \\omega_3) = ({w1},\\ {w2},\\ {w3})$ rad/s (`omega0`).\n\n"
         "1. `Omega`: the rate $\\Omega$ (rad/s) at which $\\boldsymbol\\omega$ precesses about "
         "$\\hat e_3$ *in the body frame*, with its sign: $\\Omega > 0$ when "
@@ -226,8 +226,8 @@ def _statement(d: Draw) -> str:
         "4. `alpha_dot`: the rate (rad/s, positive) at which the symmetry axis $\\hat e_3$ "
         "precesses about the fixed angular momentum $\\mathbf L$, *seen from the inertial "
         "frame*.\n"
-        "5. `theta`: the half-angle $\\theta$ (rad) of the cone that $\\hat e_3$ sweeps around "
-        "$\\mathbf L$, i.e. the angle between $\\hat e_3$ and $\\mathbf L$."
+        "5. `theta`: the angle $\\theta$ (rad) between $\\hat e_3$ and $\\mathbf L$, the "
+        "half-angle of the cone that $\\hat e_3$ sweeps."
     )
 
 

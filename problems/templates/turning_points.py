@@ -40,7 +40,9 @@ import numpy as np
 from problems.answers import Answer
 from problems.rounding import latex_sig, round_sig
 from problems.templates.heavy_top_constants import (
-    CONVENTIONS,
+    CONVENTIONS as CONVENTIONS,  # the same convention topics (problems.conventions)
+)
+from problems.templates.heavy_top_constants import (
     FEEDBACK,
     RTOL,
     SIG,
@@ -142,9 +144,8 @@ def _turning_point_answers(names: tuple[str, ...], low: np.ndarray, high: np.nda
 
 def _statement(top: Top, state: State, beta: float) -> str:
     return (
-        f"{top.text}\n\n{state_text(state)}\n\n{CONVENTIONS}\n\n"
-        "The axis nods (nutates) between two turning points. Find (relative tolerance "
-        "$10^{-3}$):\n\n"
+        f"{top.text}\n\n{state_text(state)}\n\n"
+        "The axis nods (nutates) between two turning points. Find:\n\n"
         "1. `V_eff`: the effective potential $V_{\\mathrm{eff}}(\\beta)$, in J, whose value at "
         "the turning points equals $E' = E - p_\\gamma^2/(2 I_3)$, evaluated at "
         f"$\\beta = {latex_sig(beta, SIG)}$ rad (`beta`);\n"

@@ -116,11 +116,19 @@ def test_gradebook_summary_and_feedback(graded):
     with open(hw / "graded" / "grades.csv", newline="") as f:
         rows = list(csv.reader(f))
     n = str(len(r["alice"].answers))
-    assert rows[0] == ["id", "email", "q1", "total", "maximum", "status"]
-    assert rows[1] == ["alice", "alice@uni.example", n, n, n, "graded"]
-    assert rows[2][3:] == [str(int(n) - 1), n, "graded"]
-    assert rows[4] == ["dave", "dave@uni.example", "0", "0", n, "missing"]
+    assert rows[0] == ["id", "email", "q1", "total", "maximum", "status", "reason"]
+    assert rows[1] == ["alice", "alice@uni.example", n, n, n, "graded", ""]
+    assert rows[2][3:] == [str(int(n) - 1), n, "graded", ""]
+    assert rows[4] == ["dave", "dave@uni.example", "0", "0", n, "missing", "no submission"]
+    erin, frank = rows[5], rows[6]
+    assert erin[5] == frank[5] == "failed"
+    assert "2 notebooks" in erin[6] and "not a valid notebook" in frank[6]
     assert "3 graded, 1 missing, 2 failed of 6 students" in stdout
+    # per answer, over the 3 graded: alice right, bob wrong on I_diag, carol a known mistake
+    counts = {line.split()[0]: line.split()[1:] for line in stdout.splitlines()
+              if line.startswith("q1_")}
+    assert counts["q1_I_diag"] == ["1", "1", "1", "0", "0"]
+    assert all(sum(map(int, c)) == 3 for c in counts.values())
     page = (hw / "graded" / "feedback" / "carol.html").read_text()
     assert html.escape(r["carol"].answers[0].verdict.message) in page
     key = json.loads((hw / "key.json").read_text())["students"]["carol"]

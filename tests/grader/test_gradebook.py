@@ -12,7 +12,14 @@ import pytest
 
 from grader.compare import compare, key_answers
 from grader.discover import Problem
-from grader.gradebook import feedback_html, gradebook_csv, gradebook_rows, number, summary_table
+from grader.gradebook import (
+    answer_counts,
+    feedback_html,
+    gradebook_csv,
+    gradebook_rows,
+    number,
+    summary_table,
+)
 from grader.results import StudentResult
 from problems.generate import generate_assignment
 from problems.roster import Roster
@@ -58,12 +65,13 @@ def test_gradebook_has_roster_columns_points_per_question_and_totals(files):
     alice = _record(key, "alice", {**right, first: None})  # one answer of question 1 unset
     table = gradebook_rows(manifest["roster"]["columns"], manifest["roster"]["rows"], (1, 2),
                            {"alice": alice})
-    assert table[0] == ["id", "name", "email", "q1", "q2", "total", "maximum", "status"]
+    assert table[0] == ["id", "name", "email", "q1", "q2", "total", "maximum", "status",
+                        "reason"]
     n1 = len(key["students"]["alice"]["questions"][0]["answers"])
     n2 = len(key["students"]["alice"]["questions"][1]["answers"])
     assert table[1] == ["alice", "Alice, \"Al\" Ng", "a@x", number(n1 - 1), number(n2),
-                        number(n1 + n2 - 1), number(n1 + n2), "graded"]
-    assert table[2] == ["bob", "Bob", "b@x", "", "", "", "", "not graded yet"]
+                        number(n1 + n2 - 1), number(n1 + n2), "graded", ""]
+    assert table[2] == ["bob", "Bob", "b@x", "", "", "", "", "not graded yet", ""]
     # and the CSV text reads back to the same table, commas and quotes included
     assert list(csv.reader(io.StringIO(gradebook_csv(table)))) == table
 
@@ -120,3 +128,67 @@ def test_summary_lists_students_counts_and_strays(files):
     assert re.match(r"bob\s+missing\s+0\s+\d+$", lines[3])
     assert "1 graded, 1 missing, 0 failed of 2 students" in text
     assert "  eve.ipynb: not on roster" in lines
+
+
+def _failed(key, sid, message) -> StudentResult:
+    r = _record(key, sid, None, status="failed")
+    return StudentResult(**{**r.__dict__, "message": message})
+
+
+def test_gradebook_keeps_graded_missing_and_failed_apart_with_a_reason(files):
+    _, key = files
+    alice = _record(key, "alice", _key_values(key, "alice"))
+    bob = StudentResult(**{**_record(key, "bob", None, status="missing").__dict__,
+                           "message": "no submission"})
+    roster = [{"id": "alice", "name": "A", "email": "a@x"}, {"id": "bob", "name": "B",
+                                                             "email": "b@x"}]
+    table = gradebook_rows(("id", "name", "email"), roster, (1, 2), {"alice": alice, "bob": bob})
+    rows = {r[0]: dict(zip(table[0], r, strict=True)) for r in table[1:]}
+    assert (rows["alice"]["status"], rows["alice"]["reason"]) == ("graded", "")
+    assert (rows["bob"]["status"], rows["bob"]["reason"]) == ("missing", "no submission")
+    bob = _failed(key, "bob", "the Python kernel died (exit signal 9)\nsecond line")
+    table = gradebook_rows(("id", "name", "email"), roster, (1, 2), {"alice": alice, "bob": bob})
+    failed = dict(zip(table[0], table[2], strict=True))
+    assert (failed["status"], failed["reason"]) == ("failed",
+                                                    "the Python kernel died (exit signal 9)")
+
+
+def test_grades_csv_holds_no_control_characters(files):
+    _, key = files
+    nasty = "cell 2 raised ValueError: \x1b[2J\x00bell\x07\ttab\r\nnext\u2028line\x85"
+    bob = _failed(key, "bob", nasty)
+    text = gradebook_csv(gradebook_rows(("id", "name"), [{"id": "bob", "name": "B\tob\n"}],
+                                        (1, 2), {"bob": bob}))
+    body = text.replace("\r\n", "")  # the CSV record separators, and only those
+    assert not re.search(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]", body)
+    assert text.count("\r\n") == 2  # header and bob: nothing split a record
+    row = list(csv.reader(io.StringIO(text)))[1]
+    assert row[1] == "B ob" and row[-1].startswith("cell 2 raised ValueError:")
+
+
+def test_summary_counts_each_answer_outcome_over_graded_submissions(files):
+    _, key = files
+    right = _key_values(key, "alice")
+    variables = list(right)
+    first = key["students"]["bob"]["questions"][0]["answers"][0]
+    bob_values = _key_values(key, "bob")
+    assert first["mistakes"], "the first answer of inertia_tensor lists known mistakes"
+    students = [
+        _record(key, "alice", right),                                    # all correct
+        _record(key, "bob", {**bob_values, variables[0]: first["mistakes"][0]["value"],
+                             variables[1]: "not a vector", variables[2]: None}),
+        _record(key, "alice", {**right, variables[0]: [1.0, 2.0, 3.0]}),  # wrong, no mistake
+        _record(key, "bob", None, status="missing"),                      # left out
+    ]
+    lines = answer_counts(students)
+    assert lines[1] == "per answer, over 3 graded submission(s):"
+    table = {line.split()[0]: [int(x) for x in line.split()[1:]] for line in lines[3:]}
+    # columns: correct, wrong, known mistake, invalid, unanswered
+    assert table[variables[0]] == [1, 1, 1, 0, 0]
+    assert table[variables[1]] == [2, 0, 0, 1, 0]
+    assert table[variables[2]] == [2, 0, 0, 0, 1]
+    q1 = [v for v in variables if v.startswith("q1_")]  # question 2's answers vary by student
+    assert all(sum(table[v]) == 3 for v in q1)
+    assert list(table)[: len(q1)] == q1  # question order
+    assert "\n".join(lines) in summary_table(students)
+    assert answer_counts([students[-1]]) == []

@@ -190,8 +190,8 @@ def test_records_round_trip_and_the_gradebook_is_built_from_them(hw, first_run):
     for row, r in zip(rows, report.results, strict=True):
         assert float(row["total"]) == r.points == float(row["q1"]) + float(row["q2"])
         assert (float(row["maximum"]), row["status"]) == (r.max_points, r.status)
-    assert sorted(p.name for p in out.iterdir()) == [".lock", "answers.csv", "feedback",
-                                                     "grades.csv", "results"]
+    assert sorted(p.name for p in out.iterdir()) == ["answers.csv", "feedback", "grades.csv",
+                                                     "results"]
 
 
 def test_a_rerun_skips_what_is_unchanged(hw, subs, first_run):
@@ -335,3 +335,86 @@ def test_a_kernel_that_never_started_is_not_kept_and_the_next_run_grades_it(hw, 
     assert [p.name for p, *_ in again.calls] == ["alice.ipynb"]  # only the one not graded
     assert second["alice"].status == "graded"
     assert second["alice"].points == second["alice"].max_points
+
+
+def test_an_empty_submissions_folder_is_refused_naming_the_files_expected(hw, tmp_path):
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    (empty / "README.txt").write_text("hand in here")  # a stray file is not a submission
+    with pytest.raises(UsageError) as err:
+        _run(hw, empty, FakeExecute())
+    message = str(err.value)
+    assert message.startswith(f"no submissions found in {empty}")
+    assert "alice.ipynb, bob.ipynb, carol.ipynb" in message and "README.txt" in message
+    assert not (hw / "graded").exists()  # refused before anything was written
+
+
+def test_a_class_where_one_student_handed_in_is_graded(hw, tmp_path):
+    subs = tmp_path / "one"
+    subs.mkdir()
+    (subs / "alice.ipynb").write_text(_notebook(hw, "alice"))
+    report = _run(hw, subs, FakeExecute())
+    assert [r.status for r in report.results] == ["graded"] + ["missing"] * (len(ROSTER) - 1)
+
+
+@pytest.mark.parametrize("where", ["inside", "same"])
+def test_an_output_folder_inside_the_submissions_is_refused(hw, subs, where):
+    out = subs / "graded" if where == "inside" else subs
+    with pytest.raises(UsageError, match="inside the submissions folder"):
+        _run(hw, subs, FakeExecute(), out=out)
+    assert not (subs / "graded").exists()
+
+
+def test_no_lock_file_is_left_after_a_run(hw, subs, first_run):
+    assert not (hw / "graded" / ".lock").exists()
+    with run_lock(hw / "graded"):
+        assert (hw / "graded" / ".lock").is_file()
+    assert not (hw / "graded" / ".lock").exists()
+    with pytest.raises(RuntimeError), run_lock(hw / "graded"):
+        raise RuntimeError("a run that fails")
+    assert not (hw / "graded" / ".lock").exists()
+
+
+def test_a_run_that_locked_a_removed_lock_file_takes_the_new_one(hw, subs, first_run,
+                                                                  monkeypatch):
+    """The race of removing a lock file: a run opens OUT/.lock, the holder removes it and
+    releases, the run locks the removed file. It must notice and lock the file the path names
+    now, or it and a third run would both hold "the" lock."""
+    import grader.pipeline as pipeline
+
+    real_flock = pipeline.fcntl.flock
+
+    lock = hw / "graded" / ".lock"
+    calls = []
+
+    def flock_after_removal(fd, op):
+        if not calls:  # first attempt: the holder removes the file just before we lock it
+            lock.unlink()
+        calls.append(fd)
+        return real_flock(fd, op)
+
+    monkeypatch.setattr(pipeline.fcntl, "flock", flock_after_removal)
+    with run_lock(hw / "graded"):
+        assert len(calls) == 2  # the first file was found removed; the second one is held
+        assert lock.is_file()
+        monkeypatch.setattr(pipeline.fcntl, "flock", real_flock)
+        with pytest.raises(RunInProgress):  # and it really is the lock others see
+            with run_lock(hw / "graded"):
+                pass
+    assert not lock.exists()
+
+
+@pytest.mark.parametrize("case", ["empty", "out inside"])
+def test_the_command_exits_2_with_one_line(hw, subs, tmp_path, capsys, case):
+    from eulertop.cli import main
+
+    if case == "empty":
+        (tmp_path / "empty").mkdir()
+        argv = ["grade", str(hw), str(tmp_path / "empty")]
+        expected = f"eulertop grade: no submissions found in {tmp_path / 'empty'}"
+    else:
+        argv = ["grade", str(hw), str(subs), "--out", str(subs / "graded")]
+        expected = "eulertop grade: the output folder"
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(expected) and err.count("\n") == 1 and "Traceback" not in err

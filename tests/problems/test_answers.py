@@ -13,6 +13,7 @@ import builtins
 import json
 import math
 import os
+import re
 
 import numpy as np
 import pytest
@@ -26,8 +27,10 @@ from problems.answers import (
     Verdict,
     check_form,
     check_spec,
+    comparison_rule,
     grade,
 )
+from problems.rounding import round_sig
 from problems.variant import answer_spec
 from solver.parameters import ParameterError
 from solver.symbolic import SYMBOLS
@@ -449,3 +452,82 @@ def test_bad_key_records_are_refused(fields: dict, parameter: str) -> None:
 def test_unforeseen_values_are_invalid_not_a_crash(kind: str, oddity: object) -> None:
     verdict = grade(ANSWERS[kind], oddity)
     assert verdict.status == "invalid" and verdict.message and verdict.points == 0.0
+
+
+# --- how an answer is compared, in words (issue 13) ------------------------------------------
+
+
+@pytest.mark.parametrize(("answer", "words"), [
+    (Answer("T", "scalar", 2.0, unit="J"), ["within 0.1 % (relative)"]),
+    (Answer("w", "scalar", 2.0, unit="rad/s", rtol=1e-2, atol=0.00654),
+     ["within 1 % (relative)", "0.00654 rad/s (absolute, for values near zero)"]),
+    (Answer("L", "vector", [1.0, 2.0, 2.0], rtol=2e-3),
+     ["within 0.2 % of its length", "length of the difference"]),
+    (Answer("b", "angle", 1.0, unit="rad"),
+     ["in radians", "within 0.1 % (relative)", "not taken modulo 2π"]),
+    (Answer("b", "angle", 1.0, unit="rad", period=2 * math.pi), ["in radians", "modulo 2π"]),
+    (Answer("s", "boolean", True), ["True or False"]),
+    (Answer("c", "choice", "a", options=("a", "b")), ["one of the options"]),
+    (Answer("e", "expression", "x**2", symbols=("x",), rtol=1e-6),
+     ["random points", "within 0.0001 % (relative)"]),
+])
+def test_comparison_rule_is_derived_from_the_answer(answer, words):
+    rule = comparison_rule(answer)
+    assert all(w in rule for w in words), rule
+    assert "modulo" not in rule or answer.period is not None or "not taken" in rule
+
+
+def test_comparison_rule_follows_the_tolerance_that_grades():
+    """The words and the comparison agree: a value just inside the stated tolerance is correct,
+    just outside is not."""
+    answer = Answer("w", "scalar", 2.0, unit="rad/s", rtol=1e-2, atol=0.005)
+    assert "within 1 % (relative) + 0.005 rad/s" in comparison_rule(answer)
+    edge = 2.0 * 1.01 + 0.005
+    assert grade(answer, edge * (1 - 1e-9)).status == "correct"
+    assert grade(answer, edge * (1 + 1e-6)).status == "wrong"
+
+
+# --- an answer rounded to too few figures (issue 13) ------------------------------------------
+
+
+@pytest.mark.parametrize(("key", "submitted", "figures"), [
+    (0.0123456, 0.012, "2 significant figures"),
+    (0.0123456, 0.0123, "3 significant figures"),
+    (-5432.1, -5400.0, "2 significant figures"),
+    (9.87654, 9.8, "2 significant figures"),       # cut, not rounded (9.9)
+    (2.71828e-5, 2.7e-5, "2 significant figures"),
+])
+def test_a_scalar_rounded_too_far_is_told_so(key, submitted, figures):
+    answer = Answer("x", "scalar", key, unit="J")
+    verdict = grade(answer, submitted)
+    assert (verdict.status, verdict.mistake) == ("wrong", "too_few_figures")
+    assert f"rounded to {figures}" in verdict.message
+    # the advice: keeping N figures is safe with a figure to spare, and not excessive
+    keep = int(re.search(r"keep at least (\d+) figures", verdict.message).group(1))
+    assert grade(answer, round_sig(key, keep)).status == "correct"
+    assert grade(answer, round_sig(key, keep - 1)).status == "correct"
+    assert keep <= 5  # 0.1 % never needs more than four figures for rounding
+    assert repr(key) not in verdict.message and f"{key:.4g}" not in verdict.message
+
+
+def test_a_vector_rounded_to_few_decimals_is_told_so():
+    answer = Answer("L", "vector", [1.23456, -0.0234567, 5.4321], unit="kg m^2/s")
+    verdict = grade(answer, [1.2, 0.0, 5.4])
+    assert verdict.mistake == "too_few_figures" and "1 decimal" in verdict.message
+
+
+@pytest.mark.parametrize("submitted", [
+    3.0,        # one figure: any small integer would "match"; just wrong
+    2.7185,     # five figures, but not the key's: a wrong computation
+    2.8,        # two figures, but not the key rounded (2.7) nor cut
+    -2.7,       # the sign is wrong
+])
+def test_a_wrong_value_that_is_not_the_key_rounded_is_just_wrong(submitted):
+    verdict = grade(Answer("e", "scalar", 2.71828, rtol=1e-5), submitted)
+    assert verdict.status == "wrong" and verdict.mistake is None
+    assert "not within the tolerance" in verdict.message
+
+
+def test_a_known_mistake_is_named_before_rounding_is_considered():
+    answer = Answer("w", "scalar", 2.5, mistakes=(Mistake("rpm", 24.0, "rad/s, not rpm"),))
+    assert grade(answer, 24.0).mistake == "rpm"

@@ -26,9 +26,15 @@ def test_generate_writes_an_assignment(tmp_path, families, roster_path, capsys):
     code = main(["generate", "--roster", str(roster_path), "--out", str(out), "--seed", "3",
                  "--problems", "rod,rod2", "--title", "Week 3"])
     assert code == 0
-    assert "generated 3 student(s) × 2 question(s)" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "generated 3 student(s) × 2 question(s)" in printed
     assert (out / "release" / "carol.ipynb").is_file()
     assert (out / "solutions" / "carol.ipynb").is_file()
+    # it ends by saying where each part is, and which folder to hand out
+    tail = printed.splitlines()[-3:]
+    assert f"{out / 'release'}/" in tail[0] and "hand out this folder" in tail[0]
+    assert f"{out / 'solutions'}/" in tail[1] and "instructor only" in tail[1]
+    assert str(out / "key.json") in tail[2] and "instructor only" in tail[2]
 
 
 def test_seedless_run_reports_its_seed(tmp_path, families, roster_path, capsys):

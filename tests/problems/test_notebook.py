@@ -47,10 +47,14 @@ def test_cell_layout_and_read_only_marks(hw):
         answer = cell.id.endswith("answer")
         assert cell.metadata.get("editable", True) is answer
         assert cell.metadata.deletable is False
-    assert nb.cells[0].source == "# Tops, week 3"
+    first = nb.cells[0].source
+    assert first.startswith("# Tops, week 3\n")
+    # the first cell says how to check the notebook, on JupyterHub/Colab and in a terminal
+    assert "%pip install eulertop" in first and "!eulertop check alice.ipynb" in first
     rules = nb.cells[1].source
-    assert "`alice` (Alice Ng)" in rules and "eulertop check alice.ipynb" in rules
-    assert "| `q2_I_expr` | an expression in m, L, theta |" in rules
+    assert "`alice` (Alice Ng)" in rules
+    assert "**Conventions for every question**" in rules
+    assert "q2_I_expr = None  # an expression in m, L, theta" in nb.cells[6].source
 
 
 def test_answer_cells_have_one_line_per_answer(hw):

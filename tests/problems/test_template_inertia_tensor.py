@@ -103,3 +103,24 @@ def test_box_about_corner_textbook_case():
     params = {"M": 1.0, "a": 1.0, "b": 1.0, "c": 1.0}
     moments = np.linalg.eigvalsh(_reference_tensor(params))
     np.testing.assert_allclose(moments, [1 / 6, 11 / 12, 11 / 12], rtol=1e-14)
+
+
+def test_statement_states_the_sign_of_the_products_and_the_key_follows_it():
+    """Issue 13: "I_xy = −Σ m x y" is in every statement, and the point-mass key is exactly
+    that sum (written out here from the displayed masses and positions)."""
+    import re
+
+    checked = 0
+    for seed in range(40):
+        v = inertia_tensor.generate(np.random.default_rng(seed))
+        assert re.search(r"minus sign, \$I_\{xy\} = -\\sum m\\,x y\$", v.statement)
+        masses = sorted(k for k in v.params if re.fullmatch(r"m\d+", k))
+        if not masses:
+            continue  # the box about its corner
+        r = np.array([v.params[f"r{k[1:]}"] for k in masses])
+        m = np.array([v.params[k] for k in masses])
+        products = [-np.sum(m * r[:, i] * r[:, j]) for i, j in ((0, 1), (0, 2), (1, 2))]
+        np.testing.assert_allclose(v.answer("I_offdiag").value, products, rtol=1e-12,
+                                   atol=1e-15)
+        checked += 1
+    assert checked >= 5
