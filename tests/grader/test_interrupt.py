@@ -113,6 +113,7 @@ def test_one_ctrl_c_stops_the_run_and_the_resumed_run_equals_an_uninterrupted_on
     for r in kept.values():  # what was recorded is whole; nobody was recorded as failed
         assert r.status == "graded" and r.points == r.max_points, r.message
     assert not list((out / "results").glob(".*.tmp"))
+    assert not (out / ".lock").exists()
 
     resumed = subprocess.run(_grade_argv(hw, subs, out), cwd=ROOT, capture_output=True,
                              text=True, timeout=300)

@@ -398,7 +398,7 @@ def grade(uid: int | None, hw: Path, subs: Path, out: Path, token: str, timeout:
     (return code, stdout, stderr, Watch)."""
     code = f"import sys; from eulertop.cli import main; sys.exit(main())  # {token}"
     argv = [sys.executable, "-c", code, "grade", str(hw), str(subs), "--out", str(out),
-            "--jobs", "2", "--timeout", "90"]
+            "--jobs", "2", "--timeout", "40"]
     env = {"PATH": os.environ.get("PATH", os.defpath), "LANG": "C.UTF-8", "HOME": str(out.parent),
            "TMPDIR": "/tmp"}
     if uid is not None:  # the project and its Python, reachable as a laptop user's are
@@ -438,6 +438,10 @@ def battle(request):
         attacked = grade(uid, files["hw"], files["subs"], attack_out, token + "-attack")
         seconds = time.monotonic() - t0
         time.sleep(0.5)
+        left = {"processes": processes_with(token.encode()),
+                "segments": shared_memory_segments() - segments,
+                "folders": run_folders(attacked[3].grader_pids | clean[3].grader_pids),
+                "disk_used": free - shutil.disk_usage(tempfile.gettempdir()).free}
         report = os.environ.get("EULERTOP_BATTERY_REPORT")
         if report:  # the measured numbers, for docs/security.md
             with open(report, "a") as f:
@@ -446,6 +450,11 @@ def battle(request):
                     "grader_peak_mib": round(attacked[3].grader_peak / 2**20),
                     "clean_grader_peak_mib": round(clean[3].grader_peak / 2**20),
                     "student_peak_mib": round(attacked[3].student_peak / 2**20),
+                    "left": {k: (len(v) if isinstance(v, (list, set)) else round(v / 2**20, 1))
+                             for k, v in left.items()},
+                    "honest_equal": all(
+                        _stable(records(attack_out)[sid]) == _stable(records(clean_out)[sid])
+                        for sid in HONEST),
                     "records": {sid: [r.status, r.points, r.max_points, r.message[:160]]
                                 for sid, r in sorted(records(attack_out).items())},
                 }) + "\n")
@@ -453,10 +462,7 @@ def battle(request):
             "mode": request.param, "files": files, "before": before, "canary": canary,
             "clean": clean, "attacked": attacked, "seconds": seconds,
             "clean_out": clean_out, "attack_out": attack_out,
-            "left": {"processes": processes_with(token.encode()),
-                     "segments": shared_memory_segments() - segments,
-                     "folders": run_folders(attacked[3].grader_pids | clean[3].grader_pids),
-                     "disk_used": free - shutil.disk_usage(tempfile.gettempdir()).free},
+            "left": left,
         }
     finally:
         shutil.rmtree(base, ignore_errors=True)
