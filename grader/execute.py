@@ -101,6 +101,10 @@ RECEIVE_QUEUE = 64
 EXTRACTION_TIMEOUT = 10.0
 """Seconds the answer extraction may take (within what is left of the whole-notebook limit)."""
 
+OUT_OF_TIME_GRACE = 5.0
+"""Seconds, past the whole-notebook limit, for interrupting the cell that ran out of time and
+reading the answers set before it (a cell that ignores the interrupt is killed then)."""
+
 STOP_TIMEOUT = 5.0
 """Seconds allowed for the kernel to be reaped after SIGKILL."""
 
@@ -505,7 +509,7 @@ async def _supervise(run: _Run, kernel: KernelProcess, variables: tuple[str, ...
     """Run the session under the whole-notebook deadline; the status. Kills the kernel.
 
     When the notebook's time runs out while a cell runs, that cell is interrupted, no later
-    cell runs, and the answers set so far are read — all within :data:`EXTRACTION_TIMEOUT`
+    cell runs, and the answers set so far are read — all within :data:`OUT_OF_TIME_GRACE`
     more seconds; a cell that does not yield to the interrupt then, or time running out in any
     other phase, ends the run ("timeout", no answers)."""
     task = asyncio.ensure_future(_session(run, kernel, variables))
@@ -514,7 +518,7 @@ async def _supervise(run: _Run, kernel: KernelProcess, variables: tuple[str, ...
         if not done and run.phase == "running":
             run.out_of_time = run.running or run.cells[-1]
             await kernel.interrupt()
-            done, _ = await asyncio.wait({task}, timeout=EXTRACTION_TIMEOUT)
+            done, _ = await asyncio.wait({task}, timeout=OUT_OF_TIME_GRACE)
         if not done:
             await kernel.stop()  # first: whatever the session awaits then fails fast
             task.cancel()

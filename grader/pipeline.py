@@ -565,9 +565,11 @@ def _sandbox(wanted: bool) -> Any:
         sys.stderr.write(WITHOUT_SANDBOX)
         return None
     try:
-        return probe()
+        found = probe()
     except SandboxUnavailable as err:
         raise UsageError(str(err)) from None
+    sys.stderr.write(f"eulertop grade: isolation: {found.describe()}\n")
+    return found
 
 
 @contextmanager

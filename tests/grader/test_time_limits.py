@@ -10,7 +10,7 @@ from pathlib import Path
 import nbformat
 from nbformat.v4 import new_code_cell, new_notebook
 
-from grader.execute import EXTRACTION_TIMEOUT, execute_submission
+from grader.execute import OUT_OF_TIME_GRACE, execute_submission
 from grader.limits import Limits
 
 LIMITS = Limits(cell_timeout=30, total_timeout=4)
@@ -40,4 +40,4 @@ def test_a_cell_that_ignores_the_interrupt_ends_the_run_with_no_answers(tmp_path
                            "while True:\n    pass")
     assert result.status == "timeout" and result.answers == {}
     assert "no answers could be read" in result.message
-    assert seconds < LIMITS.total_timeout + EXTRACTION_TIMEOUT + 10
+    assert seconds < LIMITS.total_timeout + OUT_OF_TIME_GRACE + 10
