@@ -594,7 +594,7 @@ def _run_all(a, out, to_run, execute, limits, jobs, reveal, progress) -> None:
 
 
 RETRIES = 2
-"""Times a submission is run again after a failure that is not its own (:func:`_grade_copy`)."""
+"""Times a submission is run again after a failure that is not its own (:func:`grade_one`)."""
 
 
 @contextmanager
@@ -610,13 +610,24 @@ def _copies_folder() -> Iterator[Path]:
             shutil.rmtree(folder, ignore_errors=True)
 
 
-def _grade_copy(submission: Submission, expected, key_hash: str, execute: Execute, limits: Any,
-                sha: str, copies: Path) -> StudentResult:
-    """Grade the grader's own copy of ``submission``, read once more as safely as in
-    :func:`_plan` (and checked to be what was hashed there). A run that failed for a reason that
-    is not the student's (``Execution.retry``: no kernel could be started) is run again, up to
-    :data:`RETRIES` times; if it still fails, its record says so and the next run grades it
-    again."""
+def grade_one(submission: Submission, expected: Sequence[KeyAnswer], key_hash: str,
+              limits: Any, execute: Execute | None = None, sha: str | None = None,
+              copies: Path | None = None) -> StudentResult:
+    """Grade ONE submission — the unit every way of grading shares (the local pool, a cluster,
+    the hosted entrypoints): its record, never an exception.
+
+    The submission is read as safely as in :func:`_plan` (a regular file under
+    ``limits.submission_bytes``; checked to be ``sha`` when given), copied into a private
+    folder (``copies``, default a new one in the run folder), executed by ``execute``
+    (default :func:`grader.execute.execute_submission`, in the sandbox) and compared with
+    ``expected`` in this process. A run that failed for a reason that is not the student's
+    (``Execution.retry``: no kernel could be started) is run again, up to :data:`RETRIES`
+    times; if it still fails, its record says so and the next run grades it again."""
+    if copies is None:
+        with _copies_folder() as own:
+            return grade_one(submission, expected, key_hash, limits, execute, sha, own)
+    if execute is None:
+        from grader.execute import execute_submission as execute
     max_bytes = getattr(limits, "submission_bytes", DEFAULT_MAX_BYTES)
     try:
         data = read_submission(submission.path, max_bytes)
@@ -624,6 +635,8 @@ def _grade_copy(submission: Submission, expected, key_hash: str, execute: Execut
         why = (f"invalid submission: {e}" if isinstance(e, InvalidSubmission) else
                f"cannot read {submission.path.name}: {e.strerror}")
         return ungraded_result(submission.student_id, "failed", why, expected, key_hash)
+    if sha is None:
+        sha = hashlib.sha256(data).hexdigest()
     if hashlib.sha256(data).hexdigest() != sha:
         return ungraded_result(submission.student_id, "failed", "invalid submission: the file "
                                "changed while the class was being graded", expected, key_hash)
@@ -652,7 +665,7 @@ def _run_all_in(stack, a, out, to_run, execute, limits, jobs, reveal, progress) 
     def work(submission, expected, key_hash, sha):
         if stop.is_set():
             return
-        result = _grade_copy(submission, expected, key_hash, execute, limits, sha, copies)
+        result = grade_one(submission, expected, key_hash, limits, execute, sha, copies)
         if stop.is_set():
             return  # stopped by Ctrl-C while it ran: no record, the next run grades it
         _publish(a, out, result, reveal)
