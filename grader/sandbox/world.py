@@ -40,9 +40,11 @@ import contextlib
 import ctypes
 import json
 import os
+import re
 import resource
 import signal
 import socket
+import stat
 import time
 
 try:
@@ -222,9 +224,15 @@ def build(request: dict, link: socket.socket) -> None:
     slot = os.path.dirname(control)
     keep_control = os.open(control, os.O_PATH | os.O_DIRECTORY)
     mount(None, "/", None, MS_REC | MS_PRIVATE)
+    # what is mounted below /tmp (a Python environment there, as in a CI clone) is bound back
+    # over the kernel's own /tmp; the slot folder is not (hidden below)
+    kept = [(point, os.open(point, os.O_PATH)) for point in _mounts_below("/tmp")
+            if point != slot and not point.startswith(slot + "/")]
     uid, gid = os.getuid(), os.getgid()
     mount("tmpfs", "/tmp", "tmpfs", MS_NOSUID | MS_NODEV,
           f"size={int(world['scratch_bytes'])},mode=0700,uid={uid},gid={gid}")
+    for point, fd in kept:
+        _bind_back(point, fd)
     for folder in (request["scratch"], os.path.join(request["scratch"], "work"),
                    os.path.join(request["scratch"], "ipython"),
                    os.path.join(request["scratch"], "matplotlib"), SHM):
@@ -248,6 +256,30 @@ def build(request: dict, link: socket.socket) -> None:
         socket.send_fds(link, [b"work"], [work])
     finally:
         os.close(work)
+
+
+def _mounts_below(top: str) -> list[str]:
+    """Mount points strictly below ``top`` in this mount namespace, shortest first."""
+    points = set()
+    with open("/proc/self/mountinfo") as f:
+        for line in f:
+            point = line.split()[4]
+            point = re.sub(r"\\([0-7]{3})", lambda m: chr(int(m.group(1), 8)), point)
+            if point.startswith(top.rstrip("/") + "/"):
+                points.add(point)
+    return sorted(points, key=len)
+
+
+def _bind_back(point: str, fd: int) -> None:
+    """Bind what ``fd`` holds (a folder or a file) read-only at ``point`` again."""
+    if stat.S_ISDIR(os.fstat(fd).st_mode):
+        os.makedirs(point, 0o755, exist_ok=True)
+    else:
+        os.makedirs(os.path.dirname(point), 0o755, exist_ok=True)
+        os.close(os.open(point, os.O_WRONLY | os.O_CREAT, 0o644))
+    mount(f"/proc/self/fd/{fd}", point, None, MS_BIND | MS_REC)
+    os.close(fd)
+    read_only(point)
 
 
 def _write_ipc_limits(scratch_bytes: int) -> None:
