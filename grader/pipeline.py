@@ -353,6 +353,8 @@ def require_submissions(submissions: Path, found: Any, ids: Sequence[str]) -> No
     nobody handed in (that folder would hold at least one roster name)."""
     if found.submissions or any(p.student_id is not None for p in found.problems):
         return
+    if getattr(found, "layout", "folder") != "folder" and found.problems:
+        return  # an LMS download whose files matched no one: each is reported, with why
     shown = ", ".join(f"{sid}.ipynb" for sid in ids[:3]) + (", …" if len(ids) > 3 else "")
     strays = [p.path.name for p in found.problems]
     seen = f"; it holds {', '.join(strays[:5])}{', …' if len(strays) > 5 else ''}" \
@@ -486,7 +488,9 @@ def grade_assignment(
         raise UsageError(f"{submissions}: not a readable folder of submissions (nor a .zip)")
     out = Path(hw) / "graded" if out is None else Path(out)
     require_out_outside(out, submissions)
-    require_submissions(submissions, discover(submissions, a.ids), a.ids)
+    if not archive:  # a zip is looked into once unpacked, below
+        require_submissions(submissions, discover(submissions, a.ids,
+                                                  merge_rows(a.rows, class_list)), a.ids)
     warm = execute is None and not cold_kernels
     found_sandbox = None
     if execute is None:
@@ -509,6 +513,8 @@ def grade_assignment(
         if archive:
             submissions = _unpack(submissions, out)
         found = discover(submissions, a.ids, merge_rows(a.rows, class_list))
+        if archive:
+            require_submissions(submissions, found, a.ids)
         if found.layout != "folder":
             atomic_write_text(out / LMS_SUBMISSIONS, gradebook_csv(_lms_table(found, submissions)))
         else:  # a previous run's LMS table would describe other files
