@@ -17,6 +17,8 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "generate": ("problems.cli", "generate an assignment: one notebook per student, and the key"),
     "check": ("grader.cli", "run a notebook as the grader would: are its answers well formed?"),
     "grade": ("grader.cli", "grade every submission against the key: gradebook, feedback, summary"),
+    "report": ("grader.report.cli", "the class report: item statistics, common wrong answers, "
+               "copied answers"),
     "bench": ("solver.work_precision", "work-precision charts and the stability battery"),
     "demo": ("eulertop.demo", "the whole pipeline on a built-in sample class, end to end"),
 }
