@@ -4,7 +4,8 @@ A notebook's code is cut into Python tokens by the standard library's :mod:`toke
 (comments kept, lower-cased; every number becomes ``#`` and every string ``"…"``, so a copy
 whose numbers were changed to one's own variant still matches; layout tokens dropped), and
 into *shingles*: every run of :data:`SHINGLE` consecutive tokens. What the student was handed is
-removed — every shingle of their own released notebook (``HW/release/<id>.ipynb``) — and so are
+removed — every shingle of any released notebook (``HW/release/<id>.ipynb``: a copy of a
+classmate's notebook holds *their* parameters cell) — and so are
 the idioms of the class: a shingle found in more than :func:`common_limit` notebooks
 (``import numpy as np``, ``np.sqrt(``). Two notebooks are compared by the Jaccard index of what
 is left, ``|A ∩ B| / |A ∪ B|``, computed exactly through an inverted index of the rare shingles
@@ -124,7 +125,7 @@ def similar_code(submissions: Mapping[str, Path], released: Mapping[str, Path],
     submissions : mapping
         Student id → submitted notebook.
     released : mapping
-        Student id → the notebook they were handed (its shingles are removed); may lack ids.
+        Student id → the notebook they were handed (the shingles of all of them are removed).
     order : mapping, optional
         Student id → position, for the order of ids within a pair (default: sorted ids).
 
@@ -133,10 +134,10 @@ def similar_code(submissions: Mapping[str, Path], released: Mapping[str, Path],
     tuple of SimilarCode
         Highest Jaccard index first.
     """
-    own: dict[str, set] = {}
-    for sid, path in submissions.items():
-        given = shingles(code_cells(released[sid])) if sid in released else set()
-        own[sid] = shingles(code_cells(path)) - given
+    given: set = set()
+    for path in released.values():
+        given |= shingles(code_cells(path))
+    own = {sid: shingles(code_cells(path)) - given for sid, path in submissions.items()}
     frequency = Counter(s for sh in own.values() for s in sh)
     limit = common_limit(len(own))
     rare = {sid: {s for s in sh if frequency[s] <= limit} for sid, sh in own.items()}

@@ -143,8 +143,8 @@ def look_first(report: ClassReport) -> str:
     for s in (*report.questions, *report.answers):
         if s.flags and (s.name is None or "possibly broken" in s.flags):
             items.append(f"<b>{e(s.label)}</b> ({e(s.family)}): "
-                         f"<span class=flag>{e(', '.join(s.flags))}</span>, facility "
-                         f"{s.facility:.2f}")
+                         f'<span class="flag">{e(", ".join(s.flags))}</span>, facility '
+                         f"{s.facility:.2f}{_agreement(report, s)}")
     for g in report.slips[:8]:
         items.append(f"common wrong answer on <b>{e(g.variable)}</b>: <code>{e(g.formula)}</code>"
                      f" ({len(g.students)} students)")
@@ -157,6 +157,20 @@ def look_first(report: ClassReport) -> str:
     if not items:
         return "<p>Nothing stands out: no flagged question, common slip or matching pair.</p>"
     return '<ul class="look">' + "".join(f"<li>{i}</li>" for i in items) + "</ul>"
+
+
+def _agreement(report: ClassReport, s: ItemStats) -> str:
+    """For a possibly broken answer: the class agreeing on one relation to the key suggests
+    the key is what is wrong."""
+    if "possibly broken" not in s.flags:
+        return ""
+    wrong = s.counts["wrong"]
+    group = next((g for g in report.slips if g.variable == s.label), None)
+    if group is None or not wrong or len(group.students) < wrong / 2:
+        return ""
+    return (f" — {len(group.students)} of the {wrong} wrong answers are <code>"
+            f"{e(group.formula)}</code> of the key: <b>check the key</b> (if the class is "
+            "right, the key is off by the inverse)")
 
 
 def scores_section(report: ClassReport) -> str:

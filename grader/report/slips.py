@@ -26,7 +26,6 @@ import math
 from collections import defaultdict
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from functools import partial
 
 import numpy as np
 
@@ -35,6 +34,10 @@ from problems.answers import Answer
 
 MIN_GROUP = 3
 """Fewest students sharing a relation for it to be reported as a common wrong answer."""
+
+CHANCE = 0.05
+"""A shared ratio or offset no named relation explains is reported when fewer groups this
+large are expected by chance."""
 
 MATCH_FACTOR = 2.0
 """A wrong value matches a relation within this many times the answer's tolerance."""
@@ -206,22 +209,37 @@ def nice_name(value: float, rtol: float) -> str | None:
     return None
 
 
-def cluster(values: Sequence[float], width: Callable[[float], float]) -> list[list[int]]:
-    """Indices of ``values`` grouped so that neighbours (sorted) differ by ≤ ``width(value)``.
+def cluster(values: Sequence[float], width: float) -> list[list[int]]:
+    """Indices of ``values`` in groups spanning at most ``width`` each (sorted, greedy).
 
     Examples
     --------
-    >>> cluster([1.0, 5.0, 1.001, 0.999], lambda c: 0.002)
+    >>> cluster([1.0, 5.0, 1.001, 0.999], 0.002)
     [[3, 0, 2], [1]]
     """
     order = sorted(range(len(values)), key=lambda i: values[i])
     groups: list[list[int]] = []
     for i in order:
-        if groups and values[i] - values[groups[-1][-1]] <= width(values[i]):
+        if groups and values[i] - values[groups[-1][0]] <= width:
             groups[-1].append(i)
         else:
             groups.append([i])
     return groups
+
+
+def chance_groups(n: int, k: int, width: float, spread: float) -> float:
+    """Expected number of groups of ``k`` among ``n`` values spread evenly over ``spread``
+    falling within ``width`` of one another by chance: ``n · C(n−1, k−1) · (width/spread)^(k−1)``
+    (each value as the group's lowest, ``k − 1`` others in its window).
+
+    Examples
+    --------
+    >>> round(chance_groups(20, 3, 0.01, 1.0), 4)
+    0.0171
+    """
+    if spread <= width:
+        return float(n)
+    return n * math.comb(n - 1, k - 1) * (width / spread) ** (k - 1)
 
 
 def relation(data: ClassData, sid: str, item: Item, x: np.ndarray) -> tuple[str, str] | None:
@@ -239,43 +257,49 @@ def relation(data: ClassData, sid: str, item: Item, x: np.ndarray) -> tuple[str,
     return None
 
 
-def _ratio_width(c: float, rtol: float, atol: float) -> float:
-    return 2 * MATCH_FACTOR * rtol * abs(c)
+def _coordinates(how: str, rows) -> list[tuple[float, tuple]]:
+    """``(u, (sid, x, v))`` per wrong value: ``u`` = log|ratio| (one sign at a time) or the
+    offset, the coordinate in which a shared slip is a narrow group."""
+    out = []
+    for sid, answer, x, v in rows:
+        c = ratio(x, v, answer) if how != "offset" else float((x - v)[0])
+        if c is None or (how == "ratio+" and c <= 0) or (how == "ratio-" and c >= 0):
+            continue
+        out.append((math.log(abs(c)) if how != "offset" else c, (sid, x, v)))
+    return out
 
 
-def _offset_width(c: float, rtol: float, atol: float) -> float:
-    return 2 * MATCH_FACTOR * (atol + rtol * np.pi)
+def _formula(how: str, u: float, rtol: float) -> tuple[str, str]:
+    if how == "offset":
+        nice = nice_name(u / np.pi, 4 * MATCH_FACTOR * rtol)
+        return f"offset_{u:.4g}", f"v + {nice}*pi" if nice else f"v + {u:.6g}"
+    c = math.exp(u) * (1 if how == "ratio+" else -1)
+    nice = nice_name(c, 4 * MATCH_FACTOR * rtol)
+    return f"ratio_{c:.4g}", f"{nice}*v" if nice else f"{c:.6g}*v"
 
 
-def _unexplained_groups(data, item, rows) -> dict[tuple[str, str], list]:
+def _unexplained_groups(item: Item, rows) -> dict[tuple[str, str], list]:
     """Group the wrong values no named relation explains by a shared ratio (and, for angles,
-    a shared offset)."""
+    a shared offset), keeping groups unlikely by chance (:func:`chance_groups` ≤
+    :data:`CHANCE`)."""
     groups: dict[tuple[str, str], list] = {}
-    for how in ("ratio", "offset"):
+    if not rows:
+        return groups
+    rtol = max(r[1].rtol for r in rows)
+    atol = max(r[1].atol for r in rows)
+    scale = float(np.median([np.linalg.norm(r[3]) for r in rows]))
+    for how in ("ratio+", "ratio-", "offset"):
         if how == "offset" and item.kind != "angle":
             continue
-        found = []
-        for sid, answer, x, v in rows:
-            c = ratio(x, v, answer) if how == "ratio" else float((x - v)[0])
-            if c is not None:
-                found.append((c, answer, sid, x, v))
-        if not found:
-            continue
-        rtol = max(a.rtol for _, a, *_ in found)
-        atol = max(a.atol for _, a, *_ in found)
-        width = partial(_ratio_width if how == "ratio" else _offset_width, rtol=rtol, atol=atol)
-        for members in cluster([f[0] for f in found], width):
-            if len(members) < MIN_GROUP:
+        found = _coordinates(how, rows)
+        u = [f[0] for f in found]
+        width = 2 * MATCH_FACTOR * (rtol if how != "offset" else atol + rtol * scale)
+        for members in cluster(u, width):
+            k = len(members)
+            if k < MIN_GROUP or chance_groups(len(u), k, width, float(np.ptp(u))) > CHANCE:
                 continue
-            c = float(np.median([found[i][0] for i in members]))
-            nice = nice_name(c, 4 * MATCH_FACTOR * rtol) if how == "ratio" else \
-                nice_name(c / np.pi, 4 * MATCH_FACTOR * rtol)
-            label = f"{how}_{c:.4g}"
-            if how == "ratio":
-                formula = f"{nice}*v" if nice else f"{c:.6g}*v"
-            else:
-                formula = f"v + {nice}*pi" if nice else f"v + {c:.6g}"
-            groups[(label, formula)] = [found[i][2:] for i in members]
+            centre = float(np.median([u[i] for i in members]))
+            groups[_formula(how, centre, rtol)] = [found[i][1] for i in members]
     return groups
 
 
@@ -297,7 +321,7 @@ def slip_groups(data: ClassData) -> tuple[SlipGroup, ...]:
                 rest.append((sid, answer, x, v))
             else:
                 named[found].append((sid, x, v))
-        named.update(_unexplained_groups(data, item, rest))
+        named.update(_unexplained_groups(item, rest))
         for (name, formula), members in named.items():
             if len(members) >= MIN_GROUP:
                 out.append(_group(data, item, name, formula, members, len(values)))
