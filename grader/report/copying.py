@@ -13,13 +13,15 @@ match are strong evidence that work passed from one student to another:
 How unlikely a match is by chance (:func:`chance`) comes from the tolerance and the spread of the
 variants: the number of the other students' values (keys, and wrong answers for ``wrong``)
 within ``K`` tolerances of the matched value, plus one, over their count and over ``K`` per
-dimension in which the values spread (``K`` = :data:`WINDOW`) — the density of the class's values
-around the match, times the width of the tolerance window. Values bunched together (an answer
-with few possible keys, a wrong value many students give, such as 0) thus make a match likely,
-and count for little. A pair's chance is the product over the answers that match, and the
-*expected number* of honest pairs at least as unlikely in a class of this size is that product
-times the number of pairs of students and the number of ways to pick that many answers
-(:func:`expected_pairs`). A pair is flagged when that expectation is at most :data:`ALPHA`.
+dimension in which the values spread (``K`` = :data:`WINDOW`) — the density of the class's
+values around the match, times the width of the tolerance window — or, when larger, the
+fraction of those values within the tolerance itself, less one (a point mass, which the
+smoothing would spread out). Values bunched together (an answer with few possible keys, a wrong
+value many students give, such as 0) thus make a match likely, and count for little. A pair's
+chance is the product over the answers that match, and the *expected number* of honest pairs
+at least as unlikely in a class of this size is that product times the number of pairs of
+students and the number of ways to pick that many answers (:func:`expected_pairs`). A pair is
+flagged when that expectation is at most :data:`ALPHA`.
 
 These are flags for a person to look at — two students working together, a shared worked
 example — never penalties.
@@ -124,12 +126,15 @@ def chance(x: np.ndarray, reference: np.ndarray, tol: float, period: float | Non
     if len(reference) == 0 or tol <= 0:
         return 1.0
     reach = WINDOW * tol
-    near = int(np.sum(np.all(np.abs(_offsets(x, reference, period)) <= reach, axis=1)))
+    offsets = _offsets(x, reference, period)
+    near = int(np.sum(np.all(np.abs(offsets) <= reach, axis=1)))
+    within = int(np.sum(np.linalg.norm(offsets, axis=1) <= tol))
     spread = np.ptp(reference, axis=0)
     if period is not None:
         spread = np.minimum(spread, period)
     dims = int(np.sum(spread > 2 * reach))
-    return float(min(1.0, (near + 1) / (len(reference) * WINDOW**dims)))
+    smooth = (near + 1) / (len(reference) * WINDOW**dims)
+    return float(min(1.0, max(smooth, (within - 1) / len(reference))))
 
 
 def expected_pairs(p: float, students: int, answers: int, matched: int) -> float:

@@ -27,7 +27,7 @@ Planted, with :data:`PLANTED` (none in an honest class):
 
 Run as a script to write the README's example report and its screenshot::
 
-    python -m tests.grader.synthetic_class docs/report
+    python -m tests.grader.report.synthetic_class docs/report
 """
 
 from __future__ import annotations
@@ -326,7 +326,8 @@ def screenshot(page: Path, png: Path, profile: Path, size: str = "1200,2600") ->
 
 
 def main(argv: list[str]) -> int:
-    """``python -m tests.grader.synthetic_class DIR``: the example report and its screenshot."""
+    """``python -m tests.grader.report.synthetic_class DIR``: the example report and its
+    screenshot."""
     import tempfile
 
     out = Path(argv[0] if argv else "docs/report")
