@@ -81,6 +81,14 @@ img { max-width: 100%; display: block; margin: 0.5rem 0; }
 """
 
 
+CONTENTS = "<nav>" + " · ".join(
+    f'<a href="#{anchor}">{name}</a>' for anchor, name in (
+        ("look", "look at first"), ("scores", "scores"), ("items", "questions and answers"),
+        ("mistakes", "known mistakes"), ("slips", "common wrong answers"),
+        ("copying", "copied answers"), ("students", "students"))) + "</nav>"
+"""Links to the sections (in-page anchors only)."""
+
+
 def sha256_source(text: str) -> str:
     """A CSP source for an inline element's exact text: ``'sha256-…'``."""
     return "'sha256-" + base64.b64encode(hashlib.sha256(text.encode()).digest()).decode() + "'"
@@ -101,6 +109,8 @@ def shown(value: object, digits: int = 6) -> str:
     """A submitted or key value for people: numbers to ``digits`` significant figures."""
     if isinstance(value, float):
         return f"{value:.{digits}g}"
+    if isinstance(value, list) and len(value) == 1 and isinstance(value[0], int | float):
+        return shown(float(value[0]), digits)  # a scalar, held as an array of one
     if isinstance(value, list) and all(isinstance(v, int | float) for v in value):
         return "[" + ", ".join(shown(float(v), digits) for v in value) + "]"
     text = json.dumps(value, ensure_ascii=False) if not isinstance(value, str) else value
@@ -181,9 +191,10 @@ def scores_section(report: ClassReport) -> str:
               for k in ("graded", "failed", "missing")}
     stats = (f"mean {np.mean(percent):.1f} %, median {np.median(percent):.1f} %"
              if percent else "no graded submission")
-    return (f"<h2>Scores</h2><p>{len(data.ids)} students on the roster: {status['graded']} "
-            f"graded, {status['failed']} could not be graded, {status['missing']} handed in "
-            f"nothing. Graded scores: {stats}.</p>"
+    return ('<h2 id="scores">Scores</h2>'
+            f"<p>{len(data.ids)} students on the roster: {status['graded']} graded, "
+            f"{status['failed']} could not be graded, "
+            f"{status['missing']} handed in nothing. Graded scores: {stats}.</p>"
             + img(figures.score_histogram(percent), "histogram of the scores"))
 
 
@@ -200,7 +211,7 @@ def items_section(report: ClassReport) -> str:
     header = ["item", "family", *CATEGORIES, "facility", "discrimination", "flags"]
     answers = report.answers
     parts = [
-        "<h2>Questions and answers</h2>",
+        '<h2 id="items">Questions and answers</h2>',
         '<p class="note">Facility: mean fraction of the points earned by the graded students. '
         "Discrimination: correlation (point-biserial) of the item's score with the rest of the "
         "score — near zero or negative, strong students miss it as often as weak ones.</p>",
@@ -221,7 +232,7 @@ def mistakes_section(report: ClassReport) -> str:
             for m in report.mistakes]
     body = table(["answer", "known mistake", "students", "feedback they got"], rows, True) \
         if rows else "<p>No known mistake was made.</p>"
-    return "<h2>Known mistakes</h2>" + body
+    return '<h2 id="mistakes">Known mistakes</h2>' + body
 
 
 def _ratio_rows(report: ClassReport) -> list[tuple[str, list[float]]]:
@@ -260,7 +271,7 @@ def slips_section(report: ClassReport) -> str:
     ratio_rows = [r for r in _ratio_rows(report) if r[1]]
     figure = img(figures.wrong_ratios(ratio_rows), "wrong answers against the students' keys") \
         if ratio_rows else ""
-    return "<h2>Common wrong answers</h2>" + intro + body + figure
+    return '<h2 id="slips">Common wrong answers</h2>' + intro + body + figure
 
 
 def _match_text(m) -> str:
@@ -297,7 +308,7 @@ def copying_section(report: ClassReport) -> str:
         cbody = table(["student", "student", "Jaccard", "shared shingles"], crows, True)
     else:
         cbody = f"<p>No two notebooks share {MIN_JACCARD:.0%} or more of their own code.</p>"
-    return ("<h2>Copied answers</h2>" + intro + body +
+    return ('<h2 id="copying">Copied answers</h2>' + intro + body +
             "<h3>Nearly identical code (weaker evidence)</h3>"
             '<p class="note">Token shingles of each notebook\'s own code (what the student was '
             "handed and the class's common idioms removed), compared by the Jaccard index.</p>"
@@ -312,7 +323,7 @@ def students_section(table_rows: Sequence[Sequence[str]], csv_text: str, csv_nam
               for i, c in enumerate(r)] for r in rows]
     data_uri = "data:text/csv;charset=utf-8;base64," + base64.b64encode(
         csv_text.encode()).decode()
-    return ("<h2>Students</h2>"
+    return ('<h2 id="students">Students</h2>'
             f'<p>Sorted by score; click a heading to sort by it. The same table as CSV: '
             f'<a download="{e(csv_name)}" href="{data_uri}">download</a> (also written as '
             f"<code>{e(csv_name)}</code> beside this page).</p>"
@@ -324,8 +335,8 @@ def report_html(report: ClassReport, table_rows: Sequence[Sequence[str]], csv_te
     """The whole page (module docstring)."""
     title = report.data.assignment.title
     body = "".join((
-        f"<h1>Class report: {e(title)}</h1>",
-        "<h2>Look at first</h2>", look_first(report),
+        f"<h1>Class report: {e(title)}</h1>", CONTENTS,
+        '<h2 id="look">Look at first</h2>', look_first(report),
         scores_section(report), items_section(report), mistakes_section(report),
         slips_section(report), copying_section(report),
         students_section(table_rows, csv_text, csv_name),

@@ -325,6 +325,14 @@ def screenshot(page: Path, png: Path, profile: Path, size: str = "1200,2600") ->
                    check=True, capture_output=True, timeout=120)
 
 
+def sections_only(page: str, first: str, last: str) -> str:
+    """The page with only the sections from ``<h2 id=first>`` to before ``<h2 id=last>``
+    (for a screenshot of the middle of the page)."""
+    start, head_end = page.index('<h2 id="look">'), page.index(f'<h2 id="{first}">')
+    return page[:start] + page[head_end:page.index(f'<h2 id="{last}">')] + \
+        page[page.index("<script>"):]
+
+
 def main(argv: list[str]) -> int:
     """``python -m tests.grader.report.synthetic_class DIR``: the example report and its
     screenshot."""
@@ -337,7 +345,12 @@ def main(argv: list[str]) -> int:
         for name in ("report.html", "report.csv", "report_items.csv"):
             shutil.copy(made.graded / name, out / name)
         screenshot(out / "report.html", out / "report.png", Path(tmp) / "profile")
-    print(f"wrote {out}/report.html, report.csv, report_items.csv, report.png")
+        middle = Path(tmp) / "middle.html"
+        middle.write_text(sections_only((out / "report.html").read_text(encoding="utf-8"),
+                                        "slips", "students"), encoding="utf-8")
+        screenshot(middle, out / "report_copying.png", Path(tmp) / "profile", size="1200,1500")
+    print(f"wrote {out}/report.html, report.csv, report_items.csv, report.png, "
+          "report_copying.png")
     return 0
 
 
