@@ -12,14 +12,18 @@ match are strong evidence that work passed from one student to another:
 
 How unlikely a match is by chance (:func:`chance`) comes from the tolerance and the spread of the
 variants: the number of the other students' values (keys, and wrong answers for ``wrong``)
-within ``K`` tolerances of the matched value, plus one, over their count and over ``K`` per
-dimension in which the values spread (``K`` = :data:`WINDOW`) — the density of the class's
-values around the match, times the width of the tolerance window — or, when larger, the
-fraction of those values within the tolerance itself, less one (a point mass, which the
-smoothing would spread out). Values bunched together (an answer with few possible keys, a wrong
-value many students give, such as 0) thus make a match likely, and count for little. A pair's
-chance is the product over the answers that match, and the *expected number* of honest pairs
-at least as unlikely in a class of this size is that product times the number of pairs of
+within ``K`` tolerances of the matched value, plus one, over their count and over ``K``
+(``K`` = :data:`WINDOW`) — the density of the class's values around the match, times the width
+of the tolerance window — or, when larger, the fraction of those values within the tolerance
+itself, less one (a point mass, which the smoothing would spread out). Values bunched together
+(an answer with few possible keys, a wrong value many students give, such as 0) thus make a
+match likely, and count for little. A vector is judged by its least telling component: the
+smallest of the per-component chances bounds the chance that all components match, however
+they are correlated (vectors that all lie on one axis, as a known mistake's ``[0, 0, L]``
+does, count for no more than one number).
+
+A pair's chance is the product over the answers that match, and the *expected number* of honest
+pairs at least as unlikely in a class of this size is that product times the number of pairs of
 students and the number of ways to pick that many answers (:func:`expected_pairs`). A pair is
 flagged when that expectation is at most :data:`ALPHA`.
 
@@ -125,16 +129,19 @@ def chance(x: np.ndarray, reference: np.ndarray, tol: float, period: float | Non
     """
     if len(reference) == 0 or tol <= 0:
         return 1.0
+    # A vector matches only if every component does, so the least likely component bounds the
+    # chance from above, whatever the correlations (values on a line or plane stay honest).
+    offsets = np.abs(_offsets(x, reference, period))
+    return min(_chance_1d(offsets[:, j], tol, period) for j in range(offsets.shape[1]))
+
+
+def _chance_1d(offsets: np.ndarray, tol: float, period: float | None) -> float:
+    """:func:`chance` in one dimension, from the distances of the class's values to ``x``."""
     reach = WINDOW * tol
-    offsets = _offsets(x, reference, period)
-    near = int(np.sum(np.all(np.abs(offsets) <= reach, axis=1)))
-    within = int(np.sum(np.linalg.norm(offsets, axis=1) <= tol))
-    spread = np.ptp(reference, axis=0)
-    if period is not None:
-        spread = np.minimum(spread, period)
-    dims = int(np.sum(spread > 2 * reach))
-    smooth = (near + 1) / (len(reference) * WINDOW**dims)
-    return float(min(1.0, max(smooth, (within - 1) / len(reference))))
+    near = int(np.sum(offsets <= reach))
+    within = int(np.sum(offsets <= tol))
+    smooth = (near + 1) / (len(offsets) * WINDOW)
+    return float(min(1.0, max(smooth, (within - 1) / len(offsets))))
 
 
 def expected_pairs(p: float, students: int, answers: int, matched: int) -> float:

@@ -37,7 +37,10 @@ MIN_GROUP = 3
 
 CHANCE = 0.05
 """A shared ratio or offset no named relation explains is reported when fewer groups this
-large are expected by chance."""
+large are expected by chance in the whole class (all answers searched)."""
+
+WINDOW = 25
+"""The density of ratios around a group is counted over this many group widths."""
 
 MATCH_FACTOR = 2.0
 """A wrong value matches a relation within this many times the answer's tolerance."""
@@ -227,19 +230,19 @@ def cluster(values: Sequence[float], width: float) -> list[list[int]]:
     return groups
 
 
-def chance_groups(n: int, k: int, width: float, spread: float) -> float:
-    """Expected number of groups of ``k`` among ``n`` values spread evenly over ``spread``
-    falling within ``width`` of one another by chance: ``n · C(n−1, k−1) · (width/spread)^(k−1)``
-    (each value as the group's lowest, ``k − 1`` others in its window).
+def chance_groups(n: int, k: int, local: int) -> float:
+    """Expected number of groups of ``k`` or more, among ``n`` values, within one window by
+    chance, when ``local`` other values lie in the :data:`WINDOW` windows around it:
+    ``n · C(n−1, k−1) · q^(k−1)`` with ``q = (local + 1) / (n · WINDOW)`` the local share of
+    values per window (each value as the group's lowest, ``k − 1`` others in its window).
 
     Examples
     --------
-    >>> round(chance_groups(20, 3, 0.01, 1.0), 4)
-    0.0171
+    >>> f"{chance_groups(40, 3, 2):.2g}"
+    '0.27'
     """
-    if spread <= width:
-        return float(n)
-    return n * math.comb(n - 1, k - 1) * (width / spread) ** (k - 1)
+    q = min(1.0, (local + 1) / (n * WINDOW))
+    return n * math.comb(n - 1, k - 1) * q ** (k - 1)
 
 
 def relation(data: ClassData, sid: str, item: Item, x: np.ndarray) -> tuple[str, str] | None:
@@ -278,10 +281,10 @@ def _formula(how: str, u: float, rtol: float) -> tuple[str, str]:
     return f"ratio_{c:.4g}", f"{nice}*v" if nice else f"{c:.6g}*v"
 
 
-def _unexplained_groups(item: Item, rows) -> dict[tuple[str, str], list]:
+def _unexplained_groups(item: Item, rows, tests: int) -> dict[tuple[str, str], list]:
     """Group the wrong values no named relation explains by a shared ratio (and, for angles,
-    a shared offset), keeping groups unlikely by chance (:func:`chance_groups` ≤
-    :data:`CHANCE`)."""
+    a shared offset), keeping groups unlikely by chance: :func:`chance_groups` times the
+    number of answers searched (``tests``) at most :data:`CHANCE`."""
     groups: dict[tuple[str, str], list] = {}
     if not rows:
         return groups
@@ -296,9 +299,10 @@ def _unexplained_groups(item: Item, rows) -> dict[tuple[str, str], list]:
         width = 2 * MATCH_FACTOR * (rtol if how != "offset" else atol + rtol * scale)
         for members in cluster(u, width):
             k = len(members)
-            if k < MIN_GROUP or chance_groups(len(u), k, width, float(np.ptp(u))) > CHANCE:
-                continue
             centre = float(np.median([u[i] for i in members]))
+            local = sum(abs(w - centre) <= WINDOW * width / 2 for w in u) - k
+            if k < MIN_GROUP or tests * chance_groups(len(u), k, local) > CHANCE:
+                continue
             groups[_formula(how, centre, rtol)] = [found[i][1] for i in members]
     return groups
 
@@ -321,7 +325,7 @@ def slip_groups(data: ClassData) -> tuple[SlipGroup, ...]:
                 rest.append((sid, answer, x, v))
             else:
                 named[found].append((sid, x, v))
-        named.update(_unexplained_groups(item, rest))
+        named.update(_unexplained_groups(item, rest, 3 * len(data.items)))
         for (name, formula), members in named.items():
             if len(members) >= MIN_GROUP:
                 out.append(_group(data, item, name, formula, members, len(values)))

@@ -8,7 +8,14 @@ import math
 import numpy as np
 import pytest
 
-from grader.report.slips import RELATIONS, chance_groups, cluster, named_relation, nice_name
+from grader.report.slips import (
+    RELATIONS,
+    WINDOW,
+    chance_groups,
+    cluster,
+    named_relation,
+    nice_name,
+)
 from problems.answers import Answer
 
 SCALAR = Answer("w", "scalar", 2.37, rtol=1e-3)
@@ -72,6 +79,7 @@ def test_chance_groups_bounds_the_simulated_rate_of_chance_triples():
     hits = sum(any(len(g) >= 3 for g in cluster(list(rng.random(n)), width))
                for _ in range(trials))
     rate = hits / trials
-    bound = chance_groups(n, 3, width, 1.0)
+    local = round((n - 1) * WINDOW * width)  # others within WINDOW widths, on average
+    bound = chance_groups(n, 3, local)
     assert rate <= bound
     assert rate > bound / 4  # and is not wildly pessimistic
