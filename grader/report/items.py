@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from grader.report.classdata import ClassData, Item
+from grader.report.classdata import ClassData
 
 CATEGORIES = ("correct", "known mistake", "wrong", "invalid", "unanswered")
 """How one answer is counted (in this order in tables and figures)."""
@@ -141,13 +141,3 @@ def item_statistics(data: ClassData) -> tuple[tuple[ItemStats, ...], tuple[ItemS
         lists = [[a.verdict for a in r.answers if a.question == q] for r in graded]
         questions.append(_stats(f"q{q}", q, None, family, lists, totals))
     return tuple(questions), tuple(answers)
-
-
-def by_label(stats: tuple[ItemStats, ...]) -> dict[str, ItemStats]:
-    """Statistics by their label."""
-    return {s.label: s for s in stats}
-
-
-def answer_item(data: ClassData, variable: str) -> Item:
-    """The :class:`Item` of a variable."""
-    return next(i for i in data.items if i.variable == variable)

@@ -29,7 +29,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from grader.report.classdata import NUMERIC_KINDS, ClassData, Item, close, submitted_values
+from grader.report.classdata import (
+    NUMERIC_KINDS,
+    ClassData,
+    Item,
+    close,
+    numeric,
+    submitted_values,
+)
 from problems.answers import Answer
 
 MIN_GROUP = 3
@@ -119,7 +126,6 @@ RELATIONS: tuple[Relation, ...] = (
     Relation("swap_x_y", "v with components 1 and 2 swapped", ("vector",), _swap(0, 1)),
     Relation("swap_x_z", "v with components 1 and 3 swapped", ("vector",), _swap(0, 2)),
     Relation("swap_y_z", "v with components 2 and 3 swapped", ("vector",), _swap(1, 2)),
-    Relation("reversed", "v in reverse order", ("vector",), lambda v: v[::-1].copy()),
     Relation("sign_x", "v with component 1 negated", ("vector",), _flip(0)),
     Relation("sign_y", "v with component 2 negated", ("vector",), _flip(1)),
     Relation("sign_z", "v with component 3 negated", ("vector",), _flip(2)),
@@ -180,8 +186,6 @@ def named_relation(answer: Answer, x: np.ndarray, v: np.ndarray) -> Relation | N
 def swapped_with(data: ClassData, sid: str, item: Item, x: np.ndarray) -> str | None:
     """Another answer of the same question whose own key ``x`` matches (typed in the wrong
     variable), or None."""
-    from grader.report.classdata import numeric
-
     answer = data.keys[sid][item.variable]
     for other in data.items:
         if other.question != item.question or other.variable == item.variable:

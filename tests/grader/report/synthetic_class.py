@@ -33,7 +33,6 @@ Run as a script to write the README's example report and its screenshot::
 from __future__ import annotations
 
 import ast
-import hashlib
 import json
 import math
 import shutil
@@ -228,10 +227,6 @@ def working_code(rng: np.random.Generator, params: list[str]) -> str:
     return "\n".join(lines)
 
 
-def literal(value: Any) -> str:
-    return repr(value)
-
-
 def student_notebook(release: dict, values: dict, rng: np.random.Generator) -> dict:
     """The release notebook with working cells and the answers filled in."""
     nb = json.loads(json.dumps(release))
@@ -247,7 +242,7 @@ def student_notebook(release: dict, values: dict, rng: np.random.Generator) -> d
                           "source": "import numpy as np\n" + working_code(rng, params),
                           "outputs": [], "execution_count": None})
             cell["source"] = "\n".join(
-                f"{line.split('=')[0].strip()} = {literal(values[line.split('=')[0].strip()])}"
+                f"{line.split('=')[0].strip()} = {values[line.split('=')[0].strip()]!r}"
                 if line.split("=")[0].strip() in values else line for line in src.splitlines())
         cells.append(cell)
     nb["cells"] = cells
@@ -301,11 +296,6 @@ def build_class(folder: Path, n: int, *, planted: bool, seed: int = 16) -> Synth
         (subs / f"{sid}.ipynb").write_text(json.dumps(nb, indent=1))
     grade_assignment(hw, subs, limits="literal", execute=LiteralExecute(), jobs=2)
     return SyntheticClass(hw, subs, hw / "graded", ids, planted, slip, true_values)
-
-
-def fingerprint(path: Path) -> str:
-    """SHA-256 of a file, for a report that must not change between two runs."""
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 CHROMIUM_FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
