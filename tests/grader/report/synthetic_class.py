@@ -23,7 +23,8 @@ Planted, with :data:`PLANTED` (none in an honest class):
 * ``slip``: a third of the class doubles ``q2_p_gamma`` (a factor 2 the template does not know);
 * three copying pairs: ``answers`` (the copier types the source's answers into their own
   notebook), ``notebook`` (the copier hands in the source's notebook as it is) and ``wrong``
-  (the copier copies the source's four wrong answers and does the rest alone).
+  (the copier copies the source's four wrong answers and does the rest alone);
+* the last student hands in a file that is not a notebook (failed), the one before nothing.
 
 Run as a script to write the README's example report and its screenshot::
 
@@ -294,6 +295,9 @@ def build_class(folder: Path, n: int, *, planted: bool, seed: int = 16) -> Synth
         notebooks[copier] = notebooks[source]
     for sid, nb in notebooks.items():
         (subs / f"{sid}.ipynb").write_text(json.dumps(nb, indent=1))
+    if planted:  # the last two hand in nothing and a file that is not a notebook
+        (subs / f"{ids[-2]}.ipynb").unlink()
+        (subs / f"{ids[-1]}.ipynb").write_text("{not a notebook")
     grade_assignment(hw, subs, limits="literal", execute=LiteralExecute(), jobs=2)
     return SyntheticClass(hw, subs, hw / "graded", ids, planted, slip, true_values)
 

@@ -34,6 +34,21 @@ def test_grading_run_writes_the_report_page_and_its_csv_files(planted_class):
     assert items[BROKEN]["flags"] == "possibly broken"
 
 
+def test_students_not_graded_are_listed_but_left_out_of_the_statistics(planted_class):
+    made, report = planted_class.made, planted_class.report
+    missing, failed = made.ids[-2], made.ids[-1]
+    assert report.data.results[missing].status == "missing"
+    assert report.data.results[failed].status == "failed"
+    assert set(report.data.graded) == set(made.ids) - {missing, failed}
+    assert all(sum(s.counts.values()) == len(made.ids) - 2
+               for s in report.answers)
+    page = (made.graded / "report.html").read_text(encoding="utf-8")
+    assert "1 could not be graded, 1 handed in nothing" in page
+    with open(made.graded / "report.csv", newline="") as f:
+        status = {r["id"]: r["status"] for r in csv.DictReader(f)}
+    assert (status[missing], status[failed]) == ("missing", "failed")
+
+
 def test_facility_is_the_mean_fraction_of_points_from_the_records(planted_class):
     data = planted_class.report.data
     for q in data.assignment.questions:
