@@ -159,7 +159,8 @@ def run_grade(args: argparse.Namespace, execute=None) -> int:
     out = args.out or args.hw / "graded"
     kept = f"; {len(report.unchanged)} unchanged, kept (--force regrades)" if report.unchanged \
         else ""
-    print(f"wrote {out / 'grades.csv'}, {out / 'results'}/, {out / 'feedback'}/{kept}")
+    print(f"wrote {out / 'grades.csv'}, {out / 'results'}/, {out / 'feedback'}/, "
+          f"{out / 'report.html'}{kept}")
     ignored = [p.message for p in report.problems if p.ignored]
     for line in report.notes:
         print(f"eulertop grade: {line}", file=sys.stderr)

@@ -533,6 +533,7 @@ def grade_assignment(
             _run_all(a, out, to_run, run, limits, jobs, reveal, progress)
         results = {sid: read_result(out / RESULTS / f"{sid}.json") for sid in a.ids}
         _rebuild(a, out, results, reveal)
+        _class_report(a, out, results, found.submissions)
     graded_now = tuple(t[0].student_id for t in to_run) + tuple(r.student_id for r in to_write)
     return RunReport(tuple(results[s] for s in a.ids), graded_now, tuple(kept), found.problems,
                      found.notes)
@@ -693,6 +694,21 @@ def _run_all_in(stack, a, out, to_run, execute, limits, jobs, reveal, progress) 
     pool.shutdown()
     for f in futures:
         f.result()  # a fault in publishing (disk full …) must not pass silently
+
+
+def _class_report(a: Assignment, out: Path, results: Mapping[str, StudentResult | None],
+                  submissions: Sequence[Submission]) -> None:
+    """``OUT/report.html`` (:mod:`grader.report`); a fault there is reported, never fatal to
+    the grades already written."""
+    from grader.report import build_report, write_report
+    from grader.report.classdata import class_data
+
+    try:
+        report = build_report(class_data(a, results), {s.student_id: s.path for s in submissions})
+        write_report(report, out / "report.html")
+    except Exception as e:
+        sys.stderr.write(f"eulertop grade: the class report could not be written "
+                         f"({type(e).__name__}: {e}); the grades are complete\n")
 
 
 def _rebuild(a: Assignment, out: Path, results: Mapping[str, StudentResult | None],
