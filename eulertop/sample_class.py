@@ -221,8 +221,11 @@ def intended(student: Student, key: Mapping[str, Answer]) -> Intended:
     """What the grader should conclude for ``student``, given their key (variable → Answer)."""
     if student.plan == "absent":
         return Intended("missing", {v: ("missing", None, None) for v in key})
-    if student.plan in ("empty", "endless_loop"):  # nothing read, nothing given (fail closed)
+    if student.plan == "empty":  # nothing read, nothing given (fail closed)
         return Intended("failed", {v: ("missing", None, None) for v in key})
+    if student.plan == "endless_loop":  # time ran out in its loop: what was set before counts
+        return Intended("graded", {v: ("correct" if _question(v) < student.question else
+                                       "missing", None, None) for v in key})
     answers = {v: ("correct", None, None) for v in key}
     if student.plan == "mistake":
         for v, a in key.items():

@@ -128,7 +128,7 @@ def test_the_string_answer_is_invalid(demo):
 # broken students: the record and the printed row say, in words, what went wrong
 BROKEN = {
     "name_error": ("graded", "NameError"),
-    "endless_loop": ("failed", "time limit"),
+    "endless_loop": ("graded", "time limit"),  # the answers set before the loop count
     "empty": ("failed", "no code"),
     "unset": ("graded", "not set"),
     "absent": ("missing", "no submission"),
@@ -148,8 +148,13 @@ def test_broken_students_are_told_what_went_wrong(demo, plan):
     assert words in printed_row(demo, student.id)
     if plan == "unset":
         assert [v["status"] for v in verdicts(demo, student.id).values()].count("missing") == 1
-    if plan in ("endless_loop", "empty", "absent"):
+    if plan in ("empty", "absent"):
         assert r["points"] == 0
+    if plan == "endless_loop":  # the questions before the looping cell, and none after it
+        got = verdicts(demo, student.id)
+        assert all(v["status"] == ("correct" if int(name[1:].split("_")[0]) < student.question
+                                   else "missing") for name, v in got.items()), got
+        assert 0 < r["points"] < r["max_points"]
 
 
 def _full_precision_numbers(value) -> set[str]:

@@ -10,6 +10,7 @@ import json
 import os
 import select
 import shutil
+import signal
 import subprocess
 import sys
 import termios
@@ -58,6 +59,9 @@ def _in_terminal(argv: list[str]) -> tuple[subprocess.Popen, int]:
 
     def controlling_terminal() -> None:
         fcntl.ioctl(0, termios.TIOCSCTTY, 0)
+        # as a shell does for a foreground job: a test run started in the background (where
+        # SIGINT is ignored, and a child inherits that) must not make Ctrl-C do nothing
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
 
     proc = subprocess.Popen(argv, stdin=slave, stdout=slave, stderr=slave, cwd=ROOT,
                             start_new_session=True, preexec_fn=controlling_terminal)
