@@ -21,6 +21,8 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "grade": ("grader.cli", "grade every submission against the key: gradebook, feedback, summary"),
     "export": ("grader.lms.export", "write the gradebook Canvas, Moodle, Blackboard or Gradescope "
                "imports, and answers.csv"),
+    "package": ("grader.hosted.package", "build the autograder for Gradescope (a zip) or a "
+                "PrairieLearn question (a folder)"),
     "bench": ("solver.work_precision", "work-precision charts and the stability battery"),
     "demo": ("eulertop.demo", "the whole pipeline on a built-in sample class, end to end"),
 }
