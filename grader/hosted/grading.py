@@ -84,7 +84,7 @@ def choose_isolation(mode: str = "auto", user: str | None = None) -> Isolation:
     if mode in ("auto", "bwrap"):
         found = sandbox.available()
         if found is not None:
-            return Isolation("bwrap", f"bubblewrap sandbox: {found.describe()}", True,
+            return Isolation("bwrap", found.describe(), True,
                              partial(execute_submission, sandbox=True))
         if mode == "bwrap":
             try:
