@@ -130,8 +130,6 @@ def grade(root: Path) -> tuple[dict, int]:
         a = load_assignment(source / ASSIGNMENT)
         limits = config_limits(config)
         visibility = config.get("visibility", "visible")
-        isolation: Isolation = choose_isolation(config.get("sandbox", "auto"),
-                                                config.get("kernel_user"))
         ids, unmatched = submitters(_read_metadata(root), a)
     except (HostedError, UsageError) as e:
         lines.append(f"The autograder could not grade this submission: {e}")
@@ -146,6 +144,12 @@ def grade(root: Path) -> tuple[dict, int]:
     if path is None:
         lines.insert(0, f"Not graded: {why}.")
         return results_json(None, lines, visibility, time.monotonic() - start), 0
+    try:
+        isolation: Isolation = choose_isolation(config.get("sandbox", "auto"),
+                                                config.get("kernel_user"))
+    except HostedError as e:
+        lines.append(f"The autograder could not grade this submission: {e}")
+        return results_json(None, lines, "visible", time.monotonic() - start), 1
     sid = choose_student(ids, claimed_student(path))
     result = grade_notebook(a, sid, path, limits, isolation)
     lines.append(f"Graded as {sid}'s variant. Isolation: {isolation.note}")
