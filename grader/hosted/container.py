@@ -11,6 +11,9 @@ What it does (:class:`ContainerKernel`, a :class:`grader.execute.LocalKernel`)
       (``Limits.memory_bytes``), no core files, processes (:data:`MAX_PROCESSES`, counted per
       user), size of any file it writes (:data:`MAX_FILE_BYTES`), open files, CPU seconds. Its
       output is capped by :func:`grader.execute.execute_submission` as everywhere.
+    * When the kernel stops, its process group is killed (as everywhere) and so is every
+      process of its user started since it started (:func:`kill_new_processes`: a process
+      that left the group with ``setsid`` does not outlive the run).
     * :func:`protect` makes the answer key and the grader's own files (the platform's source
       folder, its data) readable by the grader's user only, before any kernel starts.
 
@@ -29,6 +32,7 @@ from __future__ import annotations
 
 import os
 import pwd
+import signal
 import stat
 import subprocess
 import sys
@@ -202,6 +206,37 @@ def _hand_over(folder: Path, user: KernelUser) -> None:
         os.chown(path, user.uid, user.gid, follow_symlinks=False)
 
 
+def processes_of(uid: int) -> set[tuple[int, str]]:
+    """``(pid, start time)`` of every live process of ``uid`` (from ``/proc``)."""
+    found = set()
+    for entry in os.scandir("/proc"):
+        if not entry.name.isdigit():
+            continue
+        try:
+            if entry.stat().st_uid != uid:
+                continue
+            with open(f"/proc/{entry.name}/stat", "rb") as f:
+                fields = f.read().rsplit(b")", 1)[1].split()  # from field 3, the state
+        except (OSError, IndexError):
+            continue
+        if len(fields) > 19 and fields[0] != b"Z":  # a zombie is dead already
+            found.add((int(entry.name), fields[19].decode()))  # field 22: its start time
+    return found
+
+
+def kill_new_processes(uid: int, before: set[tuple[int, str]]) -> int:
+    """SIGKILL every process of ``uid`` that is not in ``before`` (what a kernel left behind:
+    a process that left the kernel's process group with ``setsid``); how many."""
+    killed = 0
+    for pid, _ in processes_of(uid) - before:
+        try:
+            os.kill(pid, signal.SIGKILL)
+            killed += 1
+        except OSError:
+            pass
+    return killed
+
+
 class ContainerKernel(LocalKernel):
     """A :class:`LocalKernel` run as :attr:`user` (None: as the grader) with the limits of
     :data:`LAUNCHER`; ``sandboxed`` is False and ``isolation`` says what confined it."""
@@ -217,6 +252,7 @@ class ContainerKernel(LocalKernel):
     async def start(self) -> Any:
         options: dict[str, Any] = {}
         if self.user is not None:
+            self._before = processes_of(self.user.uid)
             _hand_over(self.workdir, self.user)
             _hand_over(self.control, self.user)
             options = {"user": self.user.uid, "group": self.user.gid, "extra_groups": []}
@@ -233,6 +269,11 @@ class ContainerKernel(LocalKernel):
             )
         self.process = self.km.provisioner.process
         return await self._connect(self.km.client)
+
+    async def stop(self) -> None:
+        await super().stop()
+        if self.user is not None and hasattr(self, "_before"):
+            kill_new_processes(self.user.uid, self._before)
 
 
 def kernel_factory(user: KernelUser | None) -> Any:

@@ -127,6 +127,8 @@ def grade(root: Path) -> tuple[dict, int]:
         from grader.hosted.container import protect
 
         protect([source, root / "submission_metadata.json"])
+        (root / "results").mkdir(parents=True, exist_ok=True)
+        (root / "results").chmod(0o755)  # the grader's: the notebook cannot write results
         a = load_assignment(source / ASSIGNMENT)
         limits = config_limits(config)
         visibility = config.get("visibility", "visible")

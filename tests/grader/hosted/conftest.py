@@ -7,8 +7,9 @@
     A fresh folder under ``/tmp`` that every user may traverse (pytest's own temporary folders
     are private to root, which would hide the key from another uid for the wrong reason).
 ``kernel_uid``
-    Skips where a kernel cannot run as another user: the grader is not root, or this Python
-    lives where other users cannot run it (e.g. under ``/root``).
+    A fresh uid for the test's kernels (``$EULERTOP_KERNEL_USER``). Skips where a kernel cannot
+    run as another user: the grader is not root, or this Python lives where other users cannot
+    run it (e.g. under ``/root``; the skip says so).
 ``notebooks``
     Submissions built from the generated notebooks: ``right``, ``wrong``, ``broken``,
     ``oversized``, ``key_reader(key_path)`` (see :class:`Notebooks`).
@@ -19,6 +20,7 @@ from __future__ import annotations
 import copy
 import json
 import os
+import secrets
 import shutil
 import tempfile
 from dataclasses import dataclass
@@ -70,11 +72,14 @@ def public_tmp():
 
 
 @pytest.fixture
-def kernel_uid() -> int:
-    from grader.hosted.container import check_interpreter, kernel_user
+def kernel_uid(monkeypatch) -> int:
+    """A uid of the tests' own for kernels (``$EULERTOP_KERNEL_USER``): no process of another
+    user of this machine (``nobody``'s, say) is ever counted or killed as the kernel's."""
+    from grader.hosted.container import USER_VARIABLE, check_interpreter, kernel_user
 
     if os.geteuid() != 0:
         pytest.skip("needs root: there is no other user to run the kernel as")
+    monkeypatch.setenv(USER_VARIABLE, str(0x5E000000 + secrets.randbelow(0x100000)))
     user = kernel_user()
     why = check_interpreter(user)
     if why is not None:

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import os
 import stat
+import time
 import zipfile
 from pathlib import Path
 
@@ -17,6 +18,7 @@ from grader.hosted.grading import CONFIG
 from grader.hosted.package import gradescope_zip
 from grader.limits import Limits
 from grader.pipeline import load_assignment
+from tests.grader.hosted.conftest import code_cell
 from tests.grader.hosted.platform_formats import check_gradescope
 
 LIMITS = {"cell_timeout": 10.0, "total_timeout": 60.0, "memory_bytes": 3 * 1024**3 // 2,
@@ -119,6 +121,35 @@ def test_the_key_reader_would_get_every_point_with_the_key(hosted_hw, notebooks,
                        a.key_hash("alice"), Limits(**LIMITS),
                        partial(execute_submission, sandbox=False))
     assert result.points == hosted_hw.max_points("alice")
+
+
+def test_no_process_of_the_notebook_outlives_it(hosted_hw, notebooks, public_tmp, kernel_uid,
+                                               monkeypatch):
+    nb = json.loads(notebooks.right("alice"))
+    nb["cells"].append(code_cell("import subprocess\n"
+                                 "subprocess.Popen(['sleep', '311.5'], start_new_session=True)"))
+    results, _ = run(layout(public_tmp, hosted_hw, json.dumps(nb).encode(), ALICE),
+                     monkeypatch)
+    assert results["score"] == hosted_hw.max_points("alice")  # the cell ran
+    from grader.hosted.container import processes_of
+
+    deadline = time.monotonic() + 5  # SIGKILLed: gone as soon as the kernel has ended it
+    while processes_of(kernel_uid) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert processes_of(kernel_uid) == set()
+
+
+def test_a_python_other_users_cannot_run_is_named(public_tmp, kernel_uid, monkeypatch):
+    import sys
+
+    from grader.hosted.container import check_interpreter, kernel_user
+
+    private = public_tmp / "private"
+    private.mkdir(mode=0o700)
+    (private / "python3").symlink_to(sys.executable)
+    monkeypatch.setattr(sys, "executable", str(private / "python3"))
+    why = check_interpreter(kernel_user())
+    assert why is not None and str(private / "python3") in why and "every user" in why
 
 
 def test_broken_notebook_scores_zero_and_says_why(hosted_hw, notebooks, public_tmp, monkeypatch):
