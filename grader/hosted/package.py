@@ -372,11 +372,13 @@ def package(args: argparse.Namespace) -> Path:
 
     a = load_assignment(args.hw)
     limits = _limits(args)
+    if args.platform == "gradescope" and args.out.suffix.lower() != ".zip":
+        raise PackageError(f"--out {args.out}: Gradescope takes a .zip file")
+    if args.platform == "prairielearn" and args.out.exists() and not args.out.is_dir():
+        raise PackageError(f"--out {args.out}: not a folder")
     with tempfile.TemporaryDirectory(prefix="eulertop-wheel-") as tmp:
         wheel = _wheel(args, Path(tmp))
         if args.platform == "gradescope":
-            if args.out.suffix.lower() != ".zip":
-                raise PackageError(f"--out {args.out}: Gradescope takes a .zip file")
             config = settings(args, limits, platform="gradescope", visibility=args.visibility)
             return gradescope_zip(a, args.out, wheel, config)
         args.name = args.name or re.sub(r"[^A-Za-z0-9_-]+", "-", Path(args.hw).resolve().name)
