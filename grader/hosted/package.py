@@ -103,13 +103,28 @@ def project_root() -> Path | None:
     return root if (root / "pyproject.toml").is_file() else None
 
 
+SOURCES = ("pyproject.toml", "README.md", "eulertop", "grader", "problems", "solver")
+"""What of the source tree goes into the wheel (``pyproject.toml``'s packages)."""
+
+
 def build_wheel(dest: Path) -> Path:
-    """``pip wheel --no-deps`` of the source tree into ``dest``; the wheel's path."""
+    """``pip wheel --no-deps`` of a copy of the source tree into ``dest``; the wheel's path.
+
+    Built from a copy in ``dest`` so that nothing is written into the source tree (and no
+    stale ``build/`` folder there ends up in the wheel)."""
     root = project_root()
     if root is None:
         raise PackageError("eulertop is not running from its source tree, so no wheel can be "
                            "built here: pass --wheel FILE (a wheel of this eulertop version)")
-    base = [sys.executable, "-m", "pip", "wheel", "--no-deps", "--quiet", str(root), "-w",
+    copy = dest / "source"
+    for name in SOURCES:
+        if (root / name).is_dir():
+            shutil.copytree(root / name, copy / name,
+                            ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+        elif (root / name).is_file():
+            copy.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(root / name, copy / name)
+    base = [sys.executable, "-m", "pip", "wheel", "--no-deps", "--quiet", str(copy), "-w",
             str(dest)]
     done = subprocess.run([*base, "--no-build-isolation"], capture_output=True, text=True)
     if done.returncode != 0:
