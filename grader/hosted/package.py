@@ -14,7 +14,7 @@ PrairieLearn (:func:`prairielearn_question`)
     eulertop's generator from HW's seed and problems) and ``tests/`` (the grader's entrypoint,
     the variants' key, the settings; PrairieLearn copies it to ``/grade/tests``, never to
     students). ``OUT/grader-image/``: a ``Dockerfile`` that builds the grading image from the
-    wheel.
+    wheel. ``OUT/solutions/<name>/``: each variant's solutions, for the instructor only.
 """
 
 from __future__ import annotations
@@ -243,8 +243,8 @@ def generate(data):
 '''
 
 QUESTION_HTML = """<pl-question-panel>
-  <p>__TITLE__: open the workspace, answer every question in <code>__NOTEBOOK__</code>, run it
-  from the top, save it, and submit.</p>
+  <p>__TITLE__ (variant {{params.eulertop_variant}}): open the workspace, answer every question
+  in <code>__NOTEBOOK__</code>, run it from the top, save it, and submit.</p>
   <pl-workspace></pl-workspace>
 </pl-question-panel>
 
@@ -317,6 +317,9 @@ def prairielearn_question(a: Assignment, out: Path, wheel: Path, config: dict,
                                                     NOTEBOOK=NOTEBOOK))
         question.parent.mkdir(parents=True, exist_ok=True)
         shutil.copytree(staged, question)
+        solutions = out / "solutions" / args.name  # the instructor's, outside the question
+        shutil.rmtree(solutions, ignore_errors=True)
+        shutil.copytree(pool / "solutions", solutions)
     image = out / "grader-image"
     image.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(wheel, image / wheel.name)

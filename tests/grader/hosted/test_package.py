@@ -55,6 +55,9 @@ def test_prairielearn_question_and_image_recipe(hosted_hw, tmp_path, fake_wheel,
     question = out / "questions" / "HW"
     assert sorted(p.name for p in (question / "variants").iterdir()) == ["v000.ipynb",
                                                                         "v001.ipynb"]
+    assert sorted(p.name for p in (out / "solutions" / "HW").iterdir()) == ["v000.ipynb",
+                                                                            "v001.ipynb"]
+    assert not (question / "solutions").exists()
     info = json.loads((question / "info.json").read_text())
     assert info["externalGradingOptions"]["image"] == "me/eulertop-grader"
     dockerfile = (out / "grader-image" / "Dockerfile").read_text()
