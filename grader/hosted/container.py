@@ -84,7 +84,7 @@ class KernelUser:
     name: str
 
     def describe(self) -> str:
-        return f"uid {self.uid} ({self.name})"
+        return f"uid {self.uid}" + ("" if self.name == f"uid {self.uid}" else f" ({self.name})")
 
 
 class KernelUserError(ValueError):

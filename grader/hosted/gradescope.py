@@ -152,8 +152,12 @@ def grade(root: Path) -> tuple[dict, int]:
     except HostedError as e:
         lines.append(f"The autograder could not grade this submission: {e}")
         return results_json(None, lines, "visible", time.monotonic() - start), 1
-    sid = choose_student(ids, claimed_student(path))
+    claim = claimed_student(path)
+    sid = choose_student(ids, claim)
     result = grade_notebook(a, sid, path, limits, isolation)
+    if claim is not None and claim != sid:
+        lines.append(f"FLAGGED: this notebook was made for {claim}, not for {sid} who submitted "
+                     f"it; it was graded against {sid}'s own variant.")
     lines.append(f"Graded as {sid}'s variant. Isolation: {isolation.note}")
     return results_json(result, lines, visibility, time.monotonic() - start), 0
 

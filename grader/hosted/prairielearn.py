@@ -34,7 +34,7 @@ from grader.hosted.grading import (
     grade_notebook,
     read_config,
 )
-from grader.pipeline import Assignment, UsageError, load_assignment
+from grader.pipeline import Assignment, UsageError, claimed_student, load_assignment
 from grader.results import StudentResult, atomic_write_text
 
 ROOT_VARIABLE = "EULERTOP_PRAIRIELEARN_ROOT"
@@ -108,7 +108,12 @@ def grade(root: Path) -> tuple[dict, int]:
     result = grade_notebook(a, variant, path, limits, isolation)
     if _not_a_notebook(result):
         return not_gradable(f"Not graded: {result.message}"), 0
-    return results_json(result, [f"Graded as variant {variant}. Isolation: {isolation.note}"]), 0
+    lines = [f"Graded as variant {variant}. Isolation: {isolation.note}"]
+    claim = claimed_student(path)
+    if claim is not None and claim != variant:
+        lines.insert(0, f"FLAGGED: this notebook was made for variant {claim}, not {variant}; "
+                        f"it was graded against {variant}.")
+    return results_json(result, lines), 0
 
 
 def write_results(root: Path, results: Mapping) -> Path:

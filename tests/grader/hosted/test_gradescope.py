@@ -193,6 +193,7 @@ def test_another_students_notebook_is_graded_against_the_submitters(hosted_hw, n
     results, _ = run(layout(public_tmp, hosted_hw, notebooks.right("bob"), ALICE), monkeypatch)
     assert "alice's variant" in results["output"]
     assert "names student 'bob'" in results["output"]
+    assert "FLAGGED: this notebook was made for bob, not for alice" in results["output"]
     assert results["score"] < hosted_hw.max_points("alice")
 
 

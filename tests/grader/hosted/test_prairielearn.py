@@ -170,3 +170,11 @@ def test_unknown_variant_is_the_questions_fault_not_the_students(question, publi
     root = layout(public_tmp, question, b"{}", data_for("v999"))
     results, status = run(root, monkeypatch)
     assert status == 1 and results["gradable"] is False and "v999" in results["message"]
+
+
+def test_another_variants_notebook_is_graded_against_this_variant_and_flagged(
+        question, pool, public_tmp, kernel_uid, monkeypatch):
+    data = Notebooks(pool).right("v002")
+    results, _ = run(layout(public_tmp, question, data, data_for("v001")), monkeypatch)
+    assert "FLAGGED: this notebook was made for variant v002, not v001" in results["message"]
+    assert results["score"] < 1.0
