@@ -155,6 +155,10 @@ def grade(root: Path) -> tuple[dict, int]:
     claim = claimed_student(path)
     sid = choose_student(ids, claim)
     result = grade_notebook(a, sid, path, limits, isolation)
+    if result.execution.get("retry"):  # no kernel could be started: not the student's doing
+        lines.append(f"The autograder could not run the notebook ({result.message}); this is "
+                     "not your fault: ask your instructor to rerun the autograder.")
+        return results_json(None, lines, "visible", time.monotonic() - start), 1
     if claim is not None and claim != sid:
         lines.append(f"FLAGGED: this notebook was made for {claim}, not for {sid} who submitted "
                      f"it; it was graded against {sid}'s own variant.")

@@ -106,6 +106,8 @@ def grade(root: Path) -> tuple[dict, int]:
     except HostedError as e:
         return not_gradable(f"The grader could not grade this submission: {e}"), 1
     result = grade_notebook(a, variant, path, limits, isolation)
+    if result.execution.get("retry"):  # no kernel could be started: not the student's doing
+        return not_gradable(f"The grader could not run the notebook: {result.message}"), 1
     if _not_a_notebook(result):
         return not_gradable(f"Not graded: {result.message}"), 0
     lines = [f"Graded as variant {variant}. Isolation: {isolation.note}"]

@@ -244,3 +244,20 @@ def test_the_zip_holds_what_gradescope_needs_at_its_root(hosted_hw, tmp_path):
     assert modes["setup.sh"] & 0o111 and modes["run_autograder"] & 0o111
     assert f"./{wheel.name}" in setup and "--constraint constraints.txt" in setup
     assert config == {"sandbox": "auto"}
+
+
+def test_a_kernel_that_cannot_start_is_not_the_students_zero(hosted_hw, notebooks, public_tmp,
+                                                            monkeypatch):
+    from grader.execute import Execution
+    from grader.hosted.grading import Isolation
+
+    def no_kernel(path, variables, limits):
+        return Execution("error", "could not start a Python kernel (test)", {}, (), 0.0, False,
+                         retry=True)
+
+    monkeypatch.setattr(gradescope, "choose_isolation",
+                        lambda *a: Isolation("container", "test", True, no_kernel))
+    results, status = run(layout(public_tmp, hosted_hw, notebooks.right("alice"), ALICE),
+                          monkeypatch)
+    assert status == 1 and results["tests"] == []
+    assert "not your fault" in results["output"] and "could not start" in results["output"]

@@ -178,3 +178,19 @@ def test_another_variants_notebook_is_graded_against_this_variant_and_flagged(
     results, _ = run(layout(public_tmp, question, data, data_for("v001")), monkeypatch)
     assert "FLAGGED: this notebook was made for variant v002, not v001" in results["message"]
     assert results["score"] < 1.0
+
+
+def test_a_kernel_that_cannot_start_uses_no_attempt(question, pool, public_tmp, monkeypatch):
+    from grader.execute import Execution
+    from grader.hosted.grading import Isolation
+
+    def no_kernel(path, variables, limits):
+        return Execution("error", "could not start a Python kernel (test)", {}, (), 0.0, False,
+                         retry=True)
+
+    monkeypatch.setattr(prairielearn, "choose_isolation",
+                        lambda *a: Isolation("container", "test", True, no_kernel))
+    root = layout(public_tmp, question, Notebooks(pool).right("v000"), data_for("v000"))
+    results, status = run(root, monkeypatch)
+    assert status == 1 and results["gradable"] is False
+    assert "could not start" in results["message"]
