@@ -98,7 +98,7 @@ def kernel_user(wanted: str | None = None) -> KernelUser | None:
     Raises
     ------
     KernelUserError
-        ``wanted`` names no user, or names root.
+        ``wanted`` names no user, or names root or a user whose group is root's.
     """
     if os.geteuid() != 0:
         return None
@@ -113,6 +113,9 @@ def kernel_user(wanted: str | None = None) -> KernelUser | None:
         user = KernelUser(uid, uid, f"uid {uid}")
     if user.uid == 0:
         raise KernelUserError(f"kernel user {wanted!r} is root: name an unprivileged user")
+    if user.gid == 0:
+        raise KernelUserError(f"kernel user {wanted!r} has root's group as its own: name a "
+                              "user of an unprivileged group")
     return user
 
 
