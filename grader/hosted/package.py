@@ -63,7 +63,6 @@ if ! "$PY" -m venv __VENV__; then
   apt-get update && apt-get install -y "$(basename "$PY")-venv"
   "$PY" -m venv __VENV__
 fi
-__VENV__/bin/python -m pip install --upgrade pip
 __VENV__/bin/python -m pip install --constraint constraints.txt ./__WHEEL__
 chmod -R go+rX __VENV__
 """
