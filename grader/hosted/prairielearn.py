@@ -92,6 +92,8 @@ def grade(root: Path) -> tuple[dict, int]:
         from grader.hosted.container import protect
 
         protect([tests, root / "data"])
+        (root / "results").mkdir(parents=True, exist_ok=True)
+        (root / "results").chmod(0o755)  # the grader's: the notebook cannot write results
         a = load_assignment(tests / ASSIGNMENT)
         data = json.loads((root / "data" / "data.json").read_text(encoding="utf-8"))
         variant = variant_of(data if isinstance(data, Mapping) else {}, a)
