@@ -90,14 +90,20 @@ def test_the_key_is_out_of_reach_of_the_notebook(hosted_hw, notebooks, public_tm
                                                  monkeypatch):
     root = public_tmp / "autograder"
     key = root / "source" / "assignment" / "key.json"
-    data = notebooks.key_reader("alice", key)
-    layout(public_tmp, hosted_hw, data, ALICE)
+    nb = json.loads(notebooks.key_reader("alice", key))
+    results_folder = root / "results"  # and it tries to plant a results file of its own
+    nb["cells"].append(code_cell(
+        "import os\n"
+        f"for _p in ({str(results_folder / 'results.json')!r}, {str(results_folder / 'x')!r}):\n"
+        "    try:\n        os.makedirs(_p)\n    except OSError as _e:\n        print(_e)\n"))
+    layout(public_tmp, hosted_hw, json.dumps(nb).encode(), ALICE)
     # as Gradescope extracts it, the key is readable by every user ...
     assert key.stat().st_mode & stat.S_IROTH
     results, _ = run(root, monkeypatch)
     # ... but run_autograder made it the grader's only, and the notebook ran as another uid
     assert results["score"] == 0
     assert not key.stat().st_mode & (stat.S_IRWXG | stat.S_IRWXO)
+    assert sorted(p.name for p in results_folder.iterdir()) == ["results.json"]
 
 
 def test_the_key_reader_would_get_every_point_with_the_key(hosted_hw, notebooks, public_tmp,
