@@ -389,6 +389,8 @@ def package(args: argparse.Namespace) -> Path:
 
     a = load_assignment(args.hw)
     limits = _limits(args)
+    if args.kernel_user is not None and args.kernel_user.strip() in ("root", "0", ""):
+        raise PackageError(f"--kernel-user {args.kernel_user!r}: name an unprivileged user")
     if args.platform == "gradescope" and args.out.suffix.lower() != ".zip":
         raise PackageError(f"--out {args.out}: Gradescope takes a .zip file")
     if args.platform == "prairielearn" and args.out.exists() and not args.out.is_dir():

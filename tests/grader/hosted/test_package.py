@@ -70,6 +70,7 @@ def test_prairielearn_question_and_image_recipe(hosted_hw, tmp_path, fake_wheel,
 @pytest.mark.parametrize(("extra", "message"), [
     (["--for", "gradescope", "--out", "autograder.txt"], "takes a .zip file"),
     (["--for", "gradescope", "--out", "a.zip", "--wheel", "notes.txt"], "not a wheel file"),
+    (["--for", "gradescope", "--out", "a.zip", "--kernel-user", "root"], "unprivileged user"),
 ])
 def test_mistakes_are_named_with_exit_2(hosted_hw, tmp_path, capsys, monkeypatch, extra,
                                         message):
