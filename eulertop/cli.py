@@ -23,6 +23,8 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
                "imports, and answers.csv"),
     "report": ("grader.report.cli", "the class report: item statistics, common wrong answers, "
                "copied answers"),
+    "package": ("grader.hosted.package", "build the autograder for Gradescope (a zip) or a "
+                "PrairieLearn question (a folder)"),
     "bench": ("solver.work_precision", "work-precision charts and the stability battery"),
     "demo": ("eulertop.demo", "the whole pipeline on a built-in sample class, end to end"),
 }

@@ -1,0 +1,428 @@
+"""``eulertop package HW --for gradescope|prairielearn --out PATH``: what each platform takes.
+
+Gradescope (:func:`gradescope_zip`)
+    A zip with, at its root (Gradescope's "Autograder Specifications"): ``setup.sh``, which
+    installs eulertop from the wheel in the zip into ``/opt/eulertop`` (its dependencies from
+    the package index, pinned to the versions this eulertop runs with: ``constraints.txt``),
+    ``run_autograder``, the assignment's manifest and key (``assignment/``, nothing else of
+    HW), and :data:`grader.hosted.grading.CONFIG`.
+
+PrairieLearn (:func:`prairielearn_question`)
+    ``OUT/questions/<name>/``: a question for a course repository — ``info.json`` (external
+    grading, a JupyterLab workspace), ``question.html``, ``server.py`` (picks a variant from
+    PrairieLearn's variant seed), ``variants/`` (the notebooks the workspace offers, made by
+    eulertop's generator from HW's seed and problems) and ``tests/`` (the grader's entrypoint,
+    the variants' key, the settings; PrairieLearn copies it to ``/grade/tests``, never to
+    students). ``OUT/grader-image/``: a ``Dockerfile`` that builds the grading image from the
+    wheel. ``OUT/solutions/<name>/``: each variant's solutions, for the instructor only.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import shutil
+import stat
+import subprocess
+import sys
+import tempfile
+import zipfile
+from collections.abc import Iterable
+from importlib import metadata
+from pathlib import Path
+
+from grader.hosted.grading import CONFIG, MODES, limits_dict
+from grader.limits import Limits
+from grader.pipeline import Assignment, UsageError, load_assignment
+
+PLATFORMS = ("gradescope", "prairielearn")
+VENV = "/opt/eulertop"
+"""Where the platforms' images get eulertop: readable and runnable by every user (the kernel
+runs this Python as an unprivileged user)."""
+
+SETUP_SH = r"""#!/usr/bin/env bash
+# Gradescope runs this once, as root, when it builds the autograder's image.
+# It installs eulertop from the wheel in this zip into __VENV__ (readable by every user: the
+# student's notebook runs its Python as an unprivileged user), its dependencies pinned.
+set -euo pipefail
+cd "$(dirname "$0")"
+PY=""
+for candidate in python3.13 python3.12 python3.11 python3; do
+  if command -v "$candidate" >/dev/null &&
+     "$candidate" -c 'import sys; sys.exit(sys.version_info < (3, 11))'; then
+    PY="$(command -v "$candidate")"; break
+  fi
+done
+export DEBIAN_FRONTEND=noninteractive
+if [ -z "$PY" ]; then
+  apt-get update && apt-get install -y python3.11 python3.11-venv
+  PY="$(command -v python3.11)"
+fi
+if ! "$PY" -m venv __VENV__; then
+  apt-get update && apt-get install -y "$(basename "$PY")-venv"
+  "$PY" -m venv __VENV__
+fi
+__VENV__/bin/python -m pip install --constraint constraints.txt ./__WHEEL__
+chmod -R go+rX __VENV__
+"""
+
+RUN_AUTOGRADER = """#!/usr/bin/env bash
+# Gradescope runs this, as root, for every submission: results in /autograder/results.
+exec __VENV__/bin/python -m grader.hosted.gradescope "$@"
+"""
+
+PL_RUN = """#!/usr/bin/env bash
+# PrairieLearn's external grader runs this (info.json's entrypoint) in the grading image.
+exec __VENV__/bin/python -m grader.hosted.prairielearn "$@"
+"""
+
+DOCKERFILE = """# The grading image of the eulertop question: build it, push it to Docker Hub,
+# and name it in the question's info.json ("externalGradingOptions": {"image": ...}).
+FROM python:3.12-slim
+COPY __WHEEL__ constraints.txt /tmp/eulertop/
+RUN python -m venv __VENV__ \\
+ && __VENV__/bin/python -m pip install --no-cache-dir \\
+      --constraint /tmp/eulertop/constraints.txt /tmp/eulertop/__WHEEL__ \\
+ && chmod -R go+rX __VENV__ && rm -rf /tmp/eulertop
+"""
+
+
+class PackageError(UsageError):
+    """The package cannot be built (bad option, no wheel); nothing is left half written."""
+
+
+# --------------------------------------------------------------------------------------------
+# the wheel and the pins
+
+
+def project_root() -> Path | None:
+    """The source tree eulertop runs from (holding ``pyproject.toml``), if any."""
+    root = Path(__file__).resolve().parents[2]
+    return root if (root / "pyproject.toml").is_file() else None
+
+
+SOURCES = ("pyproject.toml", "README.md", "eulertop", "grader", "problems", "solver")
+"""What of the source tree goes into the wheel (``pyproject.toml``'s packages)."""
+
+
+def build_wheel(dest: Path) -> Path:
+    """``pip wheel --no-deps`` of a copy of the source tree into ``dest``; the wheel's path.
+
+    Built from a copy in ``dest`` so that nothing is written into the source tree (and no
+    stale ``build/`` folder there ends up in the wheel)."""
+    root = project_root()
+    if root is None:
+        raise PackageError("eulertop is not running from its source tree, so no wheel can be "
+                           "built here: pass --wheel FILE (a wheel of this eulertop version)")
+    copy = dest / "source"
+    for name in SOURCES:
+        if (root / name).is_dir():
+            shutil.copytree(root / name, copy / name,
+                            ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+        elif (root / name).is_file():
+            copy.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(root / name, copy / name)
+    base = [sys.executable, "-m", "pip", "wheel", "--no-deps", "--quiet", str(copy), "-w",
+            str(dest)]
+    done = subprocess.run([*base, "--no-build-isolation"], capture_output=True, text=True)
+    if done.returncode != 0:
+        done = subprocess.run(base, capture_output=True, text=True)
+    wheels = sorted(dest.glob("eulertop-*.whl"))
+    if done.returncode != 0 or not wheels:
+        last = (done.stderr.strip().splitlines() or ["no message"])[-1]
+        raise PackageError(f"could not build eulertop's wheel from {root}: {last}; pass "
+                           "--wheel FILE")
+    return wheels[-1]
+
+
+def _name(requirement: str) -> str:
+    return re.split(r"[\s\[<>=!~;(]", requirement.strip(), maxsplit=1)[0]
+
+
+def pinned_requirements(top: str = "eulertop") -> list[str]:
+    """``name==version`` of every installed distribution ``top`` needs (recursively, extras
+    and environment-marked requirements that do not apply here left out), sorted."""
+    from packaging.requirements import Requirement
+
+    pins, todo, seen = {}, [top], set()
+    while todo:
+        name = todo.pop()
+        key = name.lower().replace("_", "-")
+        if key in seen:
+            continue
+        seen.add(key)
+        try:
+            dist = metadata.distribution(name)
+        except metadata.PackageNotFoundError:
+            continue
+        if name != top:
+            pins[dist.metadata["Name"]] = dist.version
+        for text in dist.requires or ():
+            req = Requirement(text)
+            if req.marker is None or req.marker.evaluate({"extra": ""}):
+                todo.append(req.name)
+    return [f"{n}=={v}" for n, v in sorted(pins.items(), key=lambda p: p[0].lower())]
+
+
+# --------------------------------------------------------------------------------------------
+# Gradescope
+
+
+def _text(template: str, **values: str) -> str:
+    for k, v in values.items():
+        template = template.replace(f"__{k}__", v)
+    return template
+
+
+def _add(zf: zipfile.ZipFile, name: str, data: bytes | str, executable: bool = False) -> None:
+    info = zipfile.ZipInfo(name, date_time=(2020, 1, 1, 0, 0, 0))
+    info.external_attr = ((0o755 if executable else 0o644) | stat.S_IFREG) << 16
+    info.compress_type = zipfile.ZIP_DEFLATED
+    zf.writestr(info, data.encode() if isinstance(data, str) else data)
+
+
+def settings(args: argparse.Namespace, limits: Limits, **more: object) -> dict:
+    """The package's :data:`CONFIG`."""
+    return {"sandbox": args.sandbox, "kernel_user": args.kernel_user,
+            "limits": limits_dict(limits), **more}
+
+
+def gradescope_zip(a: Assignment, out: Path, wheel: Path, config: dict) -> Path:
+    """Write Gradescope's autograder zip ``out`` (module docstring); its path."""
+    values = {"VENV": VENV, "WHEEL": wheel.name}
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(f".{out.name}.part")
+    with zipfile.ZipFile(tmp, "w") as zf:
+        _add(zf, "setup.sh", _text(SETUP_SH, **values), executable=True)
+        _add(zf, "run_autograder", _text(RUN_AUTOGRADER, **values), executable=True)
+        _add(zf, wheel.name, wheel.read_bytes())
+        _add(zf, "constraints.txt", "\n".join(pinned_requirements()) + "\n")
+        _add(zf, CONFIG, json.dumps(config, indent=1) + "\n")
+        for name in ("assignment.json", "key.json"):
+            _add(zf, f"assignment/{name}", (a.folder / name).read_bytes())
+    tmp.replace(out)
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# PrairieLearn
+
+NOTEBOOK = "homework.ipynb"
+"""The notebook's name in the student's workspace (``gradedFiles``)."""
+
+WORKSPACE_IMAGE = "prairielearn/workspace-jupyterlab-python"
+WORKSPACE_HOME = "/home/jovyan"
+
+SERVER_PY = '''"""PrairieLearn question code (generated by eulertop package --for prairielearn).
+
+generate(): PrairieLearn's variant seed picks one of the variants in variants/ (each made by
+eulertop's generator); the workspace offers that variant's notebook, and the grader reads
+params["eulertop_variant"] to grade against that variant's key.
+"""
+
+import zlib
+
+VARIANTS = __VARIANTS__
+NOTEBOOK = __NOTEBOOK__
+
+
+def variant_of(seed):
+    text = str(seed)
+    number = int(text) if text.isdigit() else zlib.crc32(text.encode())
+    return VARIANTS[number % len(VARIANTS)]
+
+
+def generate(data):
+    variant = variant_of(data["variant_seed"])
+    data["params"]["eulertop_variant"] = variant
+    data["params"]["_workspace_files"] = [
+        {"name": NOTEBOOK, "questionFile": "variants/" + variant + ".ipynb"},
+    ]
+'''
+
+QUESTION_HTML = """<pl-question-panel>
+  <p>__TITLE__ (variant {{params.eulertop_variant}}): open the workspace, answer every question
+  in <code>__NOTEBOOK__</code>, run it from the top, save it, and submit.</p>
+  <pl-workspace></pl-workspace>
+</pl-question-panel>
+
+<pl-submission-panel>
+  <pl-external-grader-results></pl-external-grader-results>
+  <pl-file-preview></pl-file-preview>
+</pl-submission-panel>
+"""
+
+
+def variant_ids(count: int) -> list[str]:
+    width = max(3, len(str(count - 1)))
+    return [f"v{i:0{width}d}" for i in range(count)]
+
+
+def pool_assignment(a: Assignment, count: int, dest: Path) -> Path:
+    """``count`` variants of ``a`` (its seed and problems) generated into ``dest``."""
+    from problems.generate import generate_assignment
+    from problems.roster import Roster
+    from problems.templates import FAMILIES
+
+    manifest = json.loads((a.folder / "assignment.json").read_text(encoding="utf-8"))
+    roster = Roster(("id",), tuple({"id": v} for v in variant_ids(count)))
+    generate_assignment(roster, dest, FAMILIES, problems=manifest["problems"],
+                        seed=manifest["seed"], title=a.title)
+    return dest
+
+
+def info_json(a: Assignment, args: argparse.Namespace, timeout: int) -> dict:
+    import uuid
+
+    return {
+        "uuid": str(uuid.uuid5(uuid.NAMESPACE_URL, f"eulertop:{a.title}:{args.name}")),
+        "title": a.title, "topic": args.topic, "tags": ["eulertop"], "type": "v3",
+        "gradingMethod": "External",
+        "workspaceOptions": {"image": args.workspace_image, "port": 8080,
+                             "home": WORKSPACE_HOME, "gradedFiles": [NOTEBOOK]},
+        "externalGradingOptions": {"enabled": True, "image": args.image,
+                                   "entrypoint": "/grade/tests/run", "timeout": timeout},
+    }
+
+
+def prairielearn_question(a: Assignment, out: Path, wheel: Path, config: dict,
+                          args: argparse.Namespace) -> Path:
+    """Write the question and the grading image's recipe under ``out`` (module docstring)."""
+    question = out / "questions" / args.name
+    if question.exists():
+        raise PackageError(f"{question} exists already: remove it or choose another --out")
+    limits = Limits(**config["limits"])
+    timeout = min(600, int(limits.total_timeout) + 60)
+    with tempfile.TemporaryDirectory(prefix="eulertop-package-") as tmp:
+        pool = pool_assignment(a, args.variants, Path(tmp) / "pool")
+        staged = Path(tmp) / "question"
+        (staged / "variants").mkdir(parents=True)
+        (staged / "tests" / "assignment").mkdir(parents=True)
+        ids = variant_ids(args.variants)
+        for v in ids:
+            shutil.copyfile(pool / "release" / f"{v}.ipynb", staged / "variants" / f"{v}.ipynb")
+        for name in ("assignment.json", "key.json"):
+            shutil.copyfile(pool / name, staged / "tests" / "assignment" / name)
+        (staged / "tests" / CONFIG).write_text(json.dumps(config, indent=1) + "\n")
+        run = staged / "tests" / "run"
+        run.write_text(_text(PL_RUN, VENV=VENV))
+        run.chmod(0o755)
+        (staged / "info.json").write_text(json.dumps(info_json(a, args, timeout), indent=2)
+                                          + "\n")
+        (staged / "server.py").write_text(_text(SERVER_PY, VARIANTS=json.dumps(ids),
+                                                NOTEBOOK=json.dumps(NOTEBOOK)))
+        (staged / "question.html").write_text(_text(QUESTION_HTML, TITLE=a.title,
+                                                    NOTEBOOK=NOTEBOOK))
+        question.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copytree(staged, question)
+        solutions = out / "solutions" / args.name  # the instructor's, outside the question
+        shutil.rmtree(solutions, ignore_errors=True)
+        shutil.copytree(pool / "solutions", solutions)
+    image = out / "grader-image"
+    image.mkdir(parents=True, exist_ok=True)
+    shutil.copyfile(wheel, image / wheel.name)
+    (image / "constraints.txt").write_text("\n".join(pinned_requirements()) + "\n")
+    (image / "Dockerfile").write_text(_text(DOCKERFILE, VENV=VENV, WHEEL=wheel.name))
+    return question
+
+
+# --------------------------------------------------------------------------------------------
+# the command
+
+
+def add_package_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``eulertop package``."""
+    from grader.cli import seconds_argument, size_argument, whole_number_argument
+
+    parser.add_argument("hw", type=Path, metavar="HW",
+                        help="assignment folder written by 'eulertop generate'")
+    parser.add_argument("--for", dest="platform", required=True, choices=PLATFORMS,
+                        help="the platform to package for")
+    parser.add_argument("--out", type=Path, required=True, metavar="PATH",
+                        help="gradescope: the zip to write (autograder.zip); prairielearn: the "
+                             "folder to write the question and the grading image into")
+    parser.add_argument("--sandbox", choices=MODES, default="auto",
+                        help="how student code is confined there: bubblewrap where it can "
+                             "start, else the container mode (default auto)")
+    parser.add_argument("--kernel-user", metavar="USER",
+                        help="container mode: the unprivileged user notebooks run as "
+                             "(default nobody)")
+    parser.add_argument("--timeout", type=seconds_argument, metavar="S",
+                        help="time limit for a whole notebook (default 120 s)")
+    parser.add_argument("--cell-timeout", type=seconds_argument, metavar="S",
+                        help="time limit for one cell (default 30 s)")
+    parser.add_argument("--max-size", type=size_argument, metavar="SIZE",
+                        help="largest submission read (default 20 MiB)")
+    parser.add_argument("--wheel", type=Path, metavar="FILE",
+                        help="eulertop's wheel to install there (default: built from the "
+                             "source tree with 'pip wheel --no-deps')")
+    parser.add_argument("--visibility", choices=("hidden", "after_due_date", "after_published",
+                                                  "visible"), default="visible",
+                        help="gradescope: when students see each answer's result "
+                             "(default visible)")
+    parser.add_argument("--variants", type=whole_number_argument, default=20, metavar="N",
+                        help="prairielearn: variants made from HW's seed (default 20)")
+    parser.add_argument("--name", default=None, metavar="NAME",
+                        help="prairielearn: the question's folder name (default: HW's name)")
+    parser.add_argument("--topic", default="Rigid-body rotation",
+                        help="prairielearn: the question's topic (default %(default)r)")
+    parser.add_argument("--image", default="YOUR-DOCKERHUB-USER/eulertop-grader", metavar="IMAGE",
+                        help="prairielearn: the grading image built from grader-image/ "
+                             "(default %(default)s)")
+    parser.add_argument("--workspace-image", default=WORKSPACE_IMAGE, metavar="IMAGE",
+                        help="prairielearn: the JupyterLab workspace image (default "
+                             "%(default)s)")
+
+
+def _wheel(args: argparse.Namespace, tmp: Path) -> Path:
+    if args.wheel is None:
+        return build_wheel(tmp)
+    if not args.wheel.is_file() or not args.wheel.name.endswith(".whl"):
+        raise PackageError(f"--wheel {args.wheel}: not a wheel file (.whl)")
+    return args.wheel
+
+
+def package(args: argparse.Namespace) -> Path:
+    """Build the package ``args`` ask for; its path. :class:`PackageError` / ``UsageError``."""
+    from grader.cli import _limits
+
+    a = load_assignment(args.hw)
+    limits = _limits(args)
+    if args.kernel_user is not None and args.kernel_user.strip() in ("root", "0", ""):
+        raise PackageError(f"--kernel-user {args.kernel_user!r}: name an unprivileged user")
+    if args.platform == "gradescope" and args.out.suffix.lower() != ".zip":
+        raise PackageError(f"--out {args.out}: Gradescope takes a .zip file")
+    if args.platform == "prairielearn" and args.out.exists() and not args.out.is_dir():
+        raise PackageError(f"--out {args.out}: not a folder")
+    with tempfile.TemporaryDirectory(prefix="eulertop-wheel-") as tmp:
+        wheel = _wheel(args, Path(tmp))
+        if args.platform == "gradescope":
+            config = settings(args, limits, platform="gradescope", visibility=args.visibility)
+            return gradescope_zip(a, args.out, wheel, config)
+        args.name = args.name or re.sub(r"[^A-Za-z0-9_-]+", "-", Path(args.hw).resolve().name)
+        config = settings(args, limits, platform="prairielearn", notebook=NOTEBOOK)
+        return prairielearn_question(a, args.out, wheel, config, args)
+
+
+def run_package(args: argparse.Namespace) -> int:
+    """Run ``eulertop package``; exit 2 with a message for a user's mistake."""
+    try:
+        path = package(args)
+    except UsageError as e:
+        print(f"eulertop package: {e}", file=sys.stderr)
+        return 2
+    print(f"wrote {path}")
+    for line in _next_steps(args.platform, path):
+        print(line)
+    return 0
+
+
+def _next_steps(platform: str, path: Path) -> Iterable[str]:
+    if platform == "gradescope":
+        yield ("next: Gradescope → your assignment → Configure Autograder → upload this zip "
+               "(base image: Ubuntu 22.04 or newer) → Update Autograder")
+    else:
+        yield (f"next: build and push {path.parent.parent / 'grader-image'} (docker build -t "
+               "USER/eulertop-grader . && docker push USER/eulertop-grader), set that image "
+               f"in {path / 'info.json'}, and commit {path} to your course repository")
