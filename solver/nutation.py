@@ -247,16 +247,21 @@ def _upper_pole_distances(hm, w, B, a, Q, P, b_minus_a):
         S = (p - 2.0 * K / B) / s1
         root = np.sqrt(S * S + 4.0 * p)
         q = 0.5 * (S + np.where(S < 0, -1.0, 1.0) * root)  # the larger-magnitude root
-        other = np.where(q != 0, -p / q, 0.0)
-        pole_s2 = np.where(S >= 0, q, other)
-        pole_d = -np.where(S >= 0, other, q)
-        err_s = _EPS * (p + 2.0 * k_terms / B) / s1 * 8.0 + 8.0 * _EPS * (root + np.abs(S))
+        small = np.where(q != 0, -p / q, 0.0)  # the other root, a quotient: relative accuracy
+        err_big = 8.0 * _EPS * ((p + 2.0 * k_terms / B) / s1 + root + np.abs(S))
+        rel_p = 4.0 * _EPS * (np.abs(Q) + np.abs(a) * hm) / np.abs(b_minus_a) + 4.0 * _EPS
+        rel_small = rel_p + err_big / np.abs(q)
+    up = S >= 0  # q = 1 − u2 (u2 far from the pole) or q = 1 − u3 (u3 far from it)
+    pole_s2 = np.where(up, q, small)
+    pole_d = -np.where(up, small, q)
+    err_pole_s2 = np.where(up, err_big, np.abs(small) * rel_small)
+    err_pole_d = np.where(up, np.abs(small) * rel_small, err_big)
     err_s2 = 8.0 * _EPS * (hm + np.abs(w[:, 1]))
     err_d = 8.0 * _EPS * (hm + np.abs(w[:, 2]))
     exact = b_minus_a == 0
-    good = np.isfinite(pole_s2) & np.isfinite(pole_d) & np.isfinite(err_s)
-    s2 = np.where(good & (exact | (err_s < err_s2)), np.maximum(pole_s2, 0.0), direct_s2)
-    d = np.where(good & (exact | (err_s < err_d)), np.maximum(pole_d, 0.0), direct_d)
+    good = np.isfinite(pole_s2) & np.isfinite(pole_d)
+    s2 = np.where(good & (exact | (err_pole_s2 < err_s2)), np.maximum(pole_s2, 0.0), direct_s2)
+    d = np.where(good & (exact | (err_pole_d < err_d)), np.maximum(pole_d, 0.0), direct_d)
     return s1, s2, d
 
 
