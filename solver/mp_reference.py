@@ -65,7 +65,20 @@ class Reference:
 
 def reference(state: tuple[float, ...], dps: int = DPS) -> Reference:
     """The reference values of ``state = (I1, I3, Mgl, beta0, alpha_dot0, beta_dot0,
-    gamma_dot0)`` (binary floats, taken as exact) at ``dps`` digits."""
+    gamma_dot0)`` (binary floats, taken as exact) with at least ``dps − 25`` correct digits.
+
+    Precision is raised where ``dps`` digits would not do: a turning point at ``1 − u`` from a
+    pole, or a ``Δα`` whose two terms cancel ``C``-fold, need ``log10(1/(1 − u))``, ``log10 C``
+    more digits (the case is recomputed with them).
+    """
+    ref, lost = _reference(state, dps)
+    if lost > dps - 30:
+        ref, _ = _reference(state, int(lost) + 40)
+    return ref
+
+
+def _reference(state, dps: int) -> tuple[Reference, float]:
+    """(the reference at ``dps`` digits, the digits that pole distances and cancellation cost)."""
     with mp.workdps(dps):
         I1, I3, Mgl, b0, ad, bd, gd = (mp.mpf(float(x)) for x in state)
         c, s = mp.cos(b0), mp.sin(b0)
@@ -76,21 +89,74 @@ def reference(state: tuple[float, ...], dps: int = DPS) -> Reference:
         e_prime = I1 * (bd**2 + ad**2 * s**2) / 2 + Mgl * c  # R16
         a, b, A, B = pg / I1, pa / I1, 2 * e_prime / I1, 2 * Mgl / I1  # R17
         u1, u2, u3 = _roots(a, b, A, B)
+        pole = min(1 - u2, 1 + u1)
+        lost = float(-mp.log10(pole)) if pole > 0 else 0.0
         beta1, beta2 = mp.acos(min(u2, 1)), mp.acos(max(u1, -1))
         rates = (_rate(a, b, u2), _rate(a, b, u1))
         sleeping = b0 == 0 and bd == 0 and pg**2 >= 4 * Mgl * I1
         period = _period(u1, u2, u3, B)
         mean = None
         if not sleeping and mp.isfinite(period):
-            mean = _precession_angle(a, b, B, u1, u2, u3) / period
+            angle, size = _precession_angle(a, b, B, u1, u2, u3)
+            mean = angle / period
+            if angle != 0:
+                lost = max(lost, float(mp.log10(size / abs(angle))))
         label = _label(a, b, A, B, u1, u2, rates, sleeping)
-        return Reference(beta1, beta2, period, mean, u2 - u1, rates, label)
+        return Reference(beta1, beta2, period, mean, u2 - u1, rates, label), lost
 
 
 def _roots(a, b, A, B):
+    """Sorted roots of R17's cubic; a double root at a pole (a top at rest on the vertical:
+    ``f(±1) = f'(±1) = 0`` exactly) is deflated exactly, not split by rounding."""
+    for pole in (1, -1):
+        if b == pole * a and A == pole * B:  # f(u) = (1 − u²)(A − Bu) − a²(1 − pole·u)²
+            other = a * a / B - 1 if pole == 1 else 1 - a * a / B
+            return sorted([mp.mpf(pole), mp.mpf(pole), other])
     coeffs = [B, -(A + a * a), 2 * a * b - B, A - b * b]
-    roots = mp.polyroots(coeffs, maxsteps=200, extraprec=2 * mp.mp.prec)
+    polished = _newton_roots(coeffs)
+    if polished is not None:
+        return polished
+    roots = mp.polyroots(coeffs, maxsteps=200, extraprec=mp.mp.prec)
     return sorted(mp.re(r) for r in roots)
+
+
+def _newton_roots(coeffs):
+    """The three real roots by Newton's method from double-precision starts (numpy's companion
+    matrix), accepted only if they are distinct and satisfy Vieta's sum and product to the
+    working precision; None otherwise (then ``polyroots`` decides)."""
+    import numpy as np
+
+    with mp.workdps(20):
+        scaled = [float(c / coeffs[0]) for c in coeffs]
+    starts = np.roots(scaled)
+    if np.any(np.abs(starts.imag) > 0) or not np.all(np.isfinite(starts)):
+        return None
+    roots = []
+    tol = mp.mpf(10) ** (-mp.mp.dps + 5)
+    for x0 in sorted(starts.real):
+        x = mp.mpf(float(x0))
+        for _ in range(60):
+            f = mp.polyval(coeffs, x)
+            df = mp.polyval([3 * coeffs[0], 2 * coeffs[1], coeffs[2]], x)
+            if df == 0:
+                return None
+            step = f / df
+            x -= step
+            if abs(step) <= tol * max(1, abs(x)):
+                break
+        else:
+            return None
+        roots.append(x)
+    roots.sort()
+    scale = max(1, *(abs(r) for r in roots))
+    if min(roots[1] - roots[0], roots[2] - roots[1]) <= mp.mpf(10) ** (-mp.mp.dps / 2) * scale:
+        return None
+    vieta_sum = -coeffs[1] / coeffs[0]
+    vieta_product = -coeffs[3] / coeffs[0]
+    if abs(sum(roots) - vieta_sum) > tol * scale * 10 or abs(
+            roots[0] * roots[1] * roots[2] - vieta_product) > tol * scale**3 * 10:
+        return None
+    return roots
 
 
 def _rate(a, b, u):
@@ -108,20 +174,64 @@ def _period(u1, u2, u3, B):
     if u3 - u2 <= 0:
         return mp.inf
     m = (u2 - u1) / (u3 - u1)
-    return 4 * mp.ellipk(m) / mp.sqrt(B * (u3 - u1))
+    return 4 * _ellipk(m) / mp.sqrt(B * (u3 - u1))
+
+
+def _arb_backend() -> bool:
+    try:
+        import flint  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+USE_ARB = _arb_backend()
+
+
+def _ellipk(m):
+    """Legendre ``K(m)``: Arb (python-flint, rigorous error balls; ~30× faster) if installed,
+    else mpmath — the two agree (``tests/solver/test_fuzz.py``)."""
+    if not USE_ARB:
+        return mp.ellipk(m)
+    from flint import acb, ctx
+
+    ctx.dps = mp.mp.dps + 5
+    return _to_mp(acb.elliptic_k(acb(_to_arb(m))))
+
+
+def _ellippi(n, m):
+    """Legendre complete ``Π(n | m)`` (same backends as :func:`_ellipk`)."""
+    if not USE_ARB:
+        return mp.ellippi(n, m)
+    from flint import acb, ctx
+
+    ctx.dps = mp.mp.dps + 5
+    return _to_mp(acb.elliptic_pi(acb(_to_arb(n)), acb(_to_arb(m))))
+
+
+def _to_arb(x):
+    from flint import arb
+
+    return arb(mp.nstr(x, mp.mp.dps + 5, strip_zeros=False, min_fixed=1, max_fixed=0))
+
+
+def _to_mp(z):
+    value = z.real.mid().str(mp.mp.dps + 5, radius=False)
+    return mp.mpf(value)
 
 
 def _precession_angle(a, b, B, u1, u2, u3):
+    """(Δα, the sum of the magnitudes of its two terms)."""
     g, z = u2 - u1, u3 - u1
     m = g / z
-    total = mp.mpf(0)
+    terms = [mp.mpf(0), mp.mpf(0)]
     if b != a:
         n = g / (1 - u1)
-        total += (b - a) * 2 * mp.ellippi(n, m) / ((1 - u1) * mp.sqrt(z))
+        terms[0] = (b - a) * 2 * _ellippi(n, m) / ((1 - u1) * mp.sqrt(z))
     if b != -a:
         n = -g / (1 + u1)
-        total += (b + a) * 2 * mp.ellippi(n, m) / ((1 + u1) * mp.sqrt(z))
-    return total / mp.sqrt(B)
+        terms[1] = (b + a) * 2 * _ellippi(n, m) / ((1 + u1) * mp.sqrt(z))
+    return (terms[0] + terms[1]) / mp.sqrt(B), (abs(terms[0]) + abs(terms[1])) / mp.sqrt(B)
 
 
 def _label(a, b, A, B, u1, u2, rates, sleeping) -> str:

@@ -18,6 +18,7 @@ import argparse
 import csv
 import itertools
 import math
+import os
 import statistics
 import sys
 import time
@@ -439,15 +440,27 @@ def _summary(results: dict, config: BenchConfig, wall: float) -> str:
 
 
 def add_bench_arguments(parser: argparse.ArgumentParser) -> None:
-    """``eulertop bench [--out DIR] [--quick]``."""
+    """``eulertop bench [--out DIR] [--quick]`` or ``eulertop bench --fuzz N [--seed S]``."""
     parser.add_argument("--out", type=Path, default=Path("bench-results"),
-                        help="directory for the PNG charts, their CSV data and summary.md")
+                        help="directory for the PNG charts, their CSV data and summary.md "
+                        "(with --fuzz: for fuzz.md)")
     parser.add_argument("--quick", action="store_true",
                         help="a reduced sweep (< 1 min; what the tests run)")
+    parser.add_argument("--fuzz", type=int, metavar="N",
+                        help="instead of the charts: fuzz the heavy-top solver (API and batch "
+                        "CLI) on N random tops against the high-precision reference, write "
+                        "OUT/fuzz.md (regions × quantities, worst errors); exit 1 on a failure")
+    parser.add_argument("--seed", type=int, help="seed of the fuzz draw (default: a fresh one, "
+                        "printed)")
+    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1,
+                        help="processes computing the fuzz references (default: all cores)")
 
 
 def run_bench(args: argparse.Namespace) -> int:
-    """Measure everything, write charts, CSVs and ``summary.md`` into ``args.out``."""
+    """Measure everything, write charts, CSVs and ``summary.md`` into ``args.out``; or, with
+    ``--fuzz N``, run :func:`solver.fuzz.run_fuzz`."""
+    if args.fuzz is not None:
+        return _run_fuzz(args)
     import matplotlib
 
     matplotlib.use("Agg")
@@ -490,3 +503,19 @@ def run_bench(args: argparse.Namespace) -> int:
     print(f"eulertop bench: wrote {out}/summary.md and charts in "
           f"{time.perf_counter() - start:.0f} s")
     return 0
+
+
+def _run_fuzz(args: argparse.Namespace) -> int:
+    import secrets
+
+    from solver.fuzz import run_fuzz
+
+    if args.fuzz < 1:
+        print("eulertop bench: --fuzz needs a positive number of cases", file=sys.stderr)
+        return 2
+    seed = args.seed if args.seed is not None else secrets.randbelow(2**31)
+    print(f"eulertop bench: fuzz seed {seed}", flush=True)
+    report = run_fuzz(args.fuzz, seed, jobs=max(1, args.jobs), out=args.out)
+    print(f"eulertop bench: {args.fuzz} cases, seed {seed}, {report.total_failures} failure(s); "
+          f"table in {args.out}/fuzz.md")
+    return 1 if report.total_failures else 0
