@@ -65,22 +65,31 @@ class Reference:
 
 def reference(state: tuple[float, ...], dps: int = DPS) -> Reference:
     """The reference values of ``state = (I1, I3, Mgl, beta0, alpha_dot0, beta_dot0,
-    gamma_dot0)`` (binary floats, taken as exact) with at least ``dps − 25`` correct digits.
+    gamma_dot0)`` (binary floats, taken as exact, or mpmath numbers) with at least ``dps − 25``
+    correct digits.
 
     Precision is raised where ``dps`` digits would not do: a turning point at ``1 − u`` from a
     pole, or a ``Δα`` whose two terms cancel ``C``-fold, need ``log10(1/(1 − u))``, ``log10 C``
     more digits (the case is recomputed with them).
     """
-    ref, lost = _reference(state, dps)
-    if lost > dps - 30:
-        ref, _ = _reference(state, int(lost) + 40)
+    with mp.workdps(30):
+        tilt = mp.mpf(state[3])
+        near = min(abs(tilt), abs(mp.pi - tilt))
+    if 0 < near < 1e-6:  # cos β0 itself must resolve 1 − cos β0 ≈ β0²/2
+        dps = max(dps, int(-2 * mp.log10(near)) + 30)
+    for _ in range(6):
+        ref, lost = _reference(state, dps)
+        if lost <= dps - 30:
+            break
+        dps = max(int(lost) + 40, 2 * dps)
     return ref
 
 
 def _reference(state, dps: int) -> tuple[Reference, float]:
     """(the reference at ``dps`` digits, the digits that pole distances and cancellation cost)."""
     with mp.workdps(dps):
-        I1, I3, Mgl, b0, ad, bd, gd = (mp.mpf(float(x)) for x in state)
+        I1, I3, Mgl, b0, ad, bd, gd = (x if isinstance(x, mp.mpf) else mp.mpf(float(x))
+                                       for x in state)
         c, s = mp.cos(b0), mp.sin(b0)
         if b0 == 0:
             c, s = mp.mpf(1), mp.mpf(0)
@@ -88,11 +97,16 @@ def _reference(state, dps: int) -> tuple[Reference, float]:
         pa = I1 * ad * s**2 + pg * c
         e_prime = I1 * (bd**2 + ad**2 * s**2) / 2 + Mgl * c  # R16
         a, b, A, B = pg / I1, pa / I1, 2 * e_prime / I1, 2 * Mgl / I1  # R17
-        u1, u2, u3 = _roots(a, b, A, B)
-        pole = min(1 - u2, 1 + u1)
-        lost = float(-mp.log10(pole)) if pole > 0 else 0.0
+        u1, u2, u3 = _roots(a, b, A, B, c if bd == 0 else None)
+        # a turning point exactly on a pole needs b = ±a exactly; anything else at or beyond a
+        # pole is the working precision failing to resolve 1 ∓ u: ask for more digits
+        distances = [d for d, reached in ((1 - u2, b == a), (1 + u1, b == -a)) if not reached]
+        pole = min(distances, default=mp.mpf(1))
+        lost = float(-mp.log10(pole)) if pole > 0 else float(2 * dps)
         beta1, beta2 = mp.acos(min(u2, 1)), mp.acos(max(u1, -1))
         rates = (_rate(a, b, u2), _rate(a, b, u1))
+        if bd == 0 and s != 0:  # u0 = cos β0 is a turning point off the poles: α̇ = α̇0 there
+            rates = (ad, rates[1]) if u2 == c else (rates[0], ad) if u1 == c else rates
         sleeping = b0 == 0 and bd == 0 and pg**2 >= 4 * Mgl * I1
         period = _period(u1, u2, u3, B)
         mean = None
@@ -105,14 +119,24 @@ def _reference(state, dps: int) -> tuple[Reference, float]:
         return Reference(beta1, beta2, period, mean, u2 - u1, rates, label), lost
 
 
-def _roots(a, b, A, B):
-    """Sorted roots of R17's cubic; a double root at a pole (a top at rest on the vertical:
-    ``f(±1) = f'(±1) = 0`` exactly) is deflated exactly, not split by rounding."""
+def _roots(a, b, A, B, u0=None):
+    """Sorted roots of R17's cubic. Exact roots are deflated exactly, not found numerically: a
+    double root at a pole (a top at rest on the vertical: ``f(±1) = f'(±1) = 0``), and
+    ``u0 = cos β0`` when ``β̇0 = 0`` (``f(u0) = sin²β0 β̇0² = 0``), so that a steady or nearly
+    steady top's two close roots are not split at the square root of the working precision."""
+    if a == 0 and b == 0:  # the planar pendulum: f(u) = (1 − u²)(A − B u)
+        return sorted([mp.mpf(-1), mp.mpf(1), A / B])
     for pole in (1, -1):
         if b == pole * a and A == pole * B:  # f(u) = (1 − u²)(A − Bu) − a²(1 − pole·u)²
             other = a * a / B - 1 if pole == 1 else 1 - a * a / B
             return sorted([mp.mpf(pole), mp.mpf(pole), other])
     coeffs = [B, -(A + a * a), 2 * a * b - B, A - b * b]
+    if u0 is not None:  # synthetic division by (u − u0), then the quadratic without cancellation
+        q1 = coeffs[1] + B * u0
+        q0 = coeffs[2] + q1 * u0
+        disc = max(q1 * q1 - 4 * B * q0, 0)
+        big = -(q1 + mp.sign(q1) * mp.sqrt(disc)) / 2 if q1 != 0 else mp.sqrt(-B * q0)
+        return sorted([u0, big / B, q0 / big])
     polished = _newton_roots(coeffs)
     if polished is not None:
         return polished
@@ -167,7 +191,11 @@ def _rate(a, b, u):
         return a / (1 + u)
     if b == -a:
         return -a / (1 - u)
-    return (b - a * u) / ((1 - u) * (1 + u))
+    # ½[(b − a)/(1 − u) + (b + a)/(1 + u)]; a root found exactly at a pole (b ∓ a = 0 up to the
+    # working precision) contributes its finite part only
+    plus = (b - a) / (1 - u) if u != 1 else 0
+    minus = (b + a) / (1 + u) if u != -1 else 0
+    return (plus + minus) / 2
 
 
 def _period(u1, u2, u3, B):
@@ -225,10 +253,10 @@ def _precession_angle(a, b, B, u1, u2, u3):
     g, z = u2 - u1, u3 - u1
     m = g / z
     terms = [mp.mpf(0), mp.mpf(0)]
-    if b != a:
+    if b != a and u2 != 1:  # a pole on the path (u2 = 1 exactly) means b = a: no term
         n = g / (1 - u1)
         terms[0] = (b - a) * 2 * _ellippi(n, m) / ((1 - u1) * mp.sqrt(z))
-    if b != -a:
+    if b != -a and u1 != -1:
         n = -g / (1 + u1)
         terms[1] = (b + a) * 2 * _ellippi(n, m) / ((1 + u1) * mp.sqrt(z))
     return (terms[0] + terms[1]) / mp.sqrt(B), (abs(terms[0]) + abs(terms[1])) / mp.sqrt(B)
