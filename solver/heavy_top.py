@@ -12,10 +12,12 @@ Which model for which case
 case               how it is computed
 =================  ===================================================================
 turning points     roots of the cubic in ``w = u − cos β0`` (``solver.nutation``): exact
-                   deflation if ``β̇0 = 0``, Newton + Vieta otherwise; never ``np.roots``
-nutation period    ``4 R_F(0, u3 − u2, u3 − u1)/√B`` (Carlson), NaN if steady/sleeping
-mean precession    ``Δα / T_nut``, ``Δα`` from Carlson ``R_F``/``R_J`` (third kind); the
-                   exact rate ``α̇(β0)`` for steady precession; NaN for a sleeping top
+                   deflation if ``β̇0 = 0``, Newton + Vieta otherwise; never ``np.roots``;
+                   near a pole re-solved in ``v = 1 ∓ u`` (full relative accuracy)
+nutation period    ``4 R_F(0, u3 − u2, u3 − u1)/√B`` (Carlson); its limit if steady/sleeping
+mean precession    ``Δα / T_nut``, ``Δα`` from Carlson ``R_F``/``R_J`` (third kind) in the
+                   form whose terms share one sign (π split off when ``p_α``, ``p_γ``
+                   differ in sign); ``α̇(β0)`` for steady precession; NaN for a sleeping top
 ``u(t)``           Jacobi ``sn²`` with the phase of the initial state
 steady rates       closed form of R21 without cancellation (``solver.steady_precession``)
 =================  ===================================================================
@@ -29,7 +31,10 @@ rounding). ``"cusps"``: ``α̇ = 0`` at a turning point off the poles, i.e. ``b 
 is within 32 ε of its terms (a top released from rest has ``Q = 0`` and ``w = 0`` exactly, so
 that case is exact, not tolerance luck). ``"loops"``: ``α̇`` has opposite signs at the two turning
 points (it is ``(b − a u)/(1 − u²)``, monotone in sign on ``[u1, u2]``). ``"waves"``: otherwise.
-At a pole reached by the top (``β1 = 0``) ``α̇`` is the finite limit ``(b + a)/4``.
+``"revolves"``: the planar pendulum (``p_α = p_γ = 0`` exactly) going over the top — ``u1 = −1``
+and ``u2 = 1`` are exact roots, the axis passes both poles without stopping, so ``β1 = 0`` and
+``β2 = π`` are the extremes of β, not turning points (a swinging pendulum is ``"cusps"``: it stops
+at ``β1``). At a pole reached by the top (``β1 = 0``) ``α̇`` is the finite limit ``(b + a)/4``.
 An unstable sleeping top (``β0 = β̇0 = 0``, ``p_γ² < 4 Mgl I1``) rests on a separatrix:
 ``β1 = 0``, ``β2`` the other root, ``T_nut = inf``, mean precession NaN, type from the α̇ signs.
 """

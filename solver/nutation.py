@@ -25,11 +25,13 @@ initial rates, where nothing cancels::
   ``w1 w2 = −c0/(B w3)``; the discriminant of that quadratic is a sum of two non-negative terms,
   so the two nutation limits — however close — come out to full relative accuracy.
 
-Distances to the poles ``1 ∓ u`` are carried separately (``1 − u0 = 2 sin²(β0/2)``), and where
-``1 − u2`` (or ``1 + u1``) would be a cancelling difference it is taken from the exact
-identities ``(b − a)² = B (1 − u1)(1 − u2)(u3 − 1)`` and ``(b + a)² = B (1 + u1)(1 + u2)(1 + u3)``
-(``f(±1) = −(b ∓ a)²``). Angles are ``β = 2 atan2(√(1 − u), √(1 + u))``: full accuracy at both
-poles.
+Distances to the poles ``1 ∓ u`` are carried separately (``1 − u0 = 2 sin²(β0/2)``). Where
+``1 + u1`` would be a cancelling difference it is taken from the exact identity
+``(b + a)² = B (1 + u1)(1 + u2)(1 + u3)`` (``f(−1) = −(b + a)²``); ``1 − u2`` and ``u3 − 1`` come
+from the cubic re-solved in ``v = 1 − u`` (:func:`_upper_pole_distances`), whose two small roots
+solve a quadratic with a non-negative discriminant — no signed difference, so no NaN. Angles are
+``β = 2 atan2(√(1 − u), √(1 + u))``: full accuracy at both poles. ``b = ±a`` exactly (a top that
+reaches a pole, the planar pendulum) makes the pole an exact root.
 
 The nutation period and the precession angle per period are complete elliptic integrals,
 evaluated with Carlson's symmetric forms (``scipy.special.elliprf``, ``elliprj``); see
@@ -355,8 +357,8 @@ def precession_angle_of(cubic: NutationCubic) -> NDArray[np.float64]:
            Δα = π [sgn(b − a) + sgn(b + a)]
                 + (2/(3√B)) [(b + a) R_J(0,y,z, u3 + 1) − (b − a) R_J(0,y,z, u3 − 1)]
 
-       — the π of each ``J`` is split off exactly (``|b ∓ a| = √(B |f(±1)|/B)``…, since
-       ``(b ∓ a)² = B (1 ∓ u1)(1 ∓ u2)|u3 ∓ 1|``), the π's cancel symbolically, and the two
+       — the π of each ``J`` is split off exactly (``(b ∓ a)² = B (1 ∓ u1)(1 ∓ u2)|u3 ∓ 1|``
+       makes ``|b ∓ a| J±/√B = π − (remainder)``), the π's cancel symbolically, and the two
        remaining terms have one sign. The remainder identity is
        ``∫₀^π dθ / (√d √(d + s)(√d + √(d + s))) = (2/3) R_J(0, y, z, d)`` for ``u = u1 + g
        (1 − cos θ)/2``, ``s = 1 − u``, ``d = u3 − 1`` (and likewise with ``1 + u``, ``u3 + 1``).
