@@ -368,23 +368,39 @@ def precession_angle_of(cubic: NutationCubic) -> NDArray[np.float64]:
     that ``α`` makes there (the average of the two one-sided limits); the planar pendulum
     (``a = b = 0``) has ``Δα = 0``.
     """
-    y, z = _gaps(cubic)
-    w1, w2 = cubic.w[:, 0], cubic.w[:, 1]
-    om1, om2 = cubic.one_minus_u[:, 0], cubic.one_minus_u[:, 1]
-    op1, op2, op3 = cubic.one_plus_u[:, 0], cubic.one_plus_u[:, 1], cubic.one_plus_u[:, 2]
-    bma, bpa, gap = cubic.b_minus_a, cubic.b_plus_a, w2 - w1
-    root_b = np.sqrt(cubic.B)
+    opposite = cubic.b_minus_a * cubic.b_plus_a < 0
+    out = np.empty(cubic.B.shape)
+    same = ~opposite
+    if np.any(same):
+        out[same] = _same_sign_form(cubic, same)
+    if np.any(opposite):
+        out[opposite] = _split_form(cubic, opposite)
+    return out
+
+
+def _same_sign_form(cubic: NutationCubic, rows) -> NDArray[np.float64]:
+    """Form 1 of :func:`precession_angle_of` for the tops ``rows``."""
+    y, z = (g[rows] for g in _gaps(cubic))
+    w1, w2 = cubic.w[rows, 0], cubic.w[rows, 1]
+    om1, om2 = cubic.one_minus_u[rows, 0], cubic.one_minus_u[rows, 1]
+    op1, op2 = cubic.one_plus_u[rows, 0], cubic.one_plus_u[rows, 1]
+    bma, bpa, gap = cubic.b_minus_a[rows], cubic.b_plus_a[rows], w2 - w1
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        rf = elliprf(0.0, y, z)
         value_terms = _ratio(bma, om1) + _ratio(bpa, op2)
         rj_plus = _product(bma, z / om1**2 * elliprj(0.0, y, z, z * om2 / om1))
         rj_minus = _product(bpa, y / op2**2 * elliprj(0.0, y, z, y * op1 / op2))
-        same_sign = 2.0 * rf * value_terms + (2.0 / 3.0) * gap * (rj_plus + rj_minus)
-        split = ((2.0 / 3.0) * (_product(bpa, elliprj(0.0, y, z, op3))
-                                - _product(bma, elliprj(0.0, y, z, cubic.u3_minus_one))))
-    opposite = bma * bpa < 0
-    winding = np.pi * (np.sign(bma) + np.sign(bpa))
-    return np.where(opposite, winding + split / root_b, same_sign / root_b)
+        total = 2.0 * elliprf(0.0, y, z) * value_terms + (2.0 / 3.0) * gap * (rj_plus + rj_minus)
+    return total / np.sqrt(cubic.B[rows])
+
+
+def _split_form(cubic: NutationCubic, rows) -> NDArray[np.float64]:
+    """Form 2 of :func:`precession_angle_of` (π split off) for the tops ``rows``."""
+    y, z = (g[rows] for g in _gaps(cubic))
+    bma, bpa = cubic.b_minus_a[rows], cubic.b_plus_a[rows]
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        split = (2.0 / 3.0) * (_product(bpa, elliprj(0.0, y, z, cubic.one_plus_u[rows, 2]))
+                               - _product(bma, elliprj(0.0, y, z, cubic.u3_minus_one[rows])))
+    return np.pi * (np.sign(bma) + np.sign(bpa)) + split / np.sqrt(cubic.B[rows])
 
 
 def _product(coef, integral):
