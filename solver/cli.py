@@ -10,10 +10,13 @@ Many cases, one JSON object per line in and out, same order, all fields at the t
     eulertop solve --batch CASES.jsonl        # or - for standard input
 
 Each batch line names its scene in ``"scene"`` (or the scene given on the command line applies to
-every line) and may carry an ``"id"``, echoed back. A bad line is answered with
-``{"error": "..."}`` naming the field; the other lines are still answered; the exit status is 1
-if any line failed. A non-finite number is never printed as an answer: quantities that do not
-exist for a case are ``null``.
+every line) and may carry an ``"id"``, echoed back. Every input line gets exactly one output
+line, in order — blank lines, lines that are not UTF-8 or not JSON included: a bad line is
+answered with ``{"error": "..."}`` naming the line or the field, and the other lines are still
+answered. Nothing in a line can stop the batch: an unexpected failure of the solver on one line
+becomes that line's ``{"error": "internal error …"}``. A non-finite number is never printed as an
+answer: quantities that do not exist for a case are ``null``, and the heavy top's
+``"undefined"`` says why. Exit status: ``EXIT_STATUS``.
 """
 
 from __future__ import annotations
@@ -149,6 +152,10 @@ SCENES: dict[str, Scene] = {
 
 RESERVED = ("scene", "id")
 
+EXIT_STATUS = ("0: every line answered; 1: at least one line answered with an \"error\" object "
+               "(all other lines still answered, one output line per input line, in order); "
+               "2: usage error or unreadable input file (nothing solved)")
+
 
 class _FieldError(ValueError):
     def __init__(self, field_name: str, message: str) -> None:
@@ -201,6 +208,8 @@ def _plain(value: Any, name: str) -> Any:
         value = value.tolist()
     if isinstance(value, (list, tuple)):
         return [_plain(v, name) for v in value]
+    if isinstance(value, dict):
+        return {str(k): _plain(v, f"{name}.{k}") for k, v in value.items()}
     if isinstance(value, bool):
         return value
     if isinstance(value, (int, float)):
@@ -245,24 +254,42 @@ def solve_case(case: dict[str, Any], default_scene: str | None = None) -> dict[s
         return _with_id(case, {k: _plain(v, k) for k, v in result.items()})
     except (_FieldError, ParameterError) as exc:
         return _with_id(case, {"error": str(exc)})
+    except Exception as exc:  # one case must never stop a batch
+        return _with_id(case, {"error": _internal(exc)})
+
+
+def _internal(exc: BaseException) -> str:
+    return f"internal error of the solver (please report): {type(exc).__name__}: {exc}"
 
 
 def _solve_heavy_tops(cases: list[dict[str, Any]], params: list[dict[str, Any]]) -> list[dict]:
     """Heavy-top cases in one vectorised call (R14–R21); one by one if any state is invalid,
     so that each bad line gets its own error naming its field."""
     from solver.heavy_top import heavy_top_record, solve_heavy_top_many
-    from solver.parameters import ParameterError
 
     names = SCENES["heavy-top"].required
     try:
         table = solve_heavy_top_many(*(np.array([p[n] for p in params], float) for n in names))
-    except ParameterError:
+    except Exception:  # a bad state (or a solver failure): line by line
         return [solve_case(c, "heavy-top") for c in cases]
-    return [_with_id(c, {k: _plain(v, k) for k, v in heavy_top_record(table, i).items()})
-            for i, c in enumerate(cases)]
+    answers = []
+    for i, c in enumerate(cases):
+        try:
+            answers.append(_with_id(c, {k: _plain(v, k)
+                                        for k, v in heavy_top_record(table, i).items()}))
+        except Exception as exc:
+            answers.append(_with_id(c, {"error": _internal(exc)}))
+    return answers
 
 
-def _parse_line(number: int, line: str) -> dict[str, Any]:
+def _parse_line(number: int, line: str | bytes) -> dict[str, Any]:
+    if isinstance(line, bytes):
+        try:
+            line = line.decode("utf-8")
+        except UnicodeDecodeError:
+            raise _FieldError(f"line {number}", "not UTF-8 text") from None
+    if not line.strip():
+        raise _FieldError(f"line {number}", "blank (expected a JSON object)")
     try:
         case = json.loads(line)
     except json.JSONDecodeError as exc:
@@ -275,14 +302,16 @@ def _parse_line(number: int, line: str) -> dict[str, Any]:
 
 
 def solve_lines(
-    lines: Iterable[str], default_scene: str | None = None, chunk: int = 2048
+    lines: Iterable[str | bytes], default_scene: str | None = None, chunk: int = 2048
 ) -> Iterator[dict]:
-    """Answer a JSON-lines stream, one output object per non-blank input line, in order.
+    """Answer a JSON-lines stream, one output object per input line, in order.
 
-    Lines are read in chunks; the heavy tops of a chunk are solved in one vectorised call (the
-    per-call overhead of numpy on scalars would otherwise dominate), everything else per line.
+    A blank line, a line that is not UTF-8 (``bytes`` input) or not a JSON object is answered
+    with ``{"error": "line N: ..."}``. Lines are read in chunks; the heavy tops of a chunk are
+    solved in one vectorised call (the per-call overhead of numpy on scalars would otherwise
+    dominate), everything else per line.
     """
-    numbered = ((n, line) for n, line in enumerate(lines, start=1) if line.strip())
+    numbered = enumerate(lines, start=1)
     while batch := list(itertools.islice(numbered, chunk)):
         answers: list[dict | None] = [None] * len(batch)
         heavy: list[tuple[int, dict, dict]] = []
@@ -296,6 +325,9 @@ def solve_lines(
                 scene, params = _prepare(case, default_scene)
             except _FieldError as exc:
                 answers[slot] = _with_id(case, {"error": str(exc)})
+                continue
+            except Exception as exc:  # e.g. an unhashable "scene" value
+                answers[slot] = _with_id(case, {"error": _internal(exc)})
                 continue
             if scene.name == "heavy-top":
                 heavy.append((slot, case, params))
@@ -321,7 +353,9 @@ def add_solve_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("scene", nargs="?", choices=list(SCENES), help="the scene to solve")
     parser.add_argument("--batch", metavar="CASES.jsonl",
-                        help="JSON-lines input file, or - for standard input")
+                        help="JSON-lines input file, or - for standard input: one JSON object "
+                        "out per line in, in order, {\"error\": ...} for a bad line. Exit "
+                        f"status: {EXIT_STATUS}".replace("%", "%%"))
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("params", nargs=argparse.REMAINDER, help=argparse.SUPPRESS)
 
@@ -400,22 +434,32 @@ def run_solve(args: argparse.Namespace) -> int:
     return 0
 
 
+def _lines(stream) -> Iterator[str | bytes]:
+    """The lines of a binary or text stream without their line ends (binary: undecoded, so a
+    line that is not UTF-8 is that line's error, not the batch's)."""
+    for line in stream:
+        yield line.rstrip(b"\r\n") if isinstance(line, bytes) else line.rstrip("\r\n")
+
+
 def _run_batch(path: str, default_scene: str | None) -> int:
     try:
-        stream = sys.stdin if path == "-" else open(path, encoding="utf-8")
+        if path == "-":
+            stream = getattr(sys.stdin, "buffer", sys.stdin)
+        else:
+            stream = open(path, "rb")  # closed below
     except OSError as exc:
         print(f"eulertop solve: cannot read {path}: {exc.strerror}", file=sys.stderr)
         return 2
     failed = 0
     try:
-        for answer in solve_lines(stream, default_scene):
+        for answer in solve_lines(_lines(stream), default_scene):
             failed += "error" in answer
             sys.stdout.write(json.dumps(answer) + "\n")
-    except UnicodeDecodeError:
-        print(f"eulertop solve: {path} is not UTF-8 text", file=sys.stderr)
+    except OSError as exc:
+        print(f"eulertop solve: reading {path} failed: {exc}", file=sys.stderr)
         return 2
     finally:
-        if stream is not sys.stdin:
+        if path != "-":
             stream.close()
     if failed:
         print(f"eulertop solve: {failed} line(s) failed (see their \"error\" fields)",

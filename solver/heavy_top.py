@@ -12,10 +12,12 @@ Which model for which case
 case               how it is computed
 =================  ===================================================================
 turning points     roots of the cubic in ``w = u − cos β0`` (``solver.nutation``): exact
-                   deflation if ``β̇0 = 0``, Newton + Vieta otherwise; never ``np.roots``
-nutation period    ``4 R_F(0, u3 − u2, u3 − u1)/√B`` (Carlson), NaN if steady/sleeping
-mean precession    ``Δα / T_nut``, ``Δα`` from Carlson ``R_F``/``R_J`` (third kind); the
-                   exact rate ``α̇(β0)`` for steady precession; NaN for a sleeping top
+                   deflation if ``β̇0 = 0``, Newton + Vieta otherwise; never ``np.roots``;
+                   near a pole re-solved in ``v = 1 ∓ u`` (full relative accuracy)
+nutation period    ``4 R_F(0, u3 − u2, u3 − u1)/√B`` (Carlson); its limit if steady/sleeping
+mean precession    ``Δα / T_nut``, ``Δα`` from Carlson ``R_F``/``R_J`` (third kind) in the
+                   form whose terms share one sign (π split off when ``p_α``, ``p_γ``
+                   differ in sign); ``α̇(β0)`` for steady precession; NaN for a sleeping top
 ``u(t)``           Jacobi ``sn²`` with the phase of the initial state
 steady rates       closed form of R21 without cancellation (``solver.steady_precession``)
 =================  ===================================================================
@@ -29,7 +31,10 @@ rounding). ``"cusps"``: ``α̇ = 0`` at a turning point off the poles, i.e. ``b 
 is within 32 ε of its terms (a top released from rest has ``Q = 0`` and ``w = 0`` exactly, so
 that case is exact, not tolerance luck). ``"loops"``: ``α̇`` has opposite signs at the two turning
 points (it is ``(b − a u)/(1 − u²)``, monotone in sign on ``[u1, u2]``). ``"waves"``: otherwise.
-At a pole reached by the top (``β1 = 0``) ``α̇`` is the finite limit ``(b + a)/4``.
+``"revolves"``: the planar pendulum (``p_α = p_γ = 0`` exactly) going over the top — ``u1 = −1``
+and ``u2 = 1`` are exact roots, the axis passes both poles without stopping, so ``β1 = 0`` and
+``β2 = π`` are the extremes of β, not turning points (a swinging pendulum is ``"cusps"``: it stops
+at ``β1``). At a pole reached by the top (``β1 = 0``) ``α̇`` is the finite limit ``(b + a)/4``.
 An unstable sleeping top (``β0 = β̇0 = 0``, ``p_γ² < 4 Mgl I1``) rests on a separatrix:
 ``β1 = 0``, ``β2`` the other root, ``T_nut = inf``, mean precession NaN, type from the α̇ signs.
 """
@@ -75,6 +80,7 @@ __all__ = [
     "spin_rate",
     "steady_precession_rates",
     "turning_points",
+    "undefined_reasons",
 ]
 
 _EPS = np.finfo(float).eps
@@ -225,6 +231,14 @@ def _sleeping(flat) -> NDArray[np.bool_]:
     return (b0 == 0) & (bd == 0) & sleeping_top_stable(i1, i3, mgl, _omega3(flat))
 
 
+def _revolves(cubic: NutationCubic) -> NDArray[np.bool_]:
+    """Planar pendulum (``p_α = p_γ = 0``) going over the top: ``u`` runs over all of
+    ``[−1, 1]`` (``u1 = −1``, ``u2 = 1`` exact roots, ``u3 = A/B > 1``) and the axis never stops."""
+    planar = (cubic.b_minus_a == 0) & (cubic.b_plus_a == 0)
+    return (planar & (cubic.one_minus_u[:, 1] == 0) & (cubic.one_plus_u[:, 0] == 0)
+            & (cubic.u3_minus_one > 0))
+
+
 def _motion(cubic: NutationCubic, flat) -> NDArray[np.str_]:
     sleeping = _sleeping(flat)
     rates = np.stack([precession_rate_at(cubic, 0), precession_rate_at(cubic, 1)])
@@ -235,6 +249,7 @@ def _motion(cubic: NutationCubic, flat) -> NDArray[np.str_]:
     kind = np.where(rates[0] * rates[1] < 0, "loops", "waves")
     kind = np.where(cusp.any(axis=0), "cusps", kind)
     kind = np.where(cubic.steady, "steady", kind)
+    kind = np.where(_revolves(cubic), "revolves", kind)
     return np.where(sleeping, "sleeping", kind).astype(str)
 
 
@@ -243,15 +258,14 @@ def motion_type(
     alpha_dot0: ArrayLike, beta_dot0: ArrayLike, gamma_dot0: ArrayLike,
 ) -> NDArray[np.str_]:
     """Figure traced by the axis (R18): ``"waves"``, ``"loops"``, ``"cusps"``, ``"steady"``,
-    ``"sleeping"`` — see the module docstring for the tolerance logic.
+    ``"sleeping"``, ``"revolves"`` — see the module docstring for the tolerance logic.
     """
     shape, cubic, flat = _cubic(I1, I3, Mgl, beta0, alpha_dot0, beta_dot0, gamma_dot0)
     return _out(_motion(cubic, flat), shape)
 
 
 def _period(cubic: NutationCubic, flat) -> NDArray[np.float64]:
-    still = cubic.steady | _sleeping(flat)
-    return np.where(still, np.nan, nutation_period_of(cubic))
+    return nutation_period_of(cubic)
 
 
 def nutation_period(
@@ -260,8 +274,11 @@ def nutation_period(
 ) -> NDArray[np.float64]:
     """Nutation period ``T_nut = 4 K(k)/√(B (u3 − u1))`` (R20), s.
 
-    Carlson form ``4 R_F(0, u3 − u2, u3 − u1)/√B``. NaN for steady precession and a sleeping
-    top (no nutation); ``inf`` for an unstable sleeping top at rest (``u2 = u3``).
+    Carlson form ``4 R_F(0, u3 − u2, u3 − u1)/√B``. For steady precession and a sleeping top
+    (no nutation) it is the limit, the period of an infinitesimal nutation about that state
+    (``2π/√(B (u3 − u1))``; for a sleeping top ``2π I1/√(p_γ² − 4 Mgl I1)``, R19); ``inf``
+    for an unstable sleeping top at rest (``u2 = u3``: it leaves the vertical only
+    asymptotically). Never NaN.
     """
     shape, cubic, flat = _cubic(I1, I3, Mgl, beta0, alpha_dot0, beta_dot0, gamma_dot0)
     return _out(_period(cubic, flat), shape)
@@ -283,9 +300,12 @@ def mean_precession_rate(
     """Mean precession rate ``⟨α̇⟩ = Δα / T_nut`` over a nutation period (R20), rad/s.
 
     ``Δα = 2 ∫_{u1}^{u2} (b − a u)/((1 − u²) √f(u)) du`` exactly, with Carlson's ``R_F`` and
-    ``R_J`` (see ``solver.nutation.precession_angle_of``). Steady precession gives its own rate
-    (the limit of the formula); NaN for a sleeping top (``α`` undefined) and for an unstable
-    sleeping top at rest (infinite period).
+    ``R_J`` (see ``solver.nutation.precession_angle_of``, which keeps every term of one sign).
+    Steady precession gives its own rate (the limit of the formula). NaN, with the reason in
+    :func:`undefined_reasons`, for a sleeping top (``α`` is undefined on the vertical, and the
+    limit depends on how the vertical is left) and for an unstable sleeping top at rest
+    (infinite period). A top whose axis passes through a pole gets the mean of its finite
+    ``α̇`` (``α`` jumps by π at the pole; see ``precession_angle_of``).
     """
     shape, cubic, flat = _cubic(I1, I3, Mgl, beta0, alpha_dot0, beta_dot0, gamma_dot0)
     return _out(_mean_rate(cubic, flat, _period(cubic, flat)), shape)
@@ -344,18 +364,25 @@ def solve_heavy_top_many(
 
     Vectorised: one solution of the cubic for all states. Returns 1-D arrays over the
     broadcast (flattened) states: floats with NaN where a quantity does not exist (see
-    :func:`solve_heavy_top`), ``motion`` as str, ``sleeping_stable`` as bool, and
-    ``steady_precession_rates`` as an (n, 2) array ``[slow, fast]`` (NaN when not real).
+    :func:`solve_heavy_top`), ``motion`` as str, ``sleeping_stable`` as bool,
+    ``steady_precession_rates`` as an (n, 2) array ``[slow, fast]`` (NaN when not real), and
+    ``undefined`` (object array of dicts ``{field: reason}``, :func:`undefined_reasons`): every
+    NaN or infinity in the table has its reason there.
     """
     state = (I1, I3, Mgl, beta0, alpha_dot0, beta_dot0, gamma_dot0)
     _, cubic, flat = _cubic(*state)
     i1, i3, mgl, b0 = flat[0], flat[1], flat[2], flat[3]
+    with np.errstate(all="ignore"):  # a non-finite result is explained in "undefined"
+        return _many(cubic, flat, i1, i3, mgl, b0)
+
+
+def _many(cubic, flat, i1, i3, mgl, b0) -> dict[str, NDArray]:
     p_alpha, p_gamma, e_prime = (np.ravel(x) for x in constants_of_motion(*flat))
     motion = _motion(cubic, flat)
     period = _period(cubic, flat)
     sleeping = motion == "sleeping"
     slow, fast = steady_precession_rates(i1, i3, mgl, b0, p_gamma)
-    return {
+    table = {
         "p_alpha": p_alpha,
         "p_gamma": p_gamma,
         "E_prime": e_prime,
@@ -370,6 +397,56 @@ def solve_heavy_top_many(
         "omega3_critical": np.ravel(critical_spin(i1, i3, mgl)),
         "steady_precession_rates": np.stack([np.ravel(slow), np.ravel(fast)], axis=-1),
     }
+    table["undefined"] = undefined_reasons(table)
+    return table
+
+
+# Why a field of solve_heavy_top is None (the only cases in which it is): field → reason.
+REASONS = {
+    "sleeping": "sleeping top: the axis stays on the vertical, where α (so α̇) is undefined",
+    "unstable_rest": ("unstable sleeping top at rest (u2 = u3 = 1): it leaves the vertical only "
+                      "asymptotically, so the nutation period is infinite"),
+    "no_steady": "no real steady precession at beta0 with this p_gamma (p_γ² < 4 I1 Mgl cos β0)",
+    "horizontal": "the fast steady precession of a horizontal axis (cos β0 = 0) is infinite",
+    "overflow": "not finite in double precision: the state's magnitudes are out of range",
+}
+
+
+def undefined_reasons(table: dict[str, NDArray]) -> NDArray[np.object_]:
+    """For each row of :func:`solve_heavy_top_many`'s table, ``{field: reason}`` for every
+    field that has no finite value (``{}`` if none): the documented reasons of ``REASONS``.
+
+    A NaN or infinity in the table is never left unexplained: a non-finite value outside the
+    documented cases is reported as ``REASONS["overflow"]``.
+    """
+    n = len(table["motion"])
+    out = np.empty(n, dtype=object)
+    for i in range(n):
+        out[i] = _row_reasons(table, i)
+    return out
+
+
+def _row_reasons(table, i) -> dict[str, str]:
+    reasons: dict[str, str] = {}
+    sleeping = table["motion"][i] == "sleeping"
+    infinite = not np.isfinite(table["nutation_period"][i])
+    for key in ("alpha_dot_beta1", "alpha_dot_beta2", "nutation_period", "mean_precession_rate",
+                "p_alpha", "p_gamma", "E_prime", "beta1", "beta2"):
+        if np.isfinite(table[key][i]):
+            continue
+        if sleeping and key != "nutation_period":
+            reasons[key] = REASONS["sleeping"]
+        elif infinite and key in ("nutation_period", "mean_precession_rate") and (
+                np.isinf(table["nutation_period"][i])):
+            reasons[key] = REASONS["unstable_rest"]
+        else:
+            reasons[key] = REASONS["overflow"]
+    slow, fast = table["steady_precession_rates"][i]
+    if not np.isfinite(slow):
+        reasons["steady_precession_rates"] = REASONS["no_steady"]
+    elif not np.isfinite(fast):
+        reasons["steady_precession_rates"] = REASONS["horizontal"]
+    return reasons
 
 
 def solve_heavy_top(
@@ -387,9 +464,12 @@ def solve_heavy_top(
         ``sleeping_stable`` (bool, R19: would a vertical spin with this ``ω3`` be stable),
         ``omega3_critical`` (rad/s, R19), ``steady_precession_rates`` (``[slow, fast]`` at
         ``β0`` with this ``p_γ``, R21; ``None`` when not real, ``[slow, None]`` for a horizontal
-        axis). Python floats, str, bool or ``None``: ``None`` where a quantity does not exist or
-        is not finite (the nutation period and mean rate of a steady or sleeping top, α̇ of a
-        sleeping top, the infinite period of an unstable sleeping top at rest).
+        axis), and ``undefined``: ``{field: reason}`` for every field that is ``None`` (``{}``
+        when all exist; reasons from ``REASONS``). Python floats, str, bool, ``None`` or that
+        dict: ``None`` only where a quantity does not exist or is not finite — α̇ and ⟨α̇⟩ of a
+        sleeping top, the infinite period (and so ⟨α̇⟩) of an unstable sleeping top at rest,
+        steady rates that are not real. Steady and sleeping tops have the limit nutation
+        period (infinitesimal nutation); ``motion`` says that they do not nutate.
 
     Raises
     ------
@@ -404,7 +484,8 @@ def solve_heavy_top(
 
 
 def heavy_top_record(table: dict[str, NDArray], i: int) -> dict[str, Any]:
-    """Row ``i`` of :func:`solve_heavy_top_many`'s table as plain Python (None for NaN/inf)."""
+    """Row ``i`` of :func:`solve_heavy_top_many`'s table as plain Python (None for NaN/inf,
+    explained in the row's ``undefined``)."""
     slow, fast = table["steady_precession_rates"][i]
     row: dict[str, Any] = {}
     for key, column in table.items():
@@ -414,8 +495,8 @@ def heavy_top_record(table: dict[str, NDArray], i: int) -> dict[str, Any]:
             row[key] = str(column[i])
         elif key == "sleeping_stable":
             row[key] = bool(column[i])
-        elif key in ("p_alpha", "p_gamma", "E_prime", "beta1", "beta2", "omega3_critical"):
-            row[key] = float(column[i])
+        elif key == "undefined":
+            row[key] = dict(column[i])
         else:
             row[key] = _finite(column[i])
     return row

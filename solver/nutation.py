@@ -25,11 +25,13 @@ initial rates, where nothing cancels::
   ``w1 w2 = −c0/(B w3)``; the discriminant of that quadratic is a sum of two non-negative terms,
   so the two nutation limits — however close — come out to full relative accuracy.
 
-Distances to the poles ``1 ∓ u`` are carried separately (``1 − u0 = 2 sin²(β0/2)``), and where
-``1 − u2`` (or ``1 + u1``) would be a cancelling difference it is taken from the exact
-identities ``(b − a)² = B (1 − u1)(1 − u2)(u3 − 1)`` and ``(b + a)² = B (1 + u1)(1 + u2)(1 + u3)``
-(``f(±1) = −(b ∓ a)²``). Angles are ``β = 2 atan2(√(1 − u), √(1 + u))``: full accuracy at both
-poles.
+Distances to the poles ``1 ∓ u`` are carried separately (``1 − u0 = 2 sin²(β0/2)``). Where
+``1 + u1`` would be a cancelling difference it is taken from the exact identity
+``(b + a)² = B (1 + u1)(1 + u2)(1 + u3)`` (``f(−1) = −(b + a)²``); ``1 − u2`` and ``u3 − 1`` come
+from the cubic re-solved in ``v = 1 − u`` (:func:`_upper_pole_distances`), whose two small roots
+solve a quadratic with a non-negative discriminant — no signed difference, so no NaN. Angles are
+``β = 2 atan2(√(1 − u), √(1 + u))``: full accuracy at both poles. ``b = ±a`` exactly (a top that
+reaches a pole, the planar pendulum) makes the pole an exact root.
 
 The nutation period and the precession angle per period are complete elliptic integrals,
 evaluated with Carlson's symmetric forms (``scipy.special.elliprf``, ``elliprj``); see
@@ -79,7 +81,10 @@ class NutationCubic:
     w : ndarray, shape (n, 3)
         Roots ``u_i − u0``, ascending (``w1 ≤ 0 ≤ w2``, ``w3 ≥ 1 − u0``).
     one_minus_u, one_plus_u : ndarray, shape (n, 3)
-        ``1 − u_i`` and ``1 + u_i`` to full relative accuracy near the poles.
+        ``1 − u_i`` and ``1 + u_i`` to full relative accuracy near the poles (``1 − u3 ≤ 0``
+        is stored as 0: use ``u3_minus_one``).
+    u3_minus_one : ndarray
+        ``u3 − 1 ≥ 0`` to full relative accuracy (0 for the swinging planar pendulum).
     exact_root : ndarray of bool
         ``β̇0 = 0``: ``u0`` itself is a turning point, deflated exactly.
     steady_tolerance : ndarray
@@ -100,6 +105,7 @@ class NutationCubic:
     w: NDArray[np.float64]
     one_minus_u: NDArray[np.float64]
     one_plus_u: NDArray[np.float64]
+    u3_minus_one: NDArray[np.float64]
     exact_root: NDArray[np.bool_]
     steady_tolerance: NDArray[np.float64]
 
@@ -110,9 +116,11 @@ class NutationCubic:
 
     @property
     def beta(self) -> NDArray[np.float64]:
-        """``arccos u_i`` for the three roots (NaN for ``u3 > 1``), shape (n, 3), rad."""
-        with np.errstate(invalid="ignore"):
-            return 2.0 * np.arctan2(np.sqrt(self.one_minus_u), np.sqrt(self.one_plus_u))
+        """``arccos u_i`` of the two turning points ``(u1, u2)``: shape (n, 2), rad.
+
+        ``2 atan2(√(1 − u), √(1 + u))``: full accuracy at both poles.
+        """
+        return 2.0 * np.arctan2(np.sqrt(self.one_minus_u[:, :2]), np.sqrt(self.one_plus_u[:, :2]))
 
     @property
     def steady(self) -> NDArray[np.bool_]:
@@ -171,14 +179,12 @@ def nutation_cubic(
 
     b_minus_a = Q - a * hm
     b_plus_a = Q + a * hp
-    one_minus_u = np.maximum(hm[:, None] - w, 0.0)
-    one_plus_u = np.maximum(hp[:, None] + w, 0.0)
-    one_minus_u[:, 1] = _near_pole(one_minus_u[:, 1], hm, w[:, 1], b_minus_a, a, Q, B,
-                                   one_minus_u[:, 0], w[:, 2] - hm, w[:, 2] + hm)
-    one_plus_u[:, 0] = _near_pole(one_plus_u[:, 0], hp, w[:, 0], b_plus_a, a, Q, B,
-                                  one_plus_u[:, 1], hp + w[:, 2], hp + w[:, 2])
+    s1, s2, d = _upper_pole_distances(hm, w, B, a, Q, P, b_minus_a)
+    t1, t2, t3 = _lower_pole_distances(hp, w, B, a, Q, b_plus_a)
+    one_minus_u = np.stack([s1, s2, np.zeros_like(s1)], axis=1)
+    one_plus_u = np.stack([t1, t2, t3], axis=1)
     return NutationCubic(u0, hm, hp, B, a, Q, b_minus_a, b_plus_a, c0, c1, c2, w,
-                         one_minus_u, one_plus_u, exact, steady_tol)
+                         one_minus_u, one_plus_u, d, exact, steady_tol)
 
 
 def _roots_with_zero(B, c1, c2):
@@ -216,20 +222,69 @@ def _roots_general(B, c0, c1, c2, hm):
     return np.stack([q, p / q, w3], axis=1)
 
 
-def _near_pole(direct, h0, w, b_pm_a, a, Q, B, other, u3_gap, u3_size):
-    """``1 ∓ u`` of the root nearest a pole: the direct difference or the f(±1) identity.
+def _upper_pole_distances(hm, w, B, a, Q, P, b_minus_a):
+    """``1 − u1``, ``1 − u2`` and ``u3 − 1``, each to full relative accuracy (R17).
 
-    ``direct = h0 ∓ w`` loses relative accuracy when the root is much nearer the pole than u0;
-    the identity ``(b ∓ a)² = B (1 ∓ u_other)(1 ∓ u)(|u3 ∓ 1|)`` does not, unless ``b ∓ a`` or
-    the ``u3`` gap cancel. Whichever has the smaller (relative) rounding estimate is used.
+    ``1 − u1 = (1 − u0) − w1`` adds two non-negative numbers. ``1 − u2 = (1 − u0) − w2`` and
+    ``u3 − 1 = w3 − (1 − u0)`` cancel when ``u2`` or ``u3`` lies near the upper pole; there the
+    cubic is solved again in ``v = 1 − u``, whose coefficients come straight from the state::
+
+        f(1 − v) = −B v³ + (2B − C − a²) v² + 2 K v − (b − a)²,
+        C = A − B = P − B (1 − u0),   K = C − a (b − a) = P − a Q + (1 − u0)(a² − B).
+
+    Its roots are ``1 − u1`` (known), ``1 − u2 ≥ 0`` and ``1 − u3 ≤ 0``; by Vieta the last two
+    solve ``v² − S v − p = 0`` with ``p = (b − a)²/(B (1 − u1)) ≥ 0`` and
+    ``S = (p − 2K/B)/(1 − u1)``, whose discriminant ``S² + 4p`` is a sum of non-negative terms:
+    the two pole distances come out with no signed difference at all. Each element keeps the
+    form with the smaller rounding estimate; ``b = a`` exactly (a top that reaches the pole, or
+    the planar pendulum) makes ``p = 0`` and the pole an exact root.
     """
-    err_direct = (h0 + np.abs(w)) / np.maximum(direct, 1e-300)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ident = b_pm_a * b_pm_a / (B * other * u3_gap)
-        err_ident = (2.0 * (np.abs(Q) + np.abs(a) * h0) / np.abs(b_pm_a)
-                     + u3_size / u3_gap + 2.0)
-    use = np.isfinite(ident) & np.isfinite(err_ident) & (err_ident < err_direct)
-    return np.where(use, ident, direct)
+    s1 = hm - w[:, 0]
+    direct_s2 = np.maximum(hm - w[:, 1], 0.0)
+    direct_d = np.maximum(w[:, 2] - hm, 0.0)
+    k_terms = np.abs(P) + np.abs(a * Q) + hm * (a * a + B)
+    K = P - a * Q + hm * (a * a - B)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        p = b_minus_a * b_minus_a / (B * s1)
+        S = (p - 2.0 * K / B) / s1
+        root = np.sqrt(S * S + 4.0 * p)
+        q = 0.5 * (S + np.where(S < 0, -1.0, 1.0) * root)  # the larger-magnitude root
+        small = np.where(q != 0, -p / q, 0.0)  # the other root, a quotient: relative accuracy
+        err_big = 8.0 * _EPS * ((p + 2.0 * k_terms / B) / s1 + root + np.abs(S))
+        rel_p = 4.0 * _EPS * (np.abs(Q) + np.abs(a) * hm) / np.abs(b_minus_a) + 4.0 * _EPS
+        rel_small = rel_p + err_big / np.abs(q)
+    up = S >= 0  # q = 1 − u2 (u2 far from the pole) or q = 1 − u3 (u3 far from it)
+    pole_s2 = np.where(up, q, small)
+    pole_d = -np.where(up, small, q)
+    err_pole_s2 = np.where(up, err_big, np.abs(small) * rel_small)
+    err_pole_d = np.where(up, np.abs(small) * rel_small, err_big)
+    err_s2 = 8.0 * _EPS * (hm + np.abs(w[:, 1]))
+    err_d = 8.0 * _EPS * (hm + np.abs(w[:, 2]))
+    exact = b_minus_a == 0
+    good = np.isfinite(pole_s2) & np.isfinite(pole_d)
+    s2 = np.where(good & (exact | (err_pole_s2 < err_s2)), np.maximum(pole_s2, 0.0), direct_s2)
+    d = np.where(good & (exact | (err_pole_d < err_d)), np.maximum(pole_d, 0.0), direct_d)
+    return s1, s2, d
+
+
+def _lower_pole_distances(hp, w, B, a, Q, b_plus_a):
+    """``1 + u1``, ``1 + u2`` and ``1 + u3`` to full relative accuracy (R17).
+
+    ``1 + u2 = (1 + u0) + w2`` and ``1 + u3 = (1 + u0) + w3`` add non-negative numbers;
+    ``1 + u1 = (1 + u0) + w1`` cancels near the lower pole, where the exact identity
+    ``(b + a)² = B (1 + u1)(1 + u2)(1 + u3)`` (from ``f(−1) = −(b + a)²``) gives it as a
+    quotient of accurate numbers — exactly 0 when ``b = −a`` (a top that reaches the lower
+    pole, the planar pendulum). Each element keeps the form with the smaller rounding estimate.
+    """
+    t2 = hp + w[:, 1]
+    t3 = hp + w[:, 2]
+    direct = np.maximum(hp + w[:, 0], 0.0)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        ident = b_plus_a * b_plus_a / (B * t2 * t3)
+        rel = 4.0 * _EPS * (np.abs(Q) + np.abs(a) * hp) / np.abs(b_plus_a) + 8.0 * _EPS
+    err_direct = 8.0 * _EPS * (hp + np.abs(w[:, 0]))
+    use = (b_plus_a == 0) | (np.isfinite(ident) & (rel * ident < err_direct))
+    return np.where(use, np.where(b_plus_a == 0, 0.0, ident), direct), t2, t3
 
 
 def precession_rate_at(cubic: NutationCubic, i: int) -> NDArray[np.float64]:
@@ -273,41 +328,79 @@ def nutation_period_of(cubic: NutationCubic) -> NDArray[np.float64]:
 
 
 def _gaps(cubic):
-    return cubic.w[:, 2] - cubic.w[:, 1], cubic.w[:, 2] - cubic.w[:, 0]
+    """``u3 − u2 = (u3 − 1) + (1 − u2)`` and ``u3 − u1 = (u3 − 1) + (1 − u1)``: sums of
+    non-negative, fully accurate distances, so neither cancels (not even as ``u2 → u3``)."""
+    d = cubic.u3_minus_one
+    return d + cubic.one_minus_u[:, 1], d + cubic.one_minus_u[:, 0]
 
 
 def precession_angle_of(cubic: NutationCubic) -> NDArray[np.float64]:
-    """Precession ``Δα`` over one nutation period (R20), rad.
+    """Precession ``Δα`` over one nutation period (R20), rad, without cancellation.
 
     ``Δα = 2 ∫_{u1}^{u2} (b − a u) / ((1 − u²) √f) du = [(b − a) J₊ + (b + a) J₋] / √B`` with
     ``J± = ∫ du / ((1 ∓ u) √((u − u1)(u2 − u)(u3 − u)))`` (partial fractions
-    ``(b − au)/(1 − u²) = ½[(b − a)/(1 − u) + (b + a)/(1 + u)]``). The substitution
-    ``u = u1 + (u2 − u1) z/(t + z)`` (for J₊; ``u = u1 + (u2 − u1) t/(t + y)`` for J₋), with
-    ``y = u3 − u2``, ``z = u3 − u1``, maps each onto Carlson's integrals::
+    ``(b − au)/(1 − u²) = ½[(b − a)/(1 − u) + (b + a)/(1 + u)]``). With ``y = u3 − u2``,
+    ``z = u3 − u1``, ``g = u2 − u1`` there are two exact Carlson forms of the same ``Δα``:
 
-        J₊ = [2 R_F(0,y,z) + (2/3) z (u2 − u1)/(1 − u1) R_J(0,y,z, z (1 − u2)/(1 − u1))] / (1 − u1)
-        J₋ = [2 R_F(0,y,z) + (2/3) y (u2 − u1)/(1 + u2) R_J(0,y,z, y (1 + u1)/(1 + u2))] / (1 + u2)
+    1. (``b − a`` and ``b + a`` of one sign, ``|p_α| ≥ |p_γ|``; the substitution
+       ``u = u1 + g z/(t + z)`` for J₊, ``u = u1 + g t/(t + y)`` for J₋)::
 
-    Every term in brackets is positive (no cancellation, unlike ``Π(n, k)`` with ``n → −∞``).
-    The ``R_F`` parts of ``(b − a) J₊`` and ``(b + a) J₋`` are huge and opposite for a fast top;
-    their sum ``2 R_F(0,y,z) [(b − a)/(1 − u1) + (b + a)/(1 + u2)]`` is taken in the closed form
-    ``[Q (2 + u2 − u1) − a (w1 (1 + u0) + w2 (1 − u0))] / ((1 − u1)(1 + u2))``, where nothing
-    large cancels. A pole the top reaches (``u2 = 1`` or ``u1 = −1``) has ``b ∓ a = 0`` and its
-    ``R_J`` term is zero.
+           √B Δα = 2 R_F(0,y,z) [(b − a)/(1 − u1) + (b + a)/(1 + u2)]
+                   + (2/3) g [(b − a) z/(1 − u1)² R_J(0,y,z, z(1 − u2)/(1 − u1))
+                              + (b + a) y/(1 + u2)² R_J(0,y,z, y(1 + u1)/(1 + u2))]
+
+       — every term has the sign of ``b ± a``: nothing cancels.
+    2. (``b − a`` and ``b + a`` of opposite signs, ``|p_γ| > |p_α|``: the axis loops, and for a
+       fast top whose loop passes near a pole the terms of form 1 are ±π each and cancel to
+       the tiny drift)::
+
+           Δα = π [sgn(b − a) + sgn(b + a)]
+                + (2/(3√B)) [(b + a) R_J(0,y,z, u3 + 1) − (b − a) R_J(0,y,z, u3 − 1)]
+
+       — the π of each ``J`` is split off exactly (``(b ∓ a)² = B (1 ∓ u1)(1 ∓ u2)|u3 ∓ 1|``
+       makes ``|b ∓ a| J±/√B = π − (remainder)``), the π's cancel symbolically, and the two
+       remaining terms have one sign. The remainder identity is
+       ``∫₀^π dθ / (√d √(d + s)(√d + √(d + s))) = (2/3) R_J(0, y, z, d)`` for ``u = u1 + g
+       (1 − cos θ)/2``, ``s = 1 − u``, ``d = u3 − 1`` (and likewise with ``1 + u``, ``u3 + 1``).
+
+    Each top uses the form in which its terms share one sign. A top whose axis passes through a
+    pole (``b = ±a``, ``sgn 0 = 0``) has the mean of the finite ``α̇`` between the jumps of π
+    that ``α`` makes there (the average of the two one-sided limits); the planar pendulum
+    (``a = b = 0``) has ``Δα = 0``.
     """
-    y, z = _gaps(cubic)
-    w1, w2 = cubic.w[:, 0], cubic.w[:, 1]
-    om1, om2 = cubic.one_minus_u[:, 0], cubic.one_minus_u[:, 1]
-    op1, op2 = cubic.one_plus_u[:, 0], cubic.one_plus_u[:, 1]
-    bma, bpa, gap = cubic.b_minus_a, cubic.b_plus_a, w2 - w1
-    # (b − a)/(1 − u1) + (b + a)/(1 + u2), whose terms cancel for a fast top, in closed form.
-    value_terms = (cubic.Q * (2.0 + gap) - cubic.a * (w1 * cubic.one_plus_u0
-                                                      + w2 * cubic.one_minus_u0)) / (om1 * op2)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    opposite = cubic.b_minus_a * cubic.b_plus_a < 0
+    out = np.empty(cubic.B.shape)
+    same = ~opposite
+    if np.any(same):
+        out[same] = _same_sign_form(cubic, same)
+    if np.any(opposite):
+        out[opposite] = _split_form(cubic, opposite)
+    return out
+
+
+def _same_sign_form(cubic: NutationCubic, rows) -> NDArray[np.float64]:
+    """Form 1 of :func:`precession_angle_of` for the tops ``rows``."""
+    y, z = (g[rows] for g in _gaps(cubic))
+    w1, w2 = cubic.w[rows, 0], cubic.w[rows, 1]
+    om1, om2 = cubic.one_minus_u[rows, 0], cubic.one_minus_u[rows, 1]
+    op1, op2 = cubic.one_plus_u[rows, 0], cubic.one_plus_u[rows, 1]
+    bma, bpa, gap = cubic.b_minus_a[rows], cubic.b_plus_a[rows], w2 - w1
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        value_terms = _ratio(bma, om1) + _ratio(bpa, op2)
         rj_plus = _product(bma, z / om1**2 * elliprj(0.0, y, z, z * om2 / om1))
         rj_minus = _product(bpa, y / op2**2 * elliprj(0.0, y, z, y * op1 / op2))
-    total = 2.0 * elliprf(0.0, y, z) * value_terms + (2.0 / 3.0) * gap * (rj_plus + rj_minus)
-    return total / np.sqrt(cubic.B)
+        total = 2.0 * elliprf(0.0, y, z) * value_terms + (2.0 / 3.0) * gap * (rj_plus + rj_minus)
+    return total / np.sqrt(cubic.B[rows])
+
+
+def _split_form(cubic: NutationCubic, rows) -> NDArray[np.float64]:
+    """Form 2 of :func:`precession_angle_of` (π split off) for the tops ``rows``."""
+    y, z = (g[rows] for g in _gaps(cubic))
+    bma, bpa = cubic.b_minus_a[rows], cubic.b_plus_a[rows]
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        split = (2.0 / 3.0) * (_product(bpa, elliprj(0.0, y, z, cubic.one_plus_u[rows, 2]))
+                               - _product(bma, elliprj(0.0, y, z, cubic.u3_minus_one[rows])))
+    return np.pi * (np.sign(bma) + np.sign(bpa)) + split / np.sqrt(cubic.B[rows])
 
 
 def _product(coef, integral):

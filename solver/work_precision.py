@@ -18,6 +18,7 @@ import argparse
 import csv
 import itertools
 import math
+import os
 import statistics
 import sys
 import time
@@ -75,16 +76,18 @@ class BenchConfig:
     drift_steps_per_period: int = 25
     drift_samples: int = 60
     radau_drift_periods: int = 1000  # Radau at 1e4 periods alone took 7 min (measured)
+    samples: int = 8  # sampled times per work-precision error (never period multiples)
+    horizons: tuple[int, ...] = (1, 10, 100, 1000)  # periods, for the scenes table
 
     @classmethod
     def full(cls) -> BenchConfig:
-        return cls(100, 50, 10_000, tuple(10.0 ** -np.arange(3, 14)), 1e-9,
+        return cls(100, 50, 10_000, tuple(10.0 ** -np.arange(3, 15)), 1e-9,
                    (10, 20, 40, 80, 160, 320, 640))
 
     @classmethod
     def quick(cls) -> BenchConfig:
         return cls(10, 5, 100, (1e-3, 1e-6, 1e-9, 1e-12), 1e-6, (20, 80, 320),
-                   drift_samples=20)
+                   drift_samples=20, samples=4, horizons=(1, 10))
 
 
 # --- independent references (mpmath, 40 digits) ---------------------------------------------
@@ -164,25 +167,62 @@ def _controls(method: str, period: float, config: BenchConfig) -> list[float | N
     return [None]
 
 
-def work_precision(scene, period: float, n_periods: int, reference: np.ndarray | float,
-                   config: BenchConfig) -> list[dict]:
-    """Error at ``n_periods · period`` against ``reference``, with cost, for every method that
-    answers ``scene`` and every control of the sweep. Error: max-norm of ω's error over |ω0|
-    (free body), ``|Δ cos β|`` (heavy body)."""
-    times = np.array([0.0, n_periods * period])
+SAMPLE_PHASE = 0.3819660112501051  # (3 − √5)/2: sample times are never period multiples
+
+
+def sample_times(period: float, n_periods: float, samples: int) -> np.ndarray:
+    """``samples`` times spread over ``(0, n_periods · period)``, each at a fraction
+    ``SAMPLE_PHASE`` past a whole number of periods' grid (never a period multiple, where
+    periodic errors vanish and would flatter a method), the last one within the horizon."""
+    k = np.arange(samples) + SAMPLE_PHASE
+    return period * n_periods * k / samples
+
+
+def work_precision(scene, period: float, n_periods: int, reference: np.ndarray,
+                   config: BenchConfig, times: np.ndarray | None = None) -> list[dict]:
+    """Error over sampled times against ``reference`` (one row per time), with cost, for every
+    method that answers ``scene`` and every control of the sweep.
+
+    Error: the maximum over the sampled ``times`` (default ``sample_times``) of ``|ω(t) −
+    ω_ref(t)|_∞ / |ω0|`` (free body) or ``|cos β(t) − cos β_ref(t)|`` (heavy body) — named
+    ``ERROR_NAMES[kind]`` on the charts.
+    """
+    if times is None:
+        times = sample_times(period, n_periods, config.samples)
+    grid = np.r_[0.0, times]
     scale = np.linalg.norm(scene.omega0) if isinstance(scene, FreeBody) else 1.0
     rows = []
     for name, method in METHODS.items():
         if scene.kind not in method.kinds:
             continue
         for control in _controls(name, period, config):
-            traj, seconds, repeats = _timed(lambda n=name, c=control: solve(scene, times, n, c))
-            error = (float(np.max(np.abs(traj.y[-1] - reference))) / scale
-                     if traj.success and len(traj.t) == 2 else math.nan)
+            traj, seconds, repeats = _timed(lambda n=name, c=control: solve(scene, grid, n, c))
+            error = (float(np.max(np.abs(np.asarray(traj.y[1:]) - reference))) / scale
+                     if traj.success and len(traj.t) == len(grid) else math.nan)
             rows.append({"method": name, "control": control, "error": error,
                          "seconds": seconds, "repeats": repeats, "nfev": traj.nfev,
                          "nsteps": traj.nsteps, "success": traj.success})
     return rows
+
+
+ERROR_NAMES = {
+    "free": "max over sampled t of |ω(t) − ω_ref(t)|∞ / |ω0|",
+    "heavy": "max over sampled t of |cos β(t) − cos β_ref(t)|",
+}
+
+
+def stall_points(rows: list[dict]) -> dict[str, dict]:
+    """For each adaptive method, the smallest error its sweep reached and at which control:
+    where tightening stops paying (the method stalls) is read off here, not guessed."""
+    out = {}
+    for name in dict.fromkeys(r["method"] for r in rows):
+        pts = [r for r in rows if r["method"] == name and r["control"] is not None
+               and np.isfinite(r["error"])]
+        if pts:
+            best = min(pts, key=lambda r: r["error"])
+            out[name] = {"error": best["error"], "control": best["control"],
+                         "tightest": min(r["control"] for r in pts)}
+    return out
 
 
 def _np_roots_betas(state) -> tuple[float, float]:
@@ -274,7 +314,9 @@ def invariant_drift(scene: FreeBody, period: float, config: BenchConfig) -> list
             continue
         last = min(config.drift_periods, config.radau_drift_periods) if name == "Radau" else (
             config.drift_periods)
-        times = period * np.unique(np.round(np.geomspace(1.0, last, config.drift_samples)))
+        # never at period multiples (where a periodic energy error vanishes): + SAMPLE_PHASE
+        times = period * (np.unique(np.round(np.geomspace(1.0, last, config.drift_samples)))
+                          - 1 + SAMPLE_PHASE)
         control = {"rtol": config.drift_rtol, "step": period / config.drift_steps_per_period,
                    None: None}[method.control]
         start = time.perf_counter()
@@ -285,6 +327,69 @@ def invariant_drift(scene: FreeBody, period: float, config: BenchConfig) -> list
             rows.append({"method": name, "control": control, "periods": t / period,
                          "energy_error": float(dT), "L2_error": float(dL),
                          "seconds_total": seconds})
+    return rows
+
+
+def _near_pole_scene() -> HeavyBody:
+    """A stable spinning top (ω3 = 10 > ω_c) whose axis passes within ~3e-4 rad of the vertical
+    (p_α = p_γ (1 + 1e-3))."""
+    b0, w3 = 0.3, 10.0
+    ad0 = 0.6 * w3 * (1 - math.cos(b0)) / math.sin(b0) ** 2 * (1 + 1e-3)
+    return HeavyBody(1.0, 1.0, 0.6, 1.0, b0, ad0, 0.0, w3 - ad0 * math.cos(b0))
+
+
+def _separatrix_scene() -> FreeBody:
+    """I = (1, 2, 3), ω0 = (1, 0, w3) with L² − 2T I2 = 1e-6 relative above the separatrix
+    (``I1 (I2 − I1) w1² = I3 (I3 − I2) w3²`` at ``w3 = 1/√3``)."""
+    return FreeBody(1.0, 2.0, 3.0, (1.0, 0.0, (1 + 1e-6) / math.sqrt(3.0)))
+
+
+def scene_states() -> dict[str, FreeBody | HeavyBody]:
+    """The initial states of the scenes table: generic, near a pole, near the separatrix, fast."""
+    return {
+        "heavy, generic": HEAVY_SCENE,
+        "heavy, near the vertical": _near_pole_scene(),
+        "heavy, fast (ω3 = 200)": HeavyBody(1.0, 1.0, 0.6, 1.0, 0.8, 0.0, 0.1, 200.0),
+        "free, generic": FREE_SCENE,
+        "free, near the separatrix": _separatrix_scene(),
+    }
+
+
+def _period_of(scene) -> float:
+    if isinstance(scene, FreeBody):
+        return float(asymmetric_top_period(scene.I1, scene.I2, scene.I3, scene.omega0))
+    return float(nutation_period(*scene.heavy_top_state()))
+
+
+def _reference_at(scene, times: np.ndarray) -> np.ndarray:
+    if isinstance(scene, FreeBody):
+        return np.array([free_reference(scene, float(t)) for t in times])
+    return np.array([heavy_reference(scene, float(t)) for t in times])
+
+
+SCENE_RTOL = 1e-13
+
+
+def scenes_table(config: BenchConfig) -> list[dict]:
+    """DOP853 at rtol ``SCENE_RTOL`` and the exact model, per initial state and horizon
+    (``config.horizons`` periods), error over ``config.samples`` sampled times."""
+    rows = []
+    for label, scene in scene_states().items():
+        period = _period_of(scene)
+        exact = choose_model(scene)
+        for horizon in config.horizons:
+            times = sample_times(period, horizon, config.samples)
+            reference = _reference_at(scene, times)
+            grid = np.r_[0.0, times]
+            scale = np.linalg.norm(scene.omega0) if isinstance(scene, FreeBody) else 1.0
+            for method, control in (("DOP853", SCENE_RTOL), (exact, None)):
+                traj, seconds, _ = _timed(lambda m=method, c=control, sc=scene, g=grid:
+                                          solve(sc, g, m, c))
+                error = (float(np.max(np.abs(np.asarray(traj.y[1:]) - reference))) / scale
+                         if traj.success else math.nan)
+                rows.append({"scene": label, "periods": horizon, "method": method,
+                             "control": control, "error": error, "seconds": seconds,
+                             "nfev": traj.nfev})
     return rows
 
 
@@ -330,7 +435,8 @@ def _write_csv(path: Path, rows: list[dict]) -> None:
         writer.writerows(rows)
 
 
-def _plot_work_precision(plt, rows, cost: str, title: str, path: Path) -> None:
+def _plot_work_precision(plt, rows, cost: str, title: str, path: Path,
+                         error_name: str = "error") -> None:
     fig, ax = plt.subplots(figsize=(7, 5))
     for name in dict.fromkeys(r["method"] for r in rows):
         # in sweep order (loose → tight), not sorted by cost: a noisy timing must not reorder
@@ -342,7 +448,13 @@ def _plot_work_precision(plt, rows, cost: str, title: str, path: Path) -> None:
         ax.loglog(x, np.maximum(y, 1e-17), "o-" if len(x) > 1 else "*", label=name,
                   markersize=5 if len(x) > 1 else 12)
     ax.set_xlabel({"seconds": "median wall time (s)", "nfev": "right-hand-side evaluations"}[cost])
-    ax.set_ylabel("error at final time")
+    ax.set_ylabel(error_name)
+    stall = stall_points(rows).get("DOP853")
+    if stall is not None:
+        ax.axhline(stall["error"], color="grey", lw=0.6, ls=":")
+        ax.annotate(f"DOP853's floor {stall['error']:.1e} (rtol {stall['control']:.0e}; "
+                    f"swept to {stall['tightest']:.0e})", xy=(0.02, 0.02),
+                    xycoords="axes fraction", fontsize=7)
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
@@ -363,7 +475,8 @@ def _plot_drift(plt, rows, path: Path) -> None:
         ax.set_ylabel(label)
         ax.grid(True, which="both", alpha=0.3)
     axes[0].legend(fontsize=8)
-    fig.suptitle("Invariant drift, free asymmetric top (floor 1e-17 = exact to rounding)")
+    fig.suptitle("Invariant drift, free asymmetric top, sampled off period multiples "
+                 "(floor 1e-17 = exact to rounding)")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -404,26 +517,39 @@ def _summary(results: dict, config: BenchConfig, wall: float) -> str:
            "",
            f"Free asymmetric top {FREE_SCENE} over {config.free_periods} periods of ω; heavy top "
            f"{HEAVY_SCENE} over {config.heavy_periods} nutation periods. Errors against mpmath "
-           "(40 digits) evaluations of R10 / R20. Times: median of repeats, one machine, one run. "
-           f"Total bench wall time {wall:.0f} s.", ""]
+           "(40 digits) evaluations of R10 / R20 at "
+           f"{config.samples} sampled times, none a period multiple (t_k = (k + {SAMPLE_PHASE:.3f})"
+           f" × horizon / {config.samples}): free top {ERROR_NAMES['free']}; heavy top "
+           f"{ERROR_NAMES['heavy']}. Times: median of repeats, one machine (2 shared cores), one "
+           f"run. Total bench wall time {wall:.0f} s. Every number here is written by this run.",
+           ""]
     for key, title in (("free", "free asymmetric top"), ("heavy", "heavy symmetric top")):
         rows = results[key]
         out += [f"## Ranking at equal accuracy — {title}", ""]
-        for target in (1e-6, 1e-10):
+        for target in (1e-6, 1e-10, 1e-12):
             ranked = rank_at_accuracy(rows, target)
             fastest = ranked[0]["seconds"]
             for r in ranked:
                 r["× fastest"] = r["seconds"] / fastest
             out += [f"Error ≤ {target:g}:", "", _table(ranked, ["method", "seconds", "nfev",
                                                              "× fastest"]), ""]
+        stalls = [{"method": k, **v} for k, v in stall_points(rows).items()]
+        out += ["Smallest error each adaptive method reached, at which rtol, and the tightest "
+                "rtol swept (a floor above the tightest rtol's error is where it stalls):", "",
+                _table(stalls, ["method", "error", "control", "tightest"]), ""]
         exact = [r for r in rows if r["control"] is None]
-        out += ["Exact models (error vs mpmath, time for the final time):", "",
+        out += ["Exact models (error vs mpmath over the sampled times, time for all of them):", "",
                 _table(exact, ["method", "error", "seconds"]), "",
                 f"![work-precision {key}](wp_{key}_time.png) ![](wp_{key}_nfev.png)", ""]
+    out += [f"## Initial states × horizons (DOP853 at rtol {SCENE_RTOL:g} against the exact "
+            "model; error over the sampled times)", "",
+            _table(results["scenes"], ["scene", "periods", "method", "error", "seconds",
+                                       "nfev"]), ""]
     out += ["## Turning points", "", _table(results["turning"],
                                              ["case", "method", "error_rad", "seconds"]), "",
             "![turning points](turning_points.png)", "",
-            f"## Invariant drift over {config.drift_periods} periods", "",
+            f"## Invariant drift over {config.drift_periods} periods (sampled {SAMPLE_PHASE:.3f} "
+            "of a period past log-spaced whole periods)", "",
             f"(adaptive methods at rtol {config.drift_rtol:g}; fixed-step at period/"
             f"{config.drift_steps_per_period}; Radau only to "
             f"{min(config.drift_periods, config.radau_drift_periods)} periods; the table shows "
@@ -439,15 +565,27 @@ def _summary(results: dict, config: BenchConfig, wall: float) -> str:
 
 
 def add_bench_arguments(parser: argparse.ArgumentParser) -> None:
-    """``eulertop bench [--out DIR] [--quick]``."""
+    """``eulertop bench [--out DIR] [--quick]`` or ``eulertop bench --fuzz N [--seed S]``."""
     parser.add_argument("--out", type=Path, default=Path("bench-results"),
-                        help="directory for the PNG charts, their CSV data and summary.md")
+                        help="directory for the PNG charts, their CSV data and summary.md "
+                        "(with --fuzz: for fuzz.md)")
     parser.add_argument("--quick", action="store_true",
                         help="a reduced sweep (< 1 min; what the tests run)")
+    parser.add_argument("--fuzz", type=int, metavar="N",
+                        help="instead of the charts: fuzz the heavy-top solver (API and batch "
+                        "CLI) on N random tops against the high-precision reference, write "
+                        "OUT/fuzz.md (regions × quantities, worst errors); exit 1 on a failure")
+    parser.add_argument("--seed", type=int, help="seed of the fuzz draw (default: a fresh one, "
+                        "printed)")
+    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1,
+                        help="processes computing the fuzz references (default: all cores)")
 
 
 def run_bench(args: argparse.Namespace) -> int:
-    """Measure everything, write charts, CSVs and ``summary.md`` into ``args.out``."""
+    """Measure everything, write charts, CSVs and ``summary.md`` into ``args.out``; or, with
+    ``--fuzz N``, run :func:`solver.fuzz.run_fuzz`."""
+    if args.fuzz is not None:
+        return _run_fuzz(args)
     import matplotlib
 
     matplotlib.use("Agg")
@@ -460,13 +598,16 @@ def run_bench(args: argparse.Namespace) -> int:
     free_period = float(asymmetric_top_period(FREE_SCENE.I1, FREE_SCENE.I2, FREE_SCENE.I3,
                                               FREE_SCENE.omega0))
     heavy_period = float(nutation_period(*HEAVY_SCENE.heavy_top_state()))
+    free_times = sample_times(free_period, config.free_periods, config.samples)
+    heavy_times = sample_times(heavy_period, config.heavy_periods, config.samples)
     stages = {
         "free": ("free asymmetric top, work-precision", lambda: work_precision(
             FREE_SCENE, free_period, config.free_periods,
-            free_reference(FREE_SCENE, config.free_periods * free_period), config)),
+            _reference_at(FREE_SCENE, free_times), config, free_times)),
         "heavy": ("heavy top, work-precision", lambda: work_precision(
             HEAVY_SCENE, heavy_period, config.heavy_periods,
-            heavy_reference(HEAVY_SCENE, config.heavy_periods * heavy_period), config)),
+            _reference_at(HEAVY_SCENE, heavy_times), config, heavy_times)),
+        "scenes": ("initial states × horizons", lambda: scenes_table(config)),
         "turning": ("turning points, four ways", turning_point_methods),
         "drift": ("invariant drift", lambda: invariant_drift(FREE_SCENE, free_period, config)),
     }
@@ -481,7 +622,8 @@ def run_bench(args: argparse.Namespace) -> int:
         for cost in ("seconds", "nfev"):
             name = "time" if cost == "seconds" else cost
             _plot_work_precision(plt, results[key], cost, f"Work-precision, {key} top",
-                                 out / f"wp_{key}_{name}.png")
+                                 out / f"wp_{key}_{name}.png", ERROR_NAMES[key])
+    _write_csv(out / "scenes.csv", results["scenes"])
     _write_csv(out / "turning_points.csv", results["turning"])
     _plot_turning_points(plt, results["turning"], out / "turning_points.png")
     _write_csv(out / "drift.csv", results["drift"])
@@ -490,3 +632,19 @@ def run_bench(args: argparse.Namespace) -> int:
     print(f"eulertop bench: wrote {out}/summary.md and charts in "
           f"{time.perf_counter() - start:.0f} s")
     return 0
+
+
+def _run_fuzz(args: argparse.Namespace) -> int:
+    import secrets
+
+    from solver.fuzz import run_fuzz
+
+    if args.fuzz < 1:
+        print("eulertop bench: --fuzz needs a positive number of cases", file=sys.stderr)
+        return 2
+    seed = args.seed if args.seed is not None else secrets.randbelow(2**31)
+    print(f"eulertop bench: fuzz seed {seed}", flush=True)
+    report = run_fuzz(args.fuzz, seed, jobs=max(1, args.jobs), out=args.out)
+    print(f"eulertop bench: {args.fuzz} cases, seed {seed}, {report.total_failures} failure(s); "
+          f"table in {args.out}/fuzz.md")
+    return 1 if report.total_failures else 0

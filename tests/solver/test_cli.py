@@ -19,7 +19,7 @@ HEAVY = {"I1": 2.0e-4, "I3": 1.0e-4, "Mgl": 0.02, "beta0": 0.5,
          "alpha_dot0": 0.3, "beta_dot0": 0.0, "gamma_dot0": 150.0}
 HEAVY_OUT = ("p_alpha", "p_gamma", "E_prime", "beta1", "beta2", "alpha_dot_beta1",
              "alpha_dot_beta2", "nutation_period", "mean_precession_rate", "motion",
-             "sleeping_stable", "omega3_critical", "steady_precession_rates")
+             "sleeping_stable", "omega3_critical", "steady_precession_rates", "undefined")
 
 
 def run_batch(lines: list[str], monkeypatch, capsys, *extra: str) -> tuple[int, list[dict]]:
@@ -100,7 +100,12 @@ def test_nothing_non_finite_is_printed_sleeping_top(monkeypatch, capsys):
     assert status == 0
     assert answer["motion"] == "sleeping" and answer["sleeping_stable"] is True
     assert answer["beta1"] == 0.0 and answer["beta2"] == 0.0
-    assert answer["nutation_period"] is None
+    # no nutation: the period is the limit, 2π I1/√(p_γ² − 4 I1 Mgl) (R19's small oscillation)
+    pg = HEAVY["I3"] * 400.0
+    assert answer["nutation_period"] == pytest.approx(
+        2 * math.pi * HEAVY["I1"] / math.sqrt(pg**2 - 4 * HEAVY["I1"] * HEAVY["Mgl"]), rel=1e-12)
+    assert answer["mean_precession_rate"] is None
+    assert "vertical" in answer["undefined"]["mean_precession_rate"]
     numbers = [v for v in answer.values() if isinstance(v, float)]
     assert numbers and all(math.isfinite(v) for v in numbers)
 

@@ -345,7 +345,9 @@ def test_solve_heavy_top_dict():
         "sleeping_stable",
         "omega3_critical",
         "steady_precession_rates",
+        "undefined",
     ]
+    assert out["undefined"] == {}
     assert all(type(out[k]) is float for k in ("p_alpha", "beta1", "nutation_period"))
     assert out["motion"] == "cusps" and out["sleeping_stable"] is True
     assert out["omega3_critical"] == pytest.approx(40.0, rel=1e-15)
@@ -353,15 +355,40 @@ def test_solve_heavy_top_dict():
     assert isinstance(out["steady_precession_rates"], list)
     sleeping = solve_heavy_top(*TOY, 0.0, 0.0, 0.0, 150.0)
     assert sleeping["beta1"] == sleeping["beta2"] == 0.0
-    assert sleeping["nutation_period"] is None and sleeping["mean_precession_rate"] is None
-    steady = solve_heavy_top(*_steady(0.5, 150.0, 0))
-    assert steady["nutation_period"] is None and steady["motion"] == "steady"
+    # the limit: period of an infinitesimal nutation about the vertical, 2π I1/√(p_γ² − 4 I1 Mgl)
+    pg = TOY[1] * 150.0
+    assert sleeping["nutation_period"] == pytest.approx(
+        2 * np.pi * TOY[0] / np.sqrt(pg**2 - 4 * TOY[0] * TOY[2]), rel=1e-13)
+    assert sleeping["mean_precession_rate"] is None
+    assert set(sleeping["undefined"]) == {"alpha_dot_beta1", "alpha_dot_beta2",
+                                          "mean_precession_rate"}
+    assert "vertical" in sleeping["undefined"]["mean_precession_rate"]
+    state = _steady(0.5, 150.0, 0)
+    steady = solve_heavy_top(*state)
+    assert steady["motion"] == "steady"
+    # the limit: 2π/√(B (u3 − u0)), u3 = (A + a²)/B − 2 u0 for the double root u0 (Vieta, mpmath)
+    ref = reference_of(state)
+    u3 = (ref["A"] + ref["a"] ** 2) / ref["B"] - 2 * mp.cos(mp.mpf(state[3]))
+    assert _close(steady["nutation_period"], 2 * mp.pi / mp.sqrt(ref["B"] * (u3 - mp.cos(
+        mp.mpf(state[3])))))
     assert steady["mean_precession_rate"] == pytest.approx(
         steady["steady_precession_rates"][0], rel=1e-12
     )
     unstable = solve_heavy_top(*TOY, 0.0, 0.0, 0.0, 30.0)
     assert unstable["beta1"] == 0.0 and unstable["beta2"] > 0.5
     assert unstable["steady_precession_rates"] is None
+    assert unstable["nutation_period"] is None and "asymptotically" in unstable["undefined"][
+        "nutation_period"]
+    assert "real" in unstable["undefined"]["steady_precession_rates"]
+
+
+def reference_of(state) -> dict:
+    """a, A, B of R17 in mpmath from an arbitrary state."""
+    I1, I3, Mgl, b0, ad, bd, gd = (mp.mpf(x) for x in state)
+    c, s = mp.cos(b0), mp.sin(b0)
+    pg = I3 * (ad * c + gd)
+    e_prime = I1 * (bd**2 + ad**2 * s**2) / 2 + Mgl * c
+    return {"a": pg / I1, "A": 2 * e_prime / I1, "B": 2 * Mgl / I1}
 
 
 def test_vectorised_over_states():
@@ -376,7 +403,7 @@ def test_vectorised_over_states():
     kinds = motion_type(I1, 1.0e-4, 0.02, 0.5, 0.3, 0.1, gd)
     assert kinds.shape == (2, 3)
     period = nutation_period(2.0e-4, 1.0e-4, 0.02, [0.0, 0.5], 0.0, 0.0, 150.0)
-    assert np.isnan(period[0]) and np.isfinite(period[1])
+    assert np.all(np.isfinite(period))  # sleeping (β0 = 0): the limit of small nutation
 
 
 @pytest.mark.parametrize(
