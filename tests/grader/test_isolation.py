@@ -534,7 +534,10 @@ def test_nothing_is_left_behind(battle):
     assert left["processes"] == []
     assert left["segments"] == set()
     assert left["folders"] == set()
-    assert left["disk_used"] < 64 * 1024**2  # the fill attack wrote gigabytes, in tmpfs only
+    # the fill attack tries to write gigabytes in each place; what it could write went to its
+    # own tmpfs (256 MiB), gone with it. The free space of a shared machine moves by tens of
+    # MiB on its own, hence a bound well under what the attack would leave
+    assert left["disk_used"] < 512 * 1024**2
 
 
 def test_no_control_character_reaches_a_terminal_a_csv_or_a_page(battle):
