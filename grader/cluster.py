@@ -44,6 +44,7 @@ import hashlib
 import logging
 import os
 import re
+import socket
 import threading
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack, contextmanager
@@ -120,6 +121,25 @@ def parse_cluster(spec: str) -> int | str:
         raise ClusterError("--cluster: expected a scheduler address such as tcp://HOST:8786 "
                            "or local:N")
     return spec
+
+
+def require_reachable(spec: str) -> None:
+    """:class:`ClusterError` unless the scheduler at ``spec`` accepts a TCP connection (checked
+    before a run writes anything; ``local:N`` and non-TCP addresses pass)."""
+    target = parse_cluster(spec)
+    if isinstance(target, int):
+        return
+    from distributed.comm import parse_address, parse_host_port
+
+    scheme, location = parse_address(target)
+    if scheme not in ("tcp", "tls"):
+        return
+    try:
+        host, port = parse_host_port(location)
+        socket.create_connection((host, port), timeout=CONNECT_SECONDS).close()
+    except (OSError, ValueError, TypeError) as e:
+        raise ClusterError(f"cannot reach the Dask scheduler at {target}: "
+                           f"{getattr(e, 'strerror', None) or e}") from None
 
 
 @contextmanager

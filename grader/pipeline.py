@@ -608,14 +608,12 @@ def _run_all(a, out, to_run, execute, limits, jobs, reveal, progress) -> None:
 
 def _require_cluster(cluster: str) -> None:
     """:class:`UsageError` when ``--cluster`` cannot be used here (Dask not installed, a
-    malformed ``local:N``), before anything is written."""
-    try:
-        from grader.cluster import ClusterError, parse_cluster, require_distributed
-    except ImportError as e:  # pragma: no cover - grader.cluster imports no Dask at top level
-        raise UsageError(str(e)) from None
+    malformed ``local:N``, a scheduler that cannot be reached), before anything is written."""
+    from grader.cluster import ClusterError, require_distributed, require_reachable
+
     try:
         require_distributed()
-        parse_cluster(cluster)
+        require_reachable(cluster)
     except ClusterError as e:
         raise UsageError(str(e)) from None
 
