@@ -7,7 +7,8 @@ thread each. Prints side by side: wall time, throughput, and time per notebook; 
 cluster also its start-up (LocalCluster up and down, no work) and Dask's own overhead per task
 (N no-op tasks carrying the same payload as a grading task: one submission's bytes and its
 expected answers). It also prints the peak memory of the grader and everything under it
-(resident set, sampled every 0.2 s) and the disk each student's output takes.
+(resident set, sampled every 0.2 s), the disk each student's output takes, and the grader
+process's own work per student (writing records and pages), which no cluster shares.
 
 Run from the repository root, with the ``cluster`` extra installed:
 ``python benchmarks/bench_cluster.py [--students 200] [--problems inertia_tensor]``
@@ -99,6 +100,30 @@ def grade(hw: Path, subs: Path, out: Path, **how) -> tuple[float, int]:
     return wall, memory.peak
 
 
+def client_cost(hw: Path, graded: Path) -> tuple[float, float]:
+    """Seconds per student of the grader process's own work, whatever the cluster: a record
+    that came back as JSON made into its result file and feedback page (``_publish``), and
+    the final rebuild of the gradebook and every page (``_rebuild``), into a scratch folder."""
+    from grader.pipeline import FEEDBACK, RESULTS, _publish, _rebuild, load_assignment
+    from grader.results import StudentResult, read_result
+
+    a = load_assignment(hw)
+    records = {sid: read_result(graded / RESULTS / f"{sid}.json") for sid in a.ids}
+    returned = [r.to_dict() for r in records.values()]
+    with tempfile.TemporaryDirectory() as folder:
+        out = Path(folder)
+        (out / RESULTS).mkdir()
+        (out / FEEDBACK).mkdir()
+        start = time.perf_counter()
+        for d in returned:
+            _publish(a, out, StudentResult.from_dict(d), False)
+        publish = (time.perf_counter() - start) / len(returned)
+        start = time.perf_counter()
+        _rebuild(a, out, records, False)
+        rebuild = (time.perf_counter() - start) / len(returned)
+    return publish, rebuild
+
+
 def _disk(out: Path) -> float:
     files = [p for sub in ("results", "feedback") for p in (out / sub).iterdir()]
     return sum(p.stat().st_size for p in files) / max(1, len(files) // 2)
@@ -132,6 +157,7 @@ def main(argv: list[str] | None = None) -> int:
         up, per_task = dask_overhead(payload)
         remote, remote_mem = grade(hw, subs, root / "cluster", cluster="local:2")
         disk = _disk(root / "local")
+        publish, rebuild = client_cost(hw, root / "local")
         print(f"load average {os.getloadavg()[0]:.1f} at the end")
     rows = [("local pool, --jobs 2", local, local_mem, ""),
             ("LocalCluster, 2 workers", remote, remote_mem,
@@ -146,6 +172,9 @@ def main(argv: list[str] | None = None) -> int:
           f"{1000 * per_task:.1f} ms; cluster minus local per notebook: "
           f"{1000 * (remote - local) / n:.0f} ms")
     print(f"disk per student: {disk / 1024:.1f} KiB (result record + feedback page)")
+    print(f"grader process per student (on its machine, whatever the cluster): "
+          f"{1000 * publish:.1f} ms to write a returned record and its page, "
+          f"{1000 * rebuild:.1f} ms in the final rebuild")
     return 0
 
 
