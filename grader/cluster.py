@@ -201,6 +201,7 @@ class WorkerKernels(_PluginBase):
         self._stack = ExitStack()
         self._slots = max(1, int(getattr(getattr(worker, "state", None), "nthreads", 1) or 1))
         self._ready: tuple[Path, Path, Callable | None] | None = None
+        self._found: Any = None
 
     def teardown(self, worker: Any = None) -> None:
         with self._lock:
@@ -208,20 +209,21 @@ class WorkerKernels(_PluginBase):
             self._stack.close()
 
     def folders(self, warm: bool) -> tuple[Path, Path, Callable | None]:
-        """(staging folder, copies folder, kernel factory or None), made at first use."""
+        """(staging folder, copies folder, kernel factory or None), made at first use; the
+        warm kernels at the first task that wants them."""
         with self._lock:
             if self._ready is None:
                 from grader.sandbox import fresh_folder, probe, run_folder
 
-                found = probe() if self.sandbox else None  # SandboxUnavailable: the task fails
+                self._found = probe() if self.sandbox else None  # SandboxUnavailable: fails
                 run = self._stack.enter_context(run_folder())
-                factory = None
-                if warm and not self.cold:
-                    from grader.kernel_pool import KernelPool
+                self._ready = (fresh_folder(run, "w"), fresh_folder(run, "s"), None)
+            staging, copies, factory = self._ready
+            if warm and factory is None and not self.cold:
+                from grader.kernel_pool import KernelPool
 
-                    pool = self._stack.enter_context(KernelPool(self._slots, sandbox=found))
-                    factory = pool.kernel
-                self._ready = (fresh_folder(run, "w"), fresh_folder(run, "s"), factory)
+                pool = self._stack.enter_context(KernelPool(self._slots, sandbox=self._found))
+                self._ready = (staging, copies, pool.kernel)
             return self._ready
 
 
@@ -388,11 +390,21 @@ def grade_on_cluster(
             return True
         return False
 
+    def fill(ac: Any, finished: int) -> None:
+        """Top up to the window; it is looked up again now and then, since workers may come
+        and go during a run (dask-jobqueue's scale or adapt)."""
+        nonlocal limit
+        if finished % 32 == 0:
+            limit = window(client)
+        while len(by_key) < limit and submit_next(ac):
+            pass
+
     ac = as_completed([])
-    for _ in range(window(client)):
-        if not submit_next(ac):
-            break
+    limit = window(client)
+    fill(ac, 1)
+    finished = 0
     for future in ac:
+        finished += 1
         run = by_key.pop(future.key)
         sid = run[0].student_id
         try:
@@ -408,7 +420,7 @@ def grade_on_cluster(
             attempts[sid] = attempts.get(sid, 0) + 1
             if _infrastructure(e) and attempts[sid] <= RESUBMIT and not (stop and stop.is_set()):
                 pending.append(run)
-                submit_next(ac)
+                fill(ac, finished)
                 continue
             record = _fault_record(run, f"{type(e).__name__}: {e}"[:300])
         finally:
@@ -420,7 +432,7 @@ def grade_on_cluster(
             publish(record)
             published += 1
         if stop is None or not stop.is_set():
-            submit_next(ac)
+            fill(ac, finished)
     return published
 
 

@@ -255,3 +255,58 @@ def test_an_unreachable_scheduler_is_refused(klass, tmp_path, capsys, monkeypatc
     assert "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in err
     assert err.count("\n") == 1
     assert not (tmp_path / "g" / "results" / f"{CLASS[0]}.json").exists()
+
+
+# --------------------------------------------------------------------------------------------
+# the client's own resubmission: a task that ends in KilledWorker
+
+
+def execute_dying_once(path, variables, limits):
+    """Kill this worker process the first time it sees ``s01``'s submission (a marker file
+    beside the submissions records that it happened); run the rest for real, sandboxed."""
+    from grader.execute import execute_submission
+
+    marker = Path(os.environ["EULERTOP_TEST_MARKER"])
+    if path.name == f"{CLASS[1]}.ipynb" and not marker.exists():
+        marker.write_text("died", encoding="utf-8")
+        os._exit(1)
+    return execute_submission(path, variables, limits)
+
+
+@pytest.mark.slow
+def test_a_task_that_kills_its_worker_is_resubmitted(klass, local_run, tmp_path, monkeypatch):
+    """With no failure allowed per task by the scheduler, a worker death surfaces as
+    KilledWorker; the client resubmits the task, and the student is graded once, as locally."""
+    import dask
+    from distributed import Client, LocalCluster
+
+    from grader.cluster import grade_on_cluster
+    from grader.compare import key_answers
+    from grader.discover import Submission
+    from grader.pipeline import load_assignment
+
+    hw, subs = klass
+    marker = tmp_path / "died"
+    monkeypatch.setenv("EULERTOP_TEST_MARKER", str(marker))  # inherited by the workers
+    a = load_assignment(hw)
+    few = CLASS[:3]
+    to_run = [(Submission(sid, subs / f"{sid}.ipynb"), key_answers(a.key, sid), a.key_hash(sid),
+               None) for sid in few]
+    written = collections.Counter()
+    records = {}
+
+    def publish(result):
+        written[result.student_id] += 1
+        records[result.student_id] = result
+
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}), \
+            LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=None) as lc, \
+            Client(lc) as client:
+        assert grade_on_cluster(client, to_run, LIMITS, publish,
+                                execute=execute_dying_once) == 3
+    assert marker.read_text(encoding="utf-8") == "died"
+    assert written == collections.Counter(few)
+    for sid in few:
+        local = read_result(local_run / "results" / f"{sid}.json")
+        assert records[sid].status == "graded" and records[sid].points == local.points
+        assert records[sid].answers == local.answers
