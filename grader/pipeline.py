@@ -499,6 +499,8 @@ def grade_assignment(
     found_sandbox = None
     if execute is None and cluster is None:
         found_sandbox = _sandbox(sandbox)
+    elif execute is None and not sandbox:
+        sys.stderr.write(WITHOUT_SANDBOX)  # on the cluster's workers
     if execute is None or limits is None:
         from grader.limits import Limits
 
