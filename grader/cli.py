@@ -107,6 +107,11 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--cold-kernels", action="store_true",
                         help="start every kernel from scratch instead of forking it from a "
                              "pre-imported one (slower; the same isolation)")
+    parser.add_argument("--cluster", metavar="ADDRESS",
+                        help="grade on a Dask cluster: a scheduler's address, e.g. "
+                             "tcp://HOST:8786, or local:N to start N local workers; each "
+                             "worker runs the sandbox of its machine (needs "
+                             "pip install 'eulertop[cluster]'; --jobs is then unused)")
 
 
 def _limits(args: argparse.Namespace):
@@ -141,6 +146,7 @@ def run_grade(args: argparse.Namespace, execute=None) -> int:
             force=args.force, reveal=args.reveal, execute=execute,
             on_plan=lambda n: Progress(n), cold_kernels=getattr(args, "cold_kernels", False),
             sandbox=not getattr(args, "no_sandbox", False), class_list=class_list,
+            cluster=getattr(args, "cluster", None),
         )
     except (UsageError, RosterError) as e:
         print(f"eulertop grade: {e}", file=sys.stderr)

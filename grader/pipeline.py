@@ -439,6 +439,7 @@ def grade_assignment(
     cold_kernels: bool = False,
     sandbox: bool = True,
     class_list: Sequence[Mapping[str, str]] = (),
+    cluster: str | None = None,
 ) -> RunReport:
     """Grade every submission in ``submissions`` against the assignment ``hw``.
 
@@ -473,6 +474,11 @@ def grade_assignment(
     class_list : sequence of dict, optional
         Rows of an LMS class list (``grade --roster``) whose columns are added to the
         roster's, by student id, to match an LMS download (:func:`grader.lms.classlist.merge_rows`).
+    cluster : str, optional
+        Grade on a Dask cluster (:mod:`grader.cluster`): a scheduler address
+        (``tcp://HOST:PORT``) or ``local:N`` (a LocalCluster of N workers); ``jobs`` is then
+        unused (each worker grades as many at once as it has threads) and the sandbox is
+        that of each worker's machine.
 
     Raises
     ------
@@ -480,6 +486,8 @@ def grade_assignment(
         Missing or unreadable inputs, no sandbox to be had (with ``sandbox``);
         :class:`RunInProgress` when another run holds the lock.
     """
+    if cluster is not None:
+        _require_cluster(cluster)
     a = load_assignment(hw)
     submissions = Path(submissions)
     archive = submissions.suffix.lower() == ".zip" and submissions.is_file()
@@ -493,12 +501,14 @@ def grade_assignment(
                                                   merge_rows(a.rows, class_list)), a.ids)
     warm = execute is None and not cold_kernels
     found_sandbox = None
-    if execute is None:
+    if execute is None and cluster is None:
         found_sandbox = _sandbox(sandbox)
+    elif execute is None and not sandbox:
+        sys.stderr.write(WITHOUT_SANDBOX)  # on the cluster's workers
     if execute is None or limits is None:
         from grader.limits import Limits
 
-        if execute is None:
+        if execute is None and cluster is None:
             from grader.execute import execute_submission
 
             execute = partial(execute_submission, sandbox=found_sandbox is not None)
@@ -519,7 +529,8 @@ def grade_assignment(
             atomic_write_text(out / LMS_SUBMISSIONS, gradebook_csv(_lms_table(found, submissions)))
         else:  # a previous run's LMS table would describe other files
             (out / LMS_SUBMISSIONS).unlink(missing_ok=True)
-        to_run, to_write, kept = _plan(a, found, out, force, found_sandbox is not None,
+        sandboxed = found_sandbox is not None if cluster is None else sandbox and not execute
+        to_run, to_write, kept = _plan(a, found, out, force, sandboxed,
                                        getattr(limits, "submission_bytes", DEFAULT_MAX_BYTES))
         if on_plan is not None:
             progress = on_plan(len(to_run) + len(to_write)) or progress
@@ -528,9 +539,13 @@ def grade_assignment(
             if progress:
                 progress(result)
         jobs = jobs or os.cpu_count() or 1
-        with _kernels(warm and bool(to_run), min(jobs, len(to_run)), found_sandbox) as factory:
-            run = execute if factory is None else partial(execute, kernel_factory=factory)
-            _run_all(a, out, to_run, run, limits, jobs, reveal, progress)
+        if cluster is not None:
+            _run_on_cluster(cluster, a, out, to_run, execute, limits, reveal, progress,
+                            sandbox=sandbox, cold=cold_kernels)
+        else:
+            with _kernels(warm and bool(to_run), min(jobs, len(to_run)), found_sandbox) as f:
+                run = execute if f is None else partial(execute, kernel_factory=f)
+                _run_all(a, out, to_run, run, limits, jobs, reveal, progress)
         results = {sid: read_result(out / RESULTS / f"{sid}.json") for sid in a.ids}
         _rebuild(a, out, results, reveal)
         _class_report(a, out, results, found.submissions)
@@ -598,6 +613,47 @@ def _run_all(a, out, to_run, execute, limits, jobs, reveal, progress) -> None:
         return
     with ExitStack() as stack:
         _run_all_in(stack, a, out, to_run, execute, limits, jobs, reveal, progress)
+
+
+def _require_cluster(cluster: str) -> None:
+    """:class:`UsageError` when ``--cluster`` cannot be used here (Dask not installed, a
+    malformed ``local:N``, a scheduler that cannot be reached), before anything is written."""
+    from grader.cluster import ClusterError, require_distributed, require_reachable
+
+    try:
+        require_distributed()
+        require_reachable(cluster)
+    except ClusterError as e:
+        raise UsageError(str(e)) from None
+
+
+def _run_on_cluster(cluster, a, out, to_run, execute, limits, reveal, progress, *,
+                    sandbox: bool, cold: bool) -> None:
+    """:func:`_run_all` on a Dask cluster (:func:`grader.cluster.grade_on_cluster`): the
+    workers run :func:`grade_one`; this process writes every record, as they come back."""
+    if not to_run:
+        return
+    from grader.cluster import ClusterError, cluster_client, grade_on_cluster
+
+    published = []
+    stop = threading.Event()
+
+    def publish(result: StudentResult) -> None:
+        _publish(a, out, result, reveal)
+        published.append(result.student_id)
+        if progress:
+            progress(result)
+
+    try:
+        with cluster_client(cluster) as client:
+            try:
+                grade_on_cluster(client, to_run, limits, publish, execute=execute,
+                                 sandbox=sandbox, cold=cold, stop=stop)
+            except KeyboardInterrupt:
+                stop.set()  # in-flight tasks are cancelled when the client closes
+                raise Interrupted(len(published), len(to_run)) from None
+    except ClusterError as e:
+        raise UsageError(str(e)) from None
 
 
 RETRIES = 2

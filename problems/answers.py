@@ -187,8 +187,11 @@ class Answer:
 
     def to_dict(self) -> dict:
         """Plain JSON (lists for tuples); ``Answer.from_dict(a.to_dict()) == a``."""
-        d = asdict(self)
-        d["mistakes"] = [asdict(m) for m in self.mistakes]
+        # field by field, not asdict (which deep-copies through every dataclass: a tenth of
+        # 'eulertop generate'); values are plain JSON already, lists copied
+        d = {f.name: _json_copy(getattr(self, f.name)) for f in fields(self)}
+        d["mistakes"] = [{f.name: _json_copy(getattr(m, f.name)) for f in fields(m)}
+                         for m in self.mistakes]
         d["options"], d["symbols"] = list(self.options), list(self.symbols)
         return d
 
@@ -200,6 +203,17 @@ class Answer:
             Mistake(**_known_keys(Mistake, m, "mistake")) for m in d.get("mistakes", ())
         )
         return cls(**d)
+
+
+def _json_copy(value: Any) -> Any:
+    """A copy of plain JSON ``value`` sharing no list or dict with it (tuples stay tuples)."""
+    if isinstance(value, list):
+        return [_json_copy(v) for v in value]
+    if isinstance(value, tuple):
+        return tuple(_json_copy(v) for v in value)
+    if isinstance(value, dict):
+        return {k: _json_copy(v) for k, v in value.items()}
+    return value
 
 
 @dataclass(frozen=True)

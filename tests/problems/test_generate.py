@@ -299,3 +299,32 @@ def test_a_failed_swap_puts_the_old_assignment_back(make_hw, read_tree, tmp_path
         make_hw(force=True, seed=99)
     monkeypatch.undo()
     assert read_tree(hw) == before and sorted(os.listdir(tmp_path)) == listing
+
+
+CLASS = "id,name\n" + "".join(f"s{i:02d},Student {i}\n" for i in range(20))
+
+
+def test_generating_in_parallel_gives_the_same_bytes(tmp_path, write_roster, read_tree):
+    """Every real family, 20 students (enough for worker processes): two processes write
+    exactly the files one process writes, and report progress in roster order."""
+    from problems.generate import PARALLEL_MIN
+    from problems.templates import FAMILIES
+
+    roster = read_roster(write_roster(CLASS))
+    assert len(roster.rows) >= PARALLEL_MIN
+    seen = []
+    generate_assignment(roster, tmp_path / "one", FAMILIES, seed=3, title="T", jobs=1)
+    generate_assignment(roster, tmp_path / "two", FAMILIES, seed=3, title="T", jobs=2,
+                        progress=lambda done, total: seen.append((done, total)))
+    one, two = read_tree(tmp_path / "one"), read_tree(tmp_path / "two")
+    assert len(one) == 2 + 2 * 20 and one == two
+    assert seen == [(k, 20) for k in range(1, 21)]
+
+
+def test_a_template_failing_in_a_worker_process_leaves_nothing(tmp_path, write_roster):
+    roster = read_roster(write_roster(CLASS))
+    before = sorted(os.listdir(tmp_path))
+    with pytest.raises(TemplateError, match=r"'rod'.*failed"):
+        generate_assignment(roster, tmp_path / "HW", make_families(fail_on_call=3),
+                            problems=PROBLEMS, seed=7, jobs=2)
+    assert sorted(os.listdir(tmp_path)) == before

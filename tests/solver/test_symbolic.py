@@ -410,3 +410,20 @@ def test_steady_precession_rates_numeric(top_state: dict[str, np.ndarray],
     else:
         assert real.all()
         assert_matches(np.sort([slow, fast], axis=0), ref)
+
+
+def test_omega_body_is_the_expression_trigsimp_gives():
+    """The cheap sin² + cos² = 1 reduction gives structurally the expression sympy's trigsimp
+    gives (the generated statements and keys print it, so it must not change shape)."""
+    t = sp.Symbol("t", real=True)
+    angles = [sp.Function(n, real=True)(t) for n in ("alpha", "beta", "gamma")]
+    R = symbolic._euler_matrix(*angles)
+    skew = -(R.diff(t) * R.T)
+    rates = {a.diff(t): symbolic.SYMBOLS[f"{n}_dot"]
+             for a, n in zip(angles, ("alpha", "beta", "gamma"), strict=True)}
+    plain = {a: symbolic.SYMBOLS[n] for a, n in zip(angles, ("alpha", "beta", "gamma"),
+                                                     strict=True)}
+    for c, derived in zip((skew[2, 1], skew[0, 2], skew[1, 0]), symbolic.omega_body_expr(),
+                          strict=True):
+        by_trigsimp = sp.factor_terms(sp.trigsimp(sp.expand(c.subs(rates).subs(plain))))
+        assert sp.srepr(derived) == sp.srepr(by_trigsimp)
