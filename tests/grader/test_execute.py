@@ -30,15 +30,19 @@ def private_tmp(tmp_path, monkeypatch) -> Path:
 
 
 def _kernels_of_this_process() -> list[int]:
-    """Live (non-zombie) processes whose parent is this test process."""
+    """Live (non-zombie) processes whose parent is this test process — but for the helpers
+    Python's multiprocessing starts once and keeps for the life of the process (its resource
+    tracker, its fork server: left by an earlier test's process pool, e.g. a Dask cluster)."""
     children = []
     for pid in filter(str.isdigit, os.listdir("/proc")):
         try:
             stat = Path(f"/proc/{pid}/stat").read_text()
+            cmdline = Path(f"/proc/{pid}/cmdline").read_bytes()
         except OSError:
             continue
         fields = stat.rsplit(")", 1)[1].split()
-        if int(fields[1]) == os.getpid() and fields[0] != "Z":
+        if int(fields[1]) == os.getpid() and fields[0] != "Z" and \
+                b"from multiprocessing." not in cmdline:
             children.append(int(pid))
     return children
 
