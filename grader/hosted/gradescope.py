@@ -35,14 +35,13 @@ from grader.hosted.grading import (
     HostedError,
     Isolation,
     choose_isolation,
-    config_limits,
     env_root,
     find_notebook,
     grade_notebook,
-    read_config,
+    open_package,
 )
 from grader.lms.download import Students
-from grader.pipeline import Assignment, UsageError, claimed_student, load_assignment
+from grader.pipeline import Assignment, UsageError, claimed_student
 from grader.results import StudentResult, atomic_write_text
 
 ROOT_VARIABLE = "EULERTOP_GRADESCOPE_ROOT"
@@ -123,14 +122,8 @@ def grade(root: Path) -> tuple[dict, int]:
     source = root / "source"
     lines: list[str] = []
     try:
-        config = read_config(source)
-        from grader.hosted.container import protect
-
-        protect([source, root / "submission_metadata.json"])
-        (root / "results").mkdir(parents=True, exist_ok=True)
-        (root / "results").chmod(0o755)  # the grader's: the notebook cannot write results
-        a = load_assignment(source / ASSIGNMENT)
-        limits = config_limits(config)
+        config, a, limits = open_package(source, ASSIGNMENT, root,
+                                         [root / "submission_metadata.json"])
         visibility = config.get("visibility", "visible")
         ids, unmatched = submitters(_read_metadata(root), a)
     except (HostedError, UsageError) as e:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from functools import partial
 from pathlib import Path
@@ -20,7 +20,7 @@ from typing import Any
 from grader.compare import key_answers
 from grader.discover import Submission
 from grader.limits import Limits
-from grader.pipeline import Assignment, grade_one
+from grader.pipeline import Assignment, grade_one, load_assignment
 from grader.results import StudentResult
 
 MODES = ("auto", "bwrap", "container")
@@ -58,6 +58,20 @@ def read_config(folder: Path) -> dict:
     if not isinstance(config, dict):
         raise HostedError(f"{path}: the package's settings are not a JSON object")
     return config
+
+
+def open_package(package: Path, assignment: str, root: Path,
+                 private: Sequence[Path] = ()) -> tuple[dict, Assignment, Limits]:
+    """The package's settings, its assignment (``package/assignment``) and limits — after the
+    package and ``private`` were made the grader's own and ``root/results`` the grader's folder
+    (the notebook, run as another user, can read neither the key nor write results)."""
+    from grader.hosted.container import protect
+
+    config = read_config(package)
+    protect([package, *private])
+    (root / "results").mkdir(parents=True, exist_ok=True)
+    (root / "results").chmod(0o755)
+    return config, load_assignment(package / assignment), config_limits(config)
 
 
 def config_limits(config: Mapping) -> Limits:

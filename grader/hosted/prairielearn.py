@@ -28,13 +28,12 @@ from grader.gradebook import number
 from grader.hosted.grading import (
     HostedError,
     choose_isolation,
-    config_limits,
     env_root,
     find_notebook,
     grade_notebook,
-    read_config,
+    open_package,
 )
-from grader.pipeline import Assignment, UsageError, claimed_student, load_assignment
+from grader.pipeline import Assignment, UsageError, claimed_student
 from grader.results import StudentResult, atomic_write_text
 
 ROOT_VARIABLE = "EULERTOP_PRAIRIELEARN_ROOT"
@@ -88,16 +87,9 @@ def grade(root: Path) -> tuple[dict, int]:
     fault, reported as not gradable)."""
     tests = root / "tests"
     try:
-        config = read_config(tests)
-        from grader.hosted.container import protect
-
-        protect([tests, root / "data"])
-        (root / "results").mkdir(parents=True, exist_ok=True)
-        (root / "results").chmod(0o755)  # the grader's: the notebook cannot write results
-        a = load_assignment(tests / ASSIGNMENT)
+        config, a, limits = open_package(tests, ASSIGNMENT, root, [root / "data"])
         data = json.loads((root / "data" / "data.json").read_text(encoding="utf-8"))
         variant = variant_of(data if isinstance(data, Mapping) else {}, a)
-        limits = config_limits(config)
     except (HostedError, UsageError, OSError, ValueError) as e:
         return not_gradable(f"The grader could not grade this submission: {e}"), 1
     path, why = find_notebook(root / "student", config.get("notebook"))
