@@ -253,11 +253,24 @@ class LocalKernel:
         self.iopub_lost = False
         self.on_iopub_lost: Callable[[], None] | None = None
 
-    async def start(self) -> Any:
+    def kernel_argv(self) -> list[str]:
+        """The kernel's command (``{connection_file}`` substituted by jupyter_client)."""
+        return kernel_command(self.limits)
+
+    def launch_options(self) -> dict[str, Any]:
+        """Further keyword arguments of the kernel's ``Popen`` (e.g. ``user``)."""
+        return {}
+
+    def manager_class(self) -> type:
+        """The jupyter_client kernel manager that launches it."""
         from jupyter_client import AsyncKernelManager
 
-        self.km = AsyncKernelManager(
-            kernel_name="eulertop-grader", kernel_spec_manager=_grader_kernel_specs(self.limits),
+        return AsyncKernelManager
+
+    async def start(self) -> Any:
+        self.km = self.manager_class()(
+            kernel_name="eulertop-grader",
+            kernel_spec_manager=_kernel_spec_manager_class()(self.kernel_argv()),
             transport="ipc", ip=str(self.control / "kernel"),
             connection_file=str(self.control / "kernel.json"), autorestart=False,
         )
@@ -265,6 +278,7 @@ class LocalKernel:
             await self.km.start_kernel(
                 env=kernel_environment(self.workdir, self.control), cwd=str(self.workdir),
                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=stderr,
+                **self.launch_options(),
             )
         self.process = self.km.provisioner.process
         return await self._connect(self.km.client)
@@ -378,32 +392,22 @@ class LocalKernel:
                 self.process.wait(timeout=STOP_TIMEOUT)
 
 
-def _grader_kernel_spec(limits: Limits) -> Any:
-    from jupyter_client.kernelspec import KernelSpec
-
-    return KernelSpec(argv=kernel_command(limits), display_name="eulertop grader (Python 3)",
-                      language="python", env={}, metadata={})
-
-
 @functools.cache
 def _kernel_spec_manager_class() -> type:
-    from jupyter_client.kernelspec import KernelSpecManager
+    from jupyter_client.kernelspec import KernelSpec, KernelSpecManager
 
     class GraderKernelSpecs(KernelSpecManager):
-        """Answers every kernel name with the grader's own Python kernel."""
+        """Answers every kernel name with the grader's own Python kernel, run by ``argv``."""
 
-        def __init__(self, limits: Limits, **kw: Any) -> None:
+        def __init__(self, argv: list[str], **kw: Any) -> None:
             super().__init__(**kw)
-            self._spec = _grader_kernel_spec(limits)
+            self._spec = KernelSpec(argv=argv, display_name="eulertop grader (Python 3)",
+                                    language="python", env={}, metadata={})
 
         def get_kernel_spec(self, kernel_name: str) -> Any:
             return self._spec
 
     return GraderKernelSpecs
-
-
-def _grader_kernel_specs(limits: Limits) -> Any:
-    return _kernel_spec_manager_class()(limits)
 
 
 # --------------------------------------------------------------------------------------------

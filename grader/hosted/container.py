@@ -41,7 +41,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from grader.execute import LocalKernel, kernel_environment
+from grader.execute import LocalKernel
 from grader.limits import Limits
 
 USER_VARIABLE = "EULERTOP_KERNEL_USER"
@@ -176,19 +176,6 @@ def kernel_command(limits: Limits, own_user: bool = True) -> list[str]:
             "--HistoryManager.hist_file=:memory:"]
 
 
-def _spec_manager(limits: Limits, own_user: bool) -> Any:
-    from jupyter_client.kernelspec import KernelSpec, KernelSpecManager
-
-    spec = KernelSpec(argv=kernel_command(limits, own_user), language="python", env={},
-                      display_name="eulertop grader (container)", metadata={})
-
-    class Specs(KernelSpecManager):
-        def get_kernel_spec(self, kernel_name: str) -> Any:
-            return spec
-
-    return Specs()
-
-
 def _manager_class(user: KernelUser | None) -> type:
     """``AsyncKernelManager`` whose connection file the kernel's user may read."""
     from jupyter_client import AsyncKernelManager
@@ -252,26 +239,23 @@ class ContainerKernel(LocalKernel):
         self.user = user
         self.isolation = describe(user)
 
+    def kernel_argv(self) -> list[str]:
+        return kernel_command(self.limits, own_user=self.user is not None)
+
+    def manager_class(self) -> type:
+        return _manager_class(self.user)
+
+    def launch_options(self) -> dict[str, Any]:
+        if self.user is None:
+            return {}
+        return {"user": self.user.uid, "group": self.user.gid, "extra_groups": []}
+
     async def start(self) -> Any:
-        options: dict[str, Any] = {}
         if self.user is not None:
             self._before = processes_of(self.user.uid)
             _hand_over(self.workdir, self.user)
             _hand_over(self.control, self.user)
-            options = {"user": self.user.uid, "group": self.user.gid, "extra_groups": []}
-        specs = _spec_manager(self.limits, own_user=self.user is not None)
-        self.km = _manager_class(self.user)(
-            kernel_name="eulertop-grader", kernel_spec_manager=specs,
-            transport="ipc", ip=str(self.control / "kernel"),
-            connection_file=str(self.control / "kernel.json"), autorestart=False,
-        )
-        with open(self.control / "kernel-stderr.txt", "wb") as stderr:
-            await self.km.start_kernel(
-                env=kernel_environment(self.workdir, self.control), cwd=str(self.workdir),
-                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=stderr, **options,
-            )
-        self.process = self.km.provisioner.process
-        return await self._connect(self.km.client)
+        return await super().start()
 
     async def stop(self) -> None:
         await super().stop()

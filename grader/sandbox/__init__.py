@@ -73,6 +73,7 @@ __all__ = [
     "SandboxUnavailable",
     "available",
     "fresh_folder",
+    "passable",
     "probe",
     "remove_stale_run_folders",
     "run_folder",
@@ -227,19 +228,27 @@ class Sandbox:
 
 def _as_user(uid: int, sources: Sequence[str]) -> list[str]:
     """As root: what runs the sandbox's ``bwrap`` as ``uid`` instead — ``setpriv`` (no
-    capability, no other group), inside a first, root ``bwrap`` that only makes the folders
-    above ``sources`` that ``uid`` could not pass (a Python under ``/root``) passable: each such
-    folder is replaced, in that first mount namespace only, by an empty one (mode 0711) with
-    what is needed bound back."""
+    capability, no other group), inside a first, root ``bwrap`` (:func:`passable`) that only
+    makes the folders above ``sources`` that ``uid`` could not pass (a Python under ``/root``)
+    passable."""
     setpriv = shutil.which("setpriv") or "/usr/bin/setpriv"
     drop = [setpriv, f"--reuid={uid}", f"--regid={uid}", "--clear-groups", "--inh-caps=-all",
             "--"]
+    return [*passable(sources, ["CAP_SETUID", "CAP_SETGID"]), *drop]
+
+
+def passable(sources: Sequence[str], caps: Sequence[str] = ()) -> list[str]:
+    """As root: the argv prefix of a root ``bwrap`` (keeping capabilities ``caps``) in whose
+    mount namespace every folder above ``sources`` that other users could not pass is
+    replaced by an empty one (mode 0711) with what is needed bound back; ``[]`` where every
+    such folder is passable already. The rest of the file system is the host's, unchanged."""
     closed = sorted({str(p) for s in sources for p in Path(s).parents
                      if not os.stat(p).st_mode & 0o001}, key=len)
     if not closed:
-        return drop
-    outer = [shutil.which("bwrap") or "bwrap", "--dev-bind", "/", "/", "--die-with-parent",
-             "--cap-add", "CAP_SETUID", "--cap-add", "CAP_SETGID"]
+        return []
+    outer = [shutil.which("bwrap") or "bwrap", "--dev-bind", "/", "/", "--die-with-parent"]
+    for cap in caps:
+        outer += ["--cap-add", cap]
     for folder in closed:
         if any(folder.startswith(c.rstrip("/") + "/") for c in closed if c != folder):
             continue  # below one replaced already
@@ -253,7 +262,7 @@ def _as_user(uid: int, sources: Sequence[str]) -> list[str]:
                         made.add(str(parent))
                         outer += ["--perms", "0711", "--dir", str(parent)]
                 outer += ["--bind", source, source]
-    return [*outer, "--", *drop]
+    return [*outer, "--"]
 
 
 def _python_paths() -> list[str]:

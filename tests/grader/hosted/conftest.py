@@ -7,9 +7,12 @@
     A fresh folder under ``/tmp`` that every user may traverse (pytest's own temporary folders
     are private to root, which would hide the key from another uid for the wrong reason).
 ``kernel_uid``
-    A fresh uid for the test's kernels (``$EULERTOP_KERNEL_USER``). Skips where a kernel cannot
-    run as another user: the grader is not root, or this Python lives where other users cannot
-    run it (e.g. under ``/root``; the skip says so).
+    A fresh uid for the test's kernels (``$EULERTOP_KERNEL_USER``). Skips where the grader is
+    not root (there is no other user to be). Where this Python lives where other users cannot
+    run it (a pyenv under ``/root``, as on CI) but a container's would be runnable
+    (``/usr/bin/python3``), the entrypoints run as a program in a *container layout*
+    (:func:`container_layout`): the same file system, but for the closed folders above this
+    Python, made passable as a container's are.
 ``notebooks``
     Submissions built from the generated notebooks: ``right``, ``wrong``, ``broken``,
     ``oversized``, ``key_reader(key_path)`` (see :class:`Notebooks`).
@@ -22,6 +25,8 @@ import json
 import os
 import secrets
 import shutil
+import subprocess
+import sys
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,6 +37,7 @@ from problems.generate import generate_assignment
 from problems.roster import read_roster
 from problems.templates import FAMILIES
 
+REPO = Path(__file__).resolve().parents[3]
 ROSTER = "id,name,email\nalice,Alice A,alice@uni.edu\nbob,Bob B,bob@uni.edu\n"
 PROBLEMS = ["inertia_tensor", "energy_momentum"]
 
@@ -71,6 +77,24 @@ def public_tmp():
     shutil.rmtree(folder, ignore_errors=True)
 
 
+LAYOUT: list[str] = []
+"""The argv prefix of the container layout the entrypoints run in, [] for none (in-process);
+set by :func:`kernel_uid` for one test."""
+
+
+def container_layout() -> list[str] | None:
+    """As root with bubblewrap: a root ``bwrap`` (all capabilities kept: the entrypoint is
+    root in a container) whose mount namespace makes the folders above this Python and this
+    project passable by every user; None where bubblewrap cannot run."""
+    from grader.sandbox import _python_paths, passable
+
+    prefix = passable([*_python_paths(), str(REPO)], ["ALL"])
+    if not prefix:
+        return []
+    probe = subprocess.run([*prefix, "true"], capture_output=True, timeout=30)
+    return prefix if probe.returncode == 0 else None
+
+
 @pytest.fixture
 def kernel_uid(monkeypatch) -> int:
     """A uid of the tests' own for kernels (``$EULERTOP_KERNEL_USER``): no process of another
@@ -83,8 +107,26 @@ def kernel_uid(monkeypatch) -> int:
     user = kernel_user()
     why = check_interpreter(user)
     if why is not None:
-        pytest.skip(why)
+        layout = container_layout()
+        if not layout:
+            pytest.skip(f"{why}; and no bubblewrap here to lay the file system out as a "
+                        "container's")
+        monkeypatch.setattr(sys.modules[__name__], "LAYOUT", layout)
     return user.uid
+
+
+def run_entrypoint(module, variable: str, root: Path, monkeypatch) -> int:
+    """Run the entrypoint ``module`` (its ``main``) with ``$variable`` = ``root``: in this
+    process, or as ``python -m module`` in the container layout if :func:`kernel_uid` chose
+    one. Its exit status."""
+    monkeypatch.setenv(variable, str(root))
+    if not LAYOUT:
+        return module.main([])
+    done = subprocess.run([*LAYOUT, sys.executable, "-m", module.__name__], cwd=REPO,
+                          env=dict(os.environ), capture_output=True, text=True, timeout=600)
+    if done.returncode not in (0, 1):
+        raise AssertionError(f"{module.__name__} failed ({done.returncode}):\n{done.stderr}")
+    return done.returncode
 
 
 def code_cell(source: str) -> dict:

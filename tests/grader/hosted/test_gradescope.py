@@ -18,7 +18,7 @@ from grader.hosted.grading import CONFIG
 from grader.hosted.package import gradescope_zip
 from grader.limits import Limits
 from grader.pipeline import load_assignment
-from tests.grader.hosted.conftest import code_cell
+from tests.grader.hosted.conftest import code_cell, run_entrypoint
 from tests.grader.hosted.platform_formats import check_gradescope
 
 LIMITS = {"cell_timeout": 10.0, "total_timeout": 60.0, "memory_bytes": 3 * 1024**3 // 2,
@@ -56,8 +56,7 @@ ALICE = [{"email": "alice@uni.edu", "id": 1234, "name": "Alice A"}]
 
 def run(root: Path, monkeypatch) -> tuple[dict, int]:
     """``run_autograder`` (:func:`gradescope.main`) with ``$EULERTOP_GRADESCOPE_ROOT``."""
-    monkeypatch.setenv(gradescope.ROOT_VARIABLE, str(root))
-    status = gradescope.main([])
+    status = run_entrypoint(gradescope, gradescope.ROOT_VARIABLE, root, monkeypatch)
     return check_gradescope(root / "results" / "results.json"), status
 
 

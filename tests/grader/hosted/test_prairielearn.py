@@ -22,7 +22,7 @@ from grader.pipeline import load_assignment
 from problems.generate import generate_assignment
 from problems.roster import Roster
 from problems.templates import FAMILIES
-from tests.grader.hosted.conftest import HW, PROBLEMS, Notebooks
+from tests.grader.hosted.conftest import HW, PROBLEMS, Notebooks, run_entrypoint
 from tests.grader.hosted.platform_formats import check_prairielearn
 
 VARIANTS = 3
@@ -76,8 +76,7 @@ def data_for(variant: str) -> dict:
 
 
 def run(root: Path, monkeypatch) -> tuple[dict, int]:
-    monkeypatch.setenv(prairielearn.ROOT_VARIABLE, str(root))
-    status = prairielearn.main([])
+    status = run_entrypoint(prairielearn, prairielearn.ROOT_VARIABLE, root, monkeypatch)
     return check_prairielearn(root / "results" / "results.json"), status
 
 
