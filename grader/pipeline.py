@@ -52,7 +52,7 @@ import os
 import shutil
 import sys
 import threading
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence, Set
 from concurrent.futures import ThreadPoolExecutor, wait
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
@@ -547,9 +547,10 @@ def grade_assignment(
                 run = execute if f is None else partial(execute, kernel_factory=f)
                 _run_all(a, out, to_run, run, limits, jobs, reveal, progress)
         results = {sid: read_result(out / RESULTS / f"{sid}.json") for sid in a.ids}
-        _rebuild(a, out, results, reveal)
+        graded_now = (tuple(t[0].student_id for t in to_run)
+                      + tuple(r.student_id for r in to_write))
+        _rebuild(a, out, results, reveal, published=set(graded_now))
         _class_report(a, out, results, found.submissions)
-    graded_now = tuple(t[0].student_id for t in to_run) + tuple(r.student_id for r in to_write)
     return RunReport(tuple(results[s] for s in a.ids), graded_now, tuple(kept), found.problems,
                      found.notes)
 
@@ -768,14 +769,17 @@ def _class_report(a: Assignment, out: Path, results: Mapping[str, StudentResult 
 
 
 def _rebuild(a: Assignment, out: Path, results: Mapping[str, StudentResult | None],
-             reveal: bool) -> None:
-    """The gradebook and every feedback page, from the records on disk."""
+             reveal: bool, published: Set[str] = frozenset()) -> None:
+    """The gradebook and every feedback page, from the records on disk; but the pages of
+    ``published`` (written by :func:`_publish` in this run, from these same records)."""
     present = {sid: r for sid, r in results.items() if r is not None}
     unsandboxed = any(ran_code(r) and not r.sandboxed for r in present.values())
     table = gradebook_rows(a.columns, a.rows, a.questions, present, sandbox_column=unsandboxed)
     atomic_write_text(out / GRADES, gradebook_csv(table))
     atomic_write_text(out / ANSWERS, gradebook_csv(answers_rows(a.rows, present)))
     for sid, r in present.items():
+        if sid in published:
+            continue
         key = ({k.variable: k.answer.value for k in key_answers(a.key, sid)} if reveal else None)
         page = feedback_html(a.title, r, a.students[sid]["questions"], key)
         atomic_write_text(out / FEEDBACK / f"{sid}.html", page)

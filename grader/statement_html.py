@@ -14,6 +14,7 @@ source, escaped, in ``<code>``.
 
 from __future__ import annotations
 
+import functools
 import html
 import re
 from html.parser import HTMLParser
@@ -70,8 +71,12 @@ def clean_mathml(markup: str) -> str:
     return "".join(cleaner.out)
 
 
+@functools.lru_cache(maxsize=8192)
 def formula_html(latex: str, display: bool = False) -> str:
-    """One formula as MathML (cleaned), or its source in ``<code>`` if it cannot be read."""
+    """One formula as MathML (cleaned), or its source in ``<code>`` if it cannot be read.
+
+    Cached: the conventions and most formulas of a statement are the same for every student,
+    and converting one costs about a millisecond."""
     from latex2mathml.converter import convert
 
     try:
@@ -80,6 +85,7 @@ def formula_html(latex: str, display: bool = False) -> str:
         return f'<code class="latex">{html.escape(latex)}</code>'
 
 
+@functools.cache
 def _markdown():
     from markdown_it import MarkdownIt
 

@@ -128,10 +128,15 @@ def class_data(a: Assignment, results: Mapping[str, StudentResult | None]) -> Cl
 
 
 def _items(a: Assignment) -> tuple[Item, ...]:
-    first = a.key["students"][a.ids[0]]["questions"]
-    families = {q["question"]: q["family"] for q in first}
-    return tuple(Item(k.variable, k.question, k.answer.name, k.answer.kind,
-                      families[k.question]) for k in key_answers(a.key, a.ids[0]))
+    """Every answer asked of anyone, in the order of the first student asked it: variants of
+    one family may ask for different answers (one student ``F_body``, another ``r_lab``)."""
+    items: dict[str, Item] = {}
+    for sid in a.ids:
+        families = {q["question"]: q["family"] for q in a.key["students"][sid]["questions"]}
+        for k in key_answers(a.key, sid):
+            items.setdefault(k.variable, Item(k.variable, k.question, k.answer.name,
+                                              k.answer.kind, families[k.question]))
+    return tuple(sorted(items.values(), key=lambda i: i.question))
 
 
 def numeric(value: Any) -> np.ndarray | None:

@@ -157,7 +157,8 @@ def _hits(x: np.ndarray, rows: np.ndarray, tols: np.ndarray, period) -> np.ndarr
 
 def _item_matches(data: ClassData, item: Item) -> list[Match]:
     """Every ``key`` and ``wrong`` match on one answer (vectorised over the class)."""
-    answers = {s: data.keys[s][item.variable] for s in data.graded}
+    answers = {s: data.keys[s][item.variable] for s in data.graded
+               if item.variable in data.keys[s]}  # a variant may not ask for it
     keys = {s: numeric(a.value) for s, a in answers.items()}
     values = submitted_values(data, item)
     wrong = {s: x for s, (a, _, x) in values.items() if a.verdict.status == "wrong"}

@@ -133,8 +133,9 @@ def item_statistics(data: ClassData) -> tuple[tuple[ItemStats, ...], tuple[ItemS
     answers = []
     for item in data.items:
         lists = [[a.verdict for a in r.answers if a.variable == item.variable] for r in graded]
-        answers.append(_stats(item.variable, item.question, item.name, item.family, lists,
-                              totals))
+        asked = [i for i, verdicts in enumerate(lists) if verdicts]  # a variant may not ask it
+        answers.append(_stats(item.variable, item.question, item.name, item.family,
+                              [lists[i] for i in asked], totals[asked]))
     questions = []
     for q in data.assignment.questions:
         family = next(i.family for i in data.items if i.question == q)

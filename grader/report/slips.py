@@ -188,7 +188,8 @@ def swapped_with(data: ClassData, sid: str, item: Item, x: np.ndarray) -> str | 
     variable), or None."""
     answer = data.keys[sid][item.variable]
     for other in data.items:
-        if other.question != item.question or other.variable == item.variable:
+        if (other.question != item.question or other.variable == item.variable
+                or other.variable not in data.keys[sid]):  # not asked of this variant
             continue
         w = numeric(data.keys[sid][other.variable].value)
         if w is not None and close(answer, x, w, MATCH_FACTOR):
