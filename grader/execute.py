@@ -98,6 +98,9 @@ MAX_MESSAGE = 4 * 1024**2
 RECEIVE_QUEUE = 64
 """Messages a channel's socket queues before it stops reading (``RCVHWM``)."""
 
+RECONNECT_INTERVAL_MS = 5
+"""Milliseconds between the grader's attempts to connect to a kernel not yet listening."""
+
 EXTRACTION_TIMEOUT = 10.0
 """Seconds the answer extraction may take (within what is left of the whole-notebook limit)."""
 
@@ -300,6 +303,9 @@ class LocalKernel:
         # connection is dropped), and queues few: one kernel cannot fill the grader's memory
         self._context.setsockopt(zmq.MAXMSGSIZE, MAX_MESSAGE)
         self._context.setsockopt(zmq.RCVHWM, RECEIVE_QUEUE)
+        # a kernel handed out before it has bound its sockets refuses the first connection;
+        # ZeroMQ's default is to try again 100 ms later, which a fresh kernel would wait out
+        self._context.setsockopt(zmq.RECONNECT_IVL, RECONNECT_INTERVAL_MS)
         self.kc = make_client(context=self._context)
         self.kc.start_channels()
         self._watch_iopub(zmq)

@@ -79,9 +79,12 @@ PRELOAD = ("ipykernel.kernelapp", "IPython", "numpy", "scipy", "scipy.linalg", "
 KERNEL_MODULES = ("ipykernel.ipkernel", "ipykernel.zmqshell", "ipykernel.debugger",
                   "IPython.core.interactiveshell", "IPython.core.completerlib",
                   "pygments.styles.default", "tornado.gen", "tornado.locks", "tornado.queues",
-                  "tornado.platform.asyncio", "faulthandler")
-"""What a kernel imports while it starts and runs its first cells (measured with ipykernel 7:
-the debugger alone, debugpy, is a third of a start); imported too, when present."""
+                  "tornado.platform.asyncio", "faulthandler", "IPython.core.debugger", "pdb",
+                  "IPython.core.logger", "IPython.core.oinspect", "IPython.utils.wildcard",
+                  "IPython.extensions.storemagic", "sqlite3")
+"""What a kernel imports while it starts and runs its first cells (measured with ipykernel 7.4
+and IPython 9: the debugger alone, debugpy, is a third of a start; the history's sqlite3 and
+the %store extension are imported by every start); imported too, when present."""
 
 WORLD_TIMEOUT = 10.0
 """Seconds a forked kernel may take to make its own world (mounts) before it is given up."""
