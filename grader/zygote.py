@@ -61,6 +61,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import errno
+import gc
 import json
 import os
 import resource
@@ -399,6 +400,7 @@ def _become_kernel(request: dict, zygote_pid: int, link: socket.socket | None = 
     With ``request["world"]`` (sandboxed) this runs in G, the kernel's own namespaces already
     made by :func:`world.enter`; it builds the kernel's mounts (:func:`world.build`) and seals
     them once the kernel is initialised (:func:`world.seal`)."""
+    gc.enable()  # frozen in the zygote: what it imported is never visited (main)
     scratch = request.get("scratch")
     in_world = request.get("world") is not None
     if in_world:
@@ -478,6 +480,11 @@ def main() -> None:
         prctl(PR_SET_PDEATHSIG, signal.SIGTERM)  # SIGTERM: cleaned up like end of input
     import importlib
 
+    # What is imported here is shared with every kernel until written to; a garbage
+    # collection in a kernel writes to every object it visits (copying the page). So: no
+    # collection while importing, then everything frozen (out of the collector's sight) before
+    # the first fork; each kernel collects again (its own objects only).
+    gc.disable()
     preload = PRELOAD
     for arg in sys.argv[1:]:
         if arg.startswith("--preload="):
@@ -492,6 +499,7 @@ def main() -> None:
     if threads != 1 or (zmq is not None and zmq.Context._instance is not None):
         _send({"ready": False, "error": f"not fork-safe after imports ({threads} threads)"})
         return
+    gc.freeze()
     zygote = Zygote()
     _send({"ready": True, "pid": zygote.pid, "preloaded": list(preload)})
     try:

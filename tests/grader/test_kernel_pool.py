@@ -101,6 +101,26 @@ def test_every_submission_gets_a_fresh_process_with_fresh_state(pool, run):
     assert pool.slots[0].waiting is not None
 
 
+def test_what_the_zygote_imported_is_frozen_out_of_the_kernels_collections(run):
+    """A collection in a kernel would write to every object the zygote imported (copying
+    each page of them into the kernel); they are frozen, and the kernel still collects its
+    own garbage (a reference cycle made by the submission is freed)."""
+    done = run("import gc, weakref\n"
+               "frozen = gc.get_freeze_count()\n"
+               "enabled = gc.isenabled()\n"
+               "class Node: pass\n"
+               "a, b = Node(), Node()\n"
+               "a.other, b.other = b, a\n"
+               "alive = weakref.ref(a)\n"
+               "del a, b\n"
+               "gc.collect()\n"
+               "freed = alive() is None",
+               variables=("frozen", "enabled", "freed"))
+    assert done.status == "ok", done.message
+    assert done.answers["frozen"] > 100_000  # numpy, scipy, sympy, IPython: frozen
+    assert done.answers["enabled"] is True and done.answers["freed"] is True
+
+
 def test_the_child_is_confined_like_a_cold_kernel(pool, run):
     probe = textwrap.dedent("""\
         import ctypes, os, resource, signal
