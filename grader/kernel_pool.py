@@ -311,10 +311,15 @@ class Zygote:
         with self._changed:
             self._exits.pop(pid, None)
 
-    def close(self, timeout: float = 5.0) -> None:
-        """End the zygote: end of input makes it kill its kernels and leftovers and exit."""
+    def end_input(self) -> None:
+        """Close its input: it kills its kernels and leftovers and exits (:meth:`close`
+        waits for that)."""
         with contextlib.suppress(OSError, ValueError):
             self.process.stdin.close()
+
+    def close(self, timeout: float = 5.0) -> None:
+        """End the zygote: end of input makes it kill its kernels and leftovers and exit."""
+        self.end_input()
         try:
             self.process.wait(timeout)
         except subprocess.TimeoutExpired:
@@ -362,6 +367,7 @@ class Slot:
         self.preload = preload
         self.zygote: Zygote | None = None
         self.waiting: _Forked | None = None
+        self._prewarming: threading.Thread | None = None
         self.forks = 0
         self.starts = 0
         self.start_zygote()
@@ -420,6 +426,7 @@ class Slot:
 
     def take(self, limits: Limits) -> _Forked:
         """The prewarmed kernel if it is still usable, else a new one."""
+        self._settle()
         forked, self.waiting = self.waiting, None
         if forked is not None:
             usable = (forked.zygote is self.zygote and self.zygote.alive
@@ -437,7 +444,21 @@ class Slot:
             with contextlib.suppress(ZygoteError, OSError):
                 self.waiting = self.fork(limits)
 
+    def prewarm_soon(self, limits: Limits) -> None:
+        """:meth:`prewarm` in a thread of its own: the kernel that asks for it goes on at
+        once; :meth:`take` and :meth:`close` wait for it first."""
+        self._settle()
+        self._prewarming = threading.Thread(target=self.prewarm, args=(limits,), daemon=True,
+                                            name="eulertop-prewarm")
+        self._prewarming.start()
+
+    def _settle(self) -> None:
+        if self._prewarming is not None:
+            self._prewarming.join()
+            self._prewarming = None
+
     def close(self) -> None:
+        self._settle()
         if self.waiting is not None:
             release(self.waiting)
             self.waiting = None
@@ -556,6 +577,9 @@ class KernelPool:
 
     def close(self) -> None:
         """Kill every zygote, kernel and leftover; remove the pool's folder."""
+        for slot in self.slots:  # all of them end at once; then each is waited for
+            if slot.zygote is not None:
+                slot.zygote.end_input()
         for slot in self.slots:
             slot.close()
         if self.folder is not None:
@@ -630,7 +654,7 @@ class PooledKernel(LocalKernel):
         if forked.sandboxed:  # sockets bound: no more writing in a folder of this machine
             await asyncio.to_thread(_lock_control, forked)
         if self.pool.prewarm:
-            await asyncio.to_thread(self.slot.prewarm, self.limits)
+            self.slot.prewarm_soon(self.limits)
         return kc
 
     @property

@@ -54,7 +54,7 @@ import sys
 import threading
 from collections.abc import Callable, Iterator, Mapping, Sequence, Set
 from concurrent.futures import ThreadPoolExecutor, wait
-from contextlib import ExitStack, contextmanager
+from contextlib import ExitStack, contextmanager, suppress
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from functools import partial
@@ -534,16 +534,16 @@ def grade_assignment(
                                        getattr(limits, "submission_bytes", DEFAULT_MAX_BYTES))
         if on_plan is not None:
             progress = on_plan(len(to_run) + len(to_write)) or progress
-        for result in to_write:
-            _publish(a, out, result, reveal)
-            if progress:
-                progress(result)
         jobs = jobs or os.cpu_count() or 1
         if cluster is not None:
+            _publish_all(a, out, to_write, reveal, progress)
             _run_on_cluster(cluster, a, out, to_run, execute, limits, reveal, progress,
                             sandbox=sandbox, cold=cold_kernels)
-        else:
+        else:  # the kernels' zygotes start first: they import while this process writes
             with _kernels(warm and bool(to_run), min(jobs, len(to_run)), found_sandbox) as f:
+                _publish_all(a, out, to_write, reveal, progress)
+                if to_run:
+                    _prepare_report()
                 run = execute if f is None else partial(execute, kernel_factory=f)
                 _run_all(a, out, to_run, run, limits, jobs, reveal, progress)
         results = {sid: read_result(out / RESULTS / f"{sid}.json") for sid in a.ids}
@@ -751,6 +751,25 @@ def _run_all_in(stack, a, out, to_run, execute, limits, jobs, reveal, progress) 
     pool.shutdown()
     for f in futures:
         f.result()  # a fault in publishing (disk full …) must not pass silently
+
+
+def _publish_all(a: Assignment, out: Path, results: Sequence[StudentResult], reveal: bool,
+                 progress: Callable[[StudentResult], None] | None) -> None:
+    """Publish the records that need no kernel (missing, invalid, unchanged-but-rewritten)."""
+    for result in results:
+        _publish(a, out, result, reveal)
+        if progress:
+            progress(result)
+
+
+def _prepare_report() -> None:
+    """Import what the class report draws with (matplotlib: about a second) in a thread of
+    its own, while the kernels' zygotes start — when the grader has nothing else to do."""
+    def load() -> None:
+        with suppress(Exception):
+            import grader.report.page  # noqa: F401
+
+    threading.Thread(target=load, name="eulertop-report-imports", daemon=True).start()
 
 
 def _class_report(a: Assignment, out: Path, results: Mapping[str, StudentResult | None],
