@@ -47,6 +47,7 @@ Trust
 from __future__ import annotations
 
 import ast
+import functools
 import inspect
 import keyword
 import secrets
@@ -178,6 +179,13 @@ class ExtractionRequest(NamedTuple):
     user_expressions: dict[str, str]
 
 
+@functools.cache
+def _kernel_program() -> str:
+    """The source of :func:`kernel_plain` and :func:`kernel_extract` (read once: reading
+    source is a few milliseconds, per submission otherwise)."""
+    return "\n\n".join(inspect.getsource(f) for f in (kernel_plain, kernel_extract))
+
+
 def extraction_request(variables: Sequence[str], nonce: str | None = None) -> ExtractionRequest:
     """The extraction cell for ``variables`` (Python identifiers), tagged with a fresh nonce.
 
@@ -191,7 +199,7 @@ def extraction_request(variables: Sequence[str], nonce: str | None = None) -> Ex
         raise ValueError(f"answer variable names must be Python identifiers, got {bad!r}")
     nonce = nonce or secrets.token_hex(16)
     result = f"_eulertop_answers_{nonce}"
-    program = "\n\n".join(inspect.getsource(f) for f in (kernel_plain, kernel_extract))
+    program = _kernel_program()
     program += (f"\n\nnamespace[{result!r}] = kernel_extract(namespace, {tuple(variables)!r}, "
                 f"{(MAX_ELEMENTS, MAX_STRING, MAX_DEPTH)!r})\n")
     builtins = f"_eulertop_builtins_{nonce}"

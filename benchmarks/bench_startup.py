@@ -1,0 +1,141 @@
+"""Start-up and marginal cost of ``eulertop grade`` (issue 17), nbgrader side by side.
+
+Two classes of correct submissions (the students' solutions with a relative noise of 1e-6, as
+in ``bench_grade.py``), of ``--small`` (10) and ``--large`` (50) students, each its own
+assignment with the same problems. Every round times, as fresh processes, ``eulertop grade
+--force`` of both classes at ``--jobs 1`` and ``--jobs 2`` (order alternated between rounds),
+and from each pair
+
+    marginal = (t_large - t_small) / (large - small)       seconds per notebook
+    start-up = t_small - small * marginal                   seconds per run
+
+so that what a run pays once (imports, sandbox, zygotes, the class report) and what each
+notebook costs are told apart. Medians over ``--rounds`` (4). Then ``eulertop check`` of one
+notebook (median of 5), and, unless ``--no-nbgrader``, nbgrader's ``autograde`` on the same two
+classes (installed into a temporary virtual environment, as ``bench_grade.py`` does; fewer runs,
+it is slow).
+
+Run from the repository root: ``PYTHONPATH=. python benchmarks/bench_startup.py [--rounds 4]
+[--small 10] [--large 50] [--no-nbgrader]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_grade import (  # a script beside this one
+    ROOT,
+    install_nbgrader,
+    machine,
+    noisy_notebook,
+    time_nbgrader,
+)
+
+PROBLEMS = ["inertia_tensor", "euler_rotation"]
+
+
+def make_correct_class(root: Path, students: int) -> tuple[Path, Path]:
+    """An assignment of ``students`` and one correct (lightly noisy) submission each."""
+    from problems.generate import generate_assignment
+    from problems.roster import Roster
+    from problems.templates import FAMILIES
+
+    hw, subs = root / "HW", root / "subs"
+    roster = Roster(("id",), tuple({"id": f"s{i:03d}"} for i in range(students)))
+    generate_assignment(roster, hw, FAMILIES, problems=PROBLEMS, seed=2024)
+    subs.mkdir()
+    for i, row in enumerate(roster.rows):
+        nb = json.loads((hw / "solutions" / f"{row['id']}.ipynb").read_text())
+        (subs / f"{row['id']}.ipynb").write_text(json.dumps(noisy_notebook(nb, i, False)))
+    return hw, subs
+
+
+def wall(cmd: list[str]) -> float:
+    """Wall seconds of ``cmd`` as a fresh process (it must succeed)."""
+    t0 = time.perf_counter()
+    done = subprocess.run(cmd, cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)},
+                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                          check=False)
+    if done.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd[2:5])} failed: {done.stderr[-400:]}")
+    return time.perf_counter() - t0
+
+
+def grade(hw: Path, subs: Path, jobs: int) -> float:
+    return wall([sys.executable, "-m", "eulertop", "grade", str(hw), str(subs), "--jobs",
+                 str(jobs), "--force"])
+
+
+def split(small: float, large: float, n_small: int, n_large: int) -> tuple[float, float]:
+    """(start-up, marginal) seconds from the times of a small and a large class."""
+    marginal = (large - small) / (n_large - n_small)
+    return small - n_small * marginal, marginal
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rounds", type=int, default=4)
+    parser.add_argument("--small", type=int, default=10)
+    parser.add_argument("--large", type=int, default=50)
+    parser.add_argument("--nbgrader-runs", type=int, default=1)
+    parser.add_argument("--no-nbgrader", action="store_true")
+    args = parser.parse_args(argv)
+    print(f"machine: {machine()}")
+    with tempfile.TemporaryDirectory(prefix="bench-startup-") as tmp:
+        tmp = Path(tmp)
+        classes = {n: make_correct_class(tmp / f"c{n}", n) for n in (args.small, args.large)}
+        print(f"classes of {args.small} and {args.large} correct submissions, problems "
+              f"{','.join(PROBLEMS)}; {args.rounds} rounds; load average before: "
+              f"{os.getloadavg()[0]:.2f}", flush=True)
+        samples: dict[int, list[tuple[float, float, float, float]]] = {1: [], 2: []}
+        for r in range(args.rounds):
+            for jobs in ((1, 2) if r % 2 == 0 else (2, 1)):
+                sizes = (args.small, args.large) if r % 2 == 0 else (args.large, args.small)
+                t = {n: grade(*classes[n], jobs) for n in sizes}
+                s, m = split(t[args.small], t[args.large], args.small, args.large)
+                samples[jobs].append((t[args.small], t[args.large], s, m))
+                print(f"  round {r + 1} --jobs {jobs}: {args.small} in {t[args.small]:.2f} s, "
+                      f"{args.large} in {t[args.large]:.2f} s -> start-up {s:.2f} s, "
+                      f"marginal {1000 * m:.0f} ms/notebook", flush=True)
+        medians = {j: [statistics.median(col) for col in zip(*samples[j], strict=True)]
+                   for j in samples}
+        for jobs, (_, _, s, m) in medians.items():
+            print(f"eulertop grade --jobs {jobs}: start-up {s:.2f} s, marginal "
+                  f"{1000 * m:.0f} ms/notebook ({60 / m:.0f} notebooks/min at the margin); "
+                  f"medians of {args.rounds} rounds")
+        ratios = [one[3] / two[3] for one, two in zip(samples[1], samples[2], strict=True)]
+        print(f"--jobs 2 against --jobs 1 at the margin: {statistics.median(ratios):.2f}x "
+              f"(median of the rounds' ratios; each round's: "
+              f"{', '.join(f'{x:.2f}' for x in ratios)})")
+        notebook = classes[args.small][0] / "solutions" / "s000.ipynb"
+        checks = [wall([sys.executable, "-m", "eulertop", "check", str(notebook)])
+                  for _ in range(5)]
+        print(f"eulertop check of one notebook: median {statistics.median(checks):.2f} s "
+              f"(5 runs: {', '.join(f'{x:.2f}' for x in checks)})")
+        if not args.no_nbgrader:
+            nbgrader, note = install_nbgrader(tmp / "venv")
+            if nbgrader is None:
+                print(f"nbgrader: could not be installed here ({note}); not measured")
+            else:
+                t = {n: time_nbgrader(nbgrader, tmp / f"course{n}", *classes[n],
+                                      args.nbgrader_runs)[0] for n in classes}
+                s, m = split(t[args.small], t[args.large], args.small, args.large)
+                print(f"nbgrader autograde ({note}): {args.small} in {t[args.small]:.1f} s, "
+                      f"{args.large} in {t[args.large]:.1f} s -> start-up {s:.2f} s, marginal "
+                      f"{1000 * m:.0f} ms/notebook; eulertop --jobs 2 is "
+                      f"{m / medians[2][3]:.1f}x faster at the margin")
+        print(f"load average after: {os.getloadavg()[0]:.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
