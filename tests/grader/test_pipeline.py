@@ -212,6 +212,32 @@ def test_force_regrades_everything(hw, subs, first_run):
     assert strip(again.results) == strip(first_run[0].results)
 
 
+def test_each_feedback_page_is_rendered_once_and_a_rerun_still_writes_them(hw, subs,
+                                                                         monkeypatch):
+    """A page written when its record is published is not rendered again at the end of the
+    same run (the same record, the same page); a run that grades nothing rebuilds every
+    page from the records, equal to what the first run wrote."""
+    import grader.pipeline as pipeline
+
+    rendered = []
+    real = pipeline.feedback_html
+
+    def counting(title, result, questions, key=None):
+        rendered.append(result.student_id)
+        return real(title, result, questions, key)
+
+    monkeypatch.setattr(pipeline, "feedback_html", counting)
+    _run(hw, subs, FakeExecute())
+    assert sorted(rendered) == sorted(ROSTER)  # once each
+    pages = {p.name: p.read_bytes() for p in (hw / "graded" / "feedback").iterdir()}
+    for page in (hw / "graded" / "feedback").iterdir():
+        page.unlink()
+    rendered.clear()
+    _run(hw, subs, FakeExecute())  # nothing to grade: every page from the records
+    assert sorted(rendered) == sorted(ROSTER)
+    assert {p.name: p.read_bytes() for p in (hw / "graded" / "feedback").iterdir()} == pages
+
+
 def test_a_changed_submission_or_key_is_regraded(hw, subs, first_run):
     (subs / "bob.ipynb").write_text(_notebook(hw, "bob"))  # bob fixed his answer
     key = _key(hw)
