@@ -175,7 +175,12 @@ class Answer:
         key = _read_key(form, self.value, "value")
         object.__setattr__(self, "value", _to_json(key))
         _require_gradable_key(self)
-        mistakes = tuple(_checked_mistake(self, m) for m in self.mistakes)
+        if self.mistakes:  # read in the graded form once, for all of them
+            form = _Form.of(self)
+            key = _read_key(form, self.value, "value")
+            mistakes = tuple(_checked_mistake(self, m, form, key) for m in self.mistakes)
+        else:
+            mistakes = ()
         object.__setattr__(self, "mistakes", mistakes)
         names = [m.name for m in mistakes]
         if len(set(names)) != len(names):
@@ -556,6 +561,8 @@ def _read_key(form: _Form, value: Any, field: str) -> Any:
 
 def _plain(x: Any) -> Any:
     """numpy and sympy objects as plain Python, one level deep (elements are read one by one)."""
+    if type(x) is float:  # the common case first
+        return x
     if isinstance(x, np.ndarray):
         return x.tolist() if x.ndim else x.item()
     if isinstance(x, np.generic):
@@ -718,6 +725,8 @@ _READERS = {
 
 
 def _within(x: NDArray | float, v: NDArray | float, answer: Answer) -> bool:
+    if type(x) is float and type(v) is float:  # the same IEEE operations, without numpy's calls
+        return abs(x - v) <= answer.atol + answer.rtol * abs(v)
     return bool(np.all(np.abs(np.subtract(x, v)) <= answer.atol + answer.rtol * np.abs(v)))
 
 
@@ -874,12 +883,12 @@ def _require_gradable_key(answer: Answer) -> None:
         )
 
 
-def _checked_mistake(answer: Answer, mistake: Any) -> Mistake:
+def _checked_mistake(answer: Answer, mistake: Any, form: _Form, key: Any) -> Mistake:
+    """``mistake`` read in ``form``; a ParameterError if it matches the (read) ``key``."""
     if not isinstance(mistake, Mistake):
         raise ParameterError("mistakes", f"answer {answer.name!r}: not a Mistake: {mistake!r}")
-    form = _Form.of(answer)
     value = _read_key(form, mistake.value, "mistakes")
-    if _matches(answer, value, _read_key(form, answer.value, "value")):
+    if _matches(answer, value, key):
         raise ParameterError(
             "mistakes",
             f"answer {answer.name!r}: mistake {mistake.name!r} is indistinguishable from the key "

@@ -234,11 +234,15 @@ def student_answers(key: Mapping, student_id: str) -> dict[str, Answer]:
 
 
 def _write_student(
-    folder: Path, title: str, row: Mapping[str, str], variants: Sequence[Variant]
+    folder: Path, title: str, row: Mapping[str, str], variants: Sequence[Variant],
+    validate: bool = True,
 ) -> None:
+    """Write a student's release and solutions notebooks; ``validate`` checks them against the
+    nbformat schema (:func:`problems.notebook.notebook_text`)."""
     for sub, solutions in ((RELEASE, False), (SOLUTIONS, True)):
         nb = build_notebook(title, row, variants, solutions=solutions)
-        (folder / sub / f"{row['id']}.ipynb").write_text(notebook_text(nb), encoding="utf-8")
+        text = notebook_text(nb, validate=validate)
+        (folder / sub / f"{row['id']}.ipynb").write_text(text, encoding="utf-8")
 
 
 PARALLEL_MIN = 16
@@ -251,13 +255,14 @@ _FORKED: dict = {}
 """What worker processes inherit by ``fork`` (template modules cannot be pickled)."""
 
 
-def _student_files(task: tuple[Path, str, Mapping[str, str], int]) -> tuple[dict, dict]:
+def _student_files(task: tuple[Path, str, Mapping[str, str], int, bool]) -> tuple[dict, dict]:
     """In a worker process: draw one student's questions, write their two notebooks into the
-    staging folder, and return their manifest and key entries."""
-    tmp, title, row, reroll = task
+    staging folder (schema-checked when the task says so: the first student's), and return
+    their manifest and key entries."""
+    tmp, title, row, reroll, validate = task
     families, problems, seed = _FORKED["families"], _FORKED["problems"], _FORKED["seed"]
     variants = student_variants(families, problems, seed, row["id"], reroll)
-    _write_student(tmp, title, row, variants)
+    _write_student(tmp, title, row, variants, validate)
     return manifest_entry(variants, reroll), key_entry(variants)
 
 
@@ -275,7 +280,7 @@ def _students_in_parallel(
     from concurrent.futures import ProcessPoolExecutor
 
     _FORKED.update(families=families, problems=tuple(problems), seed=seed)
-    tasks = [(tmp, title, row, rerolls.get(row["id"], 0)) for row in rows]
+    tasks = [(tmp, title, row, rerolls.get(row["id"], 0), i == 0) for i, row in enumerate(rows)]
     try:
         with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("fork")) as pool:
             yield from pool.map(_student_files, tasks, chunksize=CHUNK)
@@ -435,8 +440,8 @@ def generate_assignment(
                                             problems, seed, workers)
         else:
             _FORKED.update(families=families, problems=tuple(problems), seed=seed)
-            entries = (_student_files((tmp, title, row, rerolls.get(row["id"], 0)))
-                       for row in roster.rows)
+            entries = (_student_files((tmp, title, row, rerolls.get(row["id"], 0), i == 0))
+                       for i, row in enumerate(roster.rows))
         for done, (row, (entry, answers)) in enumerate(zip(roster.rows, entries, strict=True),
                                                        start=1):
             manifest["students"][row["id"]] = entry
