@@ -49,13 +49,13 @@ from __future__ import annotations
 
 import math
 import numbers
+import sys
 from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, fields, replace
 from functools import lru_cache, partial
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
-import sympy
 from numpy.typing import NDArray
 
 from problems.expressions import (
@@ -66,6 +66,9 @@ from problems.expressions import (
     sample_points,
 )
 from solver.parameters import ParameterError
+
+if TYPE_CHECKING:
+    import sympy
 
 __all__ = [
     "KINDS",
@@ -569,6 +572,9 @@ def _plain(x: Any) -> Any:
         return x.item()
     if isinstance(x, tuple):
         return list(x)
+    sympy = sys.modules.get("sympy")
+    if sympy is None:
+        return x
     if isinstance(x, sympy.MatrixBase):
         return list(x) if 1 in x.shape else x.tolist()  # a row or column vector is flat
     if isinstance(x, sympy.logic.boolalg.BooleanAtom):
@@ -576,6 +582,18 @@ def _plain(x: Any) -> Any:
     if isinstance(x, sympy.Expr) and x.is_number:
         return _sympy_number(x)
     return x
+
+
+def _sympy_class(name: str) -> type | tuple[()]:
+    """``sympy.<name>`` if sympy is loaded, else ``()`` (``isinstance(x, ())`` is False).
+
+    A value can only be a sympy object once sympy has been imported, so reading and judging
+    values never imports it: ``eulertop check`` of a notebook of numbers does without sympy's
+    start-up (most of a second). Expressions import it where they are parsed
+    (:mod:`problems.expressions`).
+    """
+    sympy = sys.modules.get("sympy")
+    return () if sympy is None else getattr(sympy, name)
 
 
 def _sympy_number(x: sympy.Expr) -> float | complex | sympy.Expr:
@@ -611,7 +629,7 @@ def _describe(x: Any) -> str:
     if isinstance(x, list):
         nested = any(isinstance(_plain(e), list) for e in x)
         return f"a {'nested ' if nested else ''}list of {_count(len(x), 'element')}"
-    if isinstance(x, sympy.Basic):
+    if isinstance(x, _sympy_class("Basic")):
         return f"the sympy object {_quote(str(x))}"
     return f"a value of type {type(x).__name__}"
 
@@ -634,7 +652,7 @@ def _number(x: Any, what: str = "", unit: str = "") -> float:
     in_unit = f" (in {unit})" if unit else ""
     if isinstance(x, str) and _numeric_string(x):
         raise _Invalid(f"{subject}{_describe(x)}, not a number — remove the quotes")
-    if isinstance(x, sympy.Expr) and x.free_symbols:
+    if isinstance(x, _sympy_class("Expr")) and x.free_symbols:
         names = ", ".join(sorted(map(str, x.free_symbols)))
         raise _Invalid(f"{subject}an expression in {names}; a number{in_unit} is expected")
     if isinstance(x, complex):
@@ -690,7 +708,7 @@ def _read_choice(x: Any, form: _Form) -> str:
 
 
 def _read_expression(x: Any, form: _Form) -> str:
-    if isinstance(x, sympy.Basic):
+    if isinstance(x, _sympy_class("Basic")):
         x = str(x)
     elif isinstance(x, numbers.Real) and not isinstance(x, bool):
         x = repr(_number(x))  # a constant is a (probably wrong) expression
