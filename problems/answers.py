@@ -639,6 +639,8 @@ def _number(x: Any, what: str = "", unit: str = "") -> float:
     for the value itself, so that the message starts with the description of the value)."""
     x = _plain(x)
     subject = f"{what} is " if what else ""
+    if type(x) is float and math.isfinite(x):  # the common case, without the checks below
+        return x
     if isinstance(x, numbers.Real) and not isinstance(x, bool):
         try:
             value = float(x)
@@ -848,8 +850,9 @@ def _validate_fields(answer: Answer) -> None:
         raise ParameterError("kind", f"answer {name!r}: one of {KINDS}, not {answer.kind!r}")
     for field in ("rtol", "atol", "points"):
         value = getattr(answer, field)
-        if isinstance(value, bool) or not isinstance(value, numbers.Real) \
-                or not math.isfinite(value) or value < 0:
+        real = type(value) is float or (
+            not isinstance(value, bool) and isinstance(value, numbers.Real))
+        if not real or not math.isfinite(value) or value < 0:
             raise ParameterError(field, f"answer {name!r}: must be finite and ≥ 0, got {value!r}")
         object.__setattr__(answer, field, float(value))
     for field in ("unit", "description"):
@@ -894,11 +897,16 @@ def _require_gradable_key(answer: Answer) -> None:
     if answer.kind == "expression":  # defined at enough sample points; zero needs atol
         _key_points(answer.name, answer.symbols, answer.value, answer.atol)
     elif answer.kind in ("scalar", "angle", "vector") and answer.atol == 0 \
-            and not np.any(answer.value):
+            and _is_zero(answer.value):
         raise ParameterError(
             "atol", f"answer {answer.name!r}: the key is zero, so rtol alone accepts only an exact "
             "zero; set atol > 0"
         )
+
+
+def _is_zero(value: float | list[float]) -> bool:
+    """Whether a read scalar, angle or vector key is exactly zero (``not np.any``)."""
+    return value == 0.0 if type(value) is float else not np.any(value)
 
 
 def _checked_mistake(answer: Answer, mistake: Any, form: _Form, key: Any) -> Mistake:
