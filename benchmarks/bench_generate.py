@@ -84,7 +84,7 @@ def breakdown(students: int, questions: int) -> dict[str, float]:
         prepare_families,
         student_variants,
     )
-    from problems.notebook import build_notebook, notebook_text
+    from problems.notebook import build_notebooks, notebook_text
 
     families, problems, roster = _setup(students, questions)
     clock = time.process_time
@@ -94,9 +94,9 @@ def breakdown(students: int, questions: int) -> dict[str, float]:
     drawn = [student_variants(families, problems, 0, row["id"]) for row in roster.rows]
     parts["drawing the variants"], start = clock() - start, clock()
     for row, variants in zip(roster.rows, drawn, strict=True):
-        for solutions in (False, True):
-            notebook_text(build_notebook("benchmark", row, variants, solutions=solutions),
-                          validate=False)
+        memo: dict = {}
+        for notebook in build_notebooks("benchmark", row, variants):
+            notebook_text(notebook, validate=False, memo=memo)
     parts["building and encoding the notebooks"], start = clock() - start, clock()
     for variants in drawn:
         CompactJSON.of(manifest_entry(variants, 0)), CompactJSON.of(key_entry(variants))

@@ -61,7 +61,7 @@ from typing import Any
 import numpy as np
 
 from problems.answers import Answer
-from problems.notebook import build_notebook, notebook_text
+from problems.notebook import build_notebooks, notebook_text
 from problems.roster import Roster
 from problems.variant import Variant, variable_name
 
@@ -256,9 +256,10 @@ def _write_student(
 ) -> None:
     """Write a student's release and solutions notebooks; ``validate`` checks them against the
     nbformat schema (:func:`problems.notebook.notebook_text`)."""
-    for sub, solutions in ((RELEASE, False), (SOLUTIONS, True)):
-        nb = build_notebook(title, row, variants, solutions=solutions)
-        text = notebook_text(nb, validate=validate)
+    notebooks = build_notebooks(title, row, variants)  # sharing their common cells
+    memo: dict = {}  # so that notebook_text encodes each shared cell once
+    for sub, nb in zip((RELEASE, SOLUTIONS), notebooks, strict=True):
+        text = notebook_text(nb, validate=validate, memo=memo)
         (folder / sub / f"{row['id']}.ipynb").write_text(text, encoding="utf-8")
 
 

@@ -10,7 +10,14 @@ import nbformat
 import pytest
 
 from problems.generate import generate_assignment, student_answers
-from problems.notebook import answer_line, indented_json, notebook_text, python_literal
+from problems.notebook import (
+    answer_line,
+    build_notebook,
+    build_notebooks,
+    indented_json,
+    notebook_text,
+    python_literal,
+)
 from problems.roster import read_roster
 
 PROBLEMS = ("rod", "rod2")
@@ -195,3 +202,20 @@ def test_an_invalid_notebook_is_refused_only_when_validated():
     with pytest.raises(ValueError, match="generated an invalid notebook"):
         notebook_text(nb)
     assert json.loads(notebook_text(nb, validate=False)) == nb
+
+
+def test_the_two_notebooks_built_together_are_the_ones_built_alone(families):
+    """build_notebooks shares the common cells; a memo encodes them once: same notebooks, same
+    text as building and encoding each alone."""
+    from problems.generate import student_variants
+
+    variants = student_variants(families, PROBLEMS, 5, "alice")
+    row = {"id": "alice", "name": "Alice Ng"}
+    release, solutions = build_notebooks("Tops", row, variants)
+    assert release == build_notebook("Tops", row, variants)
+    assert solutions == build_notebook("Tops", row, variants, solutions=True)
+    assert release["cells"][0] is solutions["cells"][0]  # shared, not copied
+    memo: dict = {}
+    texts = [notebook_text(nb, memo=memo) for nb in (release, solutions)]
+    assert memo and texts == [dumps(release) + "\n", dumps(solutions) + "\n"]
+    assert texts[0] != texts[1]
