@@ -7,7 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from solver.parameters import ParameterError, as_real, nonnegative, positive, principal_moments
+from solver.parameters import (
+    ParameterError,
+    any_true,
+    as_real,
+    nonnegative,
+    positive,
+    principal_moments,
+)
 
 
 @pytest.mark.parametrize("value", [0.5, -3.0, 0.0, 1e300, np.float64(2.5), 7, np.array(1.5)])
@@ -43,3 +50,17 @@ def test_signs_and_the_triangle_inequality():
         principal_moments(1.0, 1.0, 2.5)
     with pytest.raises(ParameterError, match=r"^I2: must be a number"):
         principal_moments(1.0, "2", 2.5)
+
+
+def test_any_true_of_a_single_value_and_of_arrays():
+    assert any_true(np.asarray(1.0) > 0) is True and any_true(np.asarray(1.0) < 0) is False
+    assert any_true(np.array([1.0, -1.0]) < 0) is True
+    assert any_true(np.zeros((2, 3)) > 0) is False and any_true(np.zeros(0) > 0) is False
+
+
+def test_principal_moments_broadcast_as_before():
+    a, b, c = principal_moments([1.0, 2.0], 2.0, 2.5)
+    assert a.shape == b.shape == c.shape == (2,)
+    np.testing.assert_array_equal(b, [2.0, 2.0])
+    with pytest.raises(ParameterError, match=r"^I3: violates .*\(I3 = 3\.5 exceeds"):
+        principal_moments([1.5, 1.0], 2.0, [2.5, 3.5])
