@@ -427,8 +427,11 @@ def generate_assignment(
     """Generate an assignment folder ``out`` (layout, seeding, ``force``: module docstring).
 
     ``jobs`` processes draw the students' questions and write their notebooks (default: one
-    per usable core, from :data:`PARALLEL_MIN` students on; forked, so Linux and macOS); the
-    files are byte-identical to those of ``jobs=1``.
+    per usable core, from :data:`PARALLEL_MIN` students on); the files are byte-identical to
+    those of ``jobs=1``. The workers are forked (Linux, macOS) after the families' one-time work
+    (:func:`prepare_families`: sympy derivations) is done here, so they inherit it instead of
+    each repeating it. Where ``fork`` is not available (Windows) everything runs in this
+    process, and each family does its one-time work on first use, once.
 
     Raises
     ------
