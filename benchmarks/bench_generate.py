@@ -154,10 +154,13 @@ def main(argv: list[str] | None = None) -> int:
     print(f"machine: {machine()}; load average {load_before:.1f} before, "
           f"{os.getloadavg()[0]:.1f} after")
     print(f"problems: {', '.join(runs[0]['problems'])}")
+    verdict = ""
+    if (args.students, args.questions) == (300, 14):  # the class size the target is set for
+        verdict = (f"; target < {TARGET_S:.0f} s: "
+                   f"{'met' if median('generate') < TARGET_S else 'MISSED'}")
     print(f"generate {args.students} students × {args.questions} questions, jobs {jobs}, "
           f"a fresh process per run: median {median('generate'):.2f} s over {args.runs} runs "
-          f"(min {min(generate):.2f}, max {max(generate):.2f}); target < {TARGET_S:.0f} s: "
-          f"{'met' if median('generate') < TARGET_S else 'MISSED'}")
+          f"(min {min(generate):.2f}, max {max(generate):.2f}){verdict}")
     print(f"whole process (start-up, imports {median('imports'):.2f} s, generate): median "
           f"{median('whole'):.2f} s")
     print(f"CPU (user + system, the process and its workers): median {median('cpu'):.2f} s per "
