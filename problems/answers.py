@@ -49,13 +49,13 @@ from __future__ import annotations
 
 import math
 import numbers
+import sys
 from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, fields, replace
 from functools import lru_cache, partial
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
-import sympy
 from numpy.typing import NDArray
 
 from problems.expressions import (
@@ -66,6 +66,9 @@ from problems.expressions import (
     sample_points,
 )
 from solver.parameters import ParameterError
+
+if TYPE_CHECKING:
+    import sympy
 
 __all__ = [
     "KINDS",
@@ -175,7 +178,12 @@ class Answer:
         key = _read_key(form, self.value, "value")
         object.__setattr__(self, "value", _to_json(key))
         _require_gradable_key(self)
-        mistakes = tuple(_checked_mistake(self, m) for m in self.mistakes)
+        if self.mistakes:  # read in the graded form once, for all of them
+            form = _Form.of(self)
+            key = _read_key(form, self.value, "value")
+            mistakes = tuple(_checked_mistake(self, m, form, key) for m in self.mistakes)
+        else:
+            mistakes = ()
         object.__setattr__(self, "mistakes", mistakes)
         names = [m.name for m in mistakes]
         if len(set(names)) != len(names):
@@ -556,12 +564,17 @@ def _read_key(form: _Form, value: Any, field: str) -> Any:
 
 def _plain(x: Any) -> Any:
     """numpy and sympy objects as plain Python, one level deep (elements are read one by one)."""
+    if type(x) is float:  # the common case first
+        return x
     if isinstance(x, np.ndarray):
         return x.tolist() if x.ndim else x.item()
     if isinstance(x, np.generic):
         return x.item()
     if isinstance(x, tuple):
         return list(x)
+    sympy = sys.modules.get("sympy")
+    if sympy is None:
+        return x
     if isinstance(x, sympy.MatrixBase):
         return list(x) if 1 in x.shape else x.tolist()  # a row or column vector is flat
     if isinstance(x, sympy.logic.boolalg.BooleanAtom):
@@ -569,6 +582,18 @@ def _plain(x: Any) -> Any:
     if isinstance(x, sympy.Expr) and x.is_number:
         return _sympy_number(x)
     return x
+
+
+def _sympy_class(name: str) -> type | tuple[()]:
+    """``sympy.<name>`` if sympy is loaded, else ``()`` (``isinstance(x, ())`` is False).
+
+    A value can only be a sympy object once sympy has been imported, so reading and judging
+    values never imports it: ``eulertop check`` of a notebook of numbers does without sympy's
+    start-up (most of a second). Expressions import it where they are parsed
+    (:mod:`problems.expressions`).
+    """
+    sympy = sys.modules.get("sympy")
+    return () if sympy is None else getattr(sympy, name)
 
 
 def _sympy_number(x: sympy.Expr) -> float | complex | sympy.Expr:
@@ -604,7 +629,7 @@ def _describe(x: Any) -> str:
     if isinstance(x, list):
         nested = any(isinstance(_plain(e), list) for e in x)
         return f"a {'nested ' if nested else ''}list of {_count(len(x), 'element')}"
-    if isinstance(x, sympy.Basic):
+    if isinstance(x, _sympy_class("Basic")):
         return f"the sympy object {_quote(str(x))}"
     return f"a value of type {type(x).__name__}"
 
@@ -614,6 +639,8 @@ def _number(x: Any, what: str = "", unit: str = "") -> float:
     for the value itself, so that the message starts with the description of the value)."""
     x = _plain(x)
     subject = f"{what} is " if what else ""
+    if type(x) is float and math.isfinite(x):  # the common case, without the checks below
+        return x
     if isinstance(x, numbers.Real) and not isinstance(x, bool):
         try:
             value = float(x)
@@ -627,7 +654,7 @@ def _number(x: Any, what: str = "", unit: str = "") -> float:
     in_unit = f" (in {unit})" if unit else ""
     if isinstance(x, str) and _numeric_string(x):
         raise _Invalid(f"{subject}{_describe(x)}, not a number — remove the quotes")
-    if isinstance(x, sympy.Expr) and x.free_symbols:
+    if isinstance(x, _sympy_class("Expr")) and x.free_symbols:
         names = ", ".join(sorted(map(str, x.free_symbols)))
         raise _Invalid(f"{subject}an expression in {names}; a number{in_unit} is expected")
     if isinstance(x, complex):
@@ -683,7 +710,7 @@ def _read_choice(x: Any, form: _Form) -> str:
 
 
 def _read_expression(x: Any, form: _Form) -> str:
-    if isinstance(x, sympy.Basic):
+    if isinstance(x, _sympy_class("Basic")):
         x = str(x)
     elif isinstance(x, numbers.Real) and not isinstance(x, bool):
         x = repr(_number(x))  # a constant is a (probably wrong) expression
@@ -718,6 +745,8 @@ _READERS = {
 
 
 def _within(x: NDArray | float, v: NDArray | float, answer: Answer) -> bool:
+    if type(x) is float and type(v) is float:  # the same IEEE operations, without numpy's calls
+        return abs(x - v) <= answer.atol + answer.rtol * abs(v)
     return bool(np.all(np.abs(np.subtract(x, v)) <= answer.atol + answer.rtol * np.abs(v)))
 
 
@@ -821,8 +850,9 @@ def _validate_fields(answer: Answer) -> None:
         raise ParameterError("kind", f"answer {name!r}: one of {KINDS}, not {answer.kind!r}")
     for field in ("rtol", "atol", "points"):
         value = getattr(answer, field)
-        if isinstance(value, bool) or not isinstance(value, numbers.Real) \
-                or not math.isfinite(value) or value < 0:
+        real = type(value) is float or (
+            not isinstance(value, bool) and isinstance(value, numbers.Real))
+        if not real or not math.isfinite(value) or value < 0:
             raise ParameterError(field, f"answer {name!r}: must be finite and ≥ 0, got {value!r}")
         object.__setattr__(answer, field, float(value))
     for field in ("unit", "description"):
@@ -867,19 +897,24 @@ def _require_gradable_key(answer: Answer) -> None:
     if answer.kind == "expression":  # defined at enough sample points; zero needs atol
         _key_points(answer.name, answer.symbols, answer.value, answer.atol)
     elif answer.kind in ("scalar", "angle", "vector") and answer.atol == 0 \
-            and not np.any(answer.value):
+            and _is_zero(answer.value):
         raise ParameterError(
             "atol", f"answer {answer.name!r}: the key is zero, so rtol alone accepts only an exact "
             "zero; set atol > 0"
         )
 
 
-def _checked_mistake(answer: Answer, mistake: Any) -> Mistake:
+def _is_zero(value: float | list[float]) -> bool:
+    """Whether a read scalar, angle or vector key is exactly zero (``not np.any``)."""
+    return value == 0.0 if type(value) is float else not np.any(value)
+
+
+def _checked_mistake(answer: Answer, mistake: Any, form: _Form, key: Any) -> Mistake:
+    """``mistake`` read in ``form``; a ParameterError if it matches the (read) ``key``."""
     if not isinstance(mistake, Mistake):
         raise ParameterError("mistakes", f"answer {answer.name!r}: not a Mistake: {mistake!r}")
-    form = _Form.of(answer)
     value = _read_key(form, mistake.value, "mistakes")
-    if _matches(answer, value, _read_key(form, answer.value, "value")):
+    if _matches(answer, value, key):
         raise ParameterError(
             "mistakes",
             f"answer {answer.name!r}: mistake {mistake.name!r} is indistinguishable from the key "

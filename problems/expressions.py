@@ -48,11 +48,18 @@ import re
 import tokenize
 from collections.abc import Callable, Mapping, Sequence
 from functools import lru_cache
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import sympy
 from numpy.typing import NDArray
-from sympy.parsing.sympy_parser import auto_number, parse_expr
+
+if TYPE_CHECKING:
+    import sympy
+
+# sympy's parser, imported on first use (reading numbers needs no sympy); module attributes, so
+# that the tests can watch what reaches it.
+parse_expr: Callable[..., Any] | None = None
+auto_number: Callable[..., Any] | None = None
 
 __all__ = [
     "CONSTANTS",
@@ -176,6 +183,8 @@ def check_symbol_names(symbols: Sequence[str]) -> tuple[str, ...]:
 def symbol_table(symbols: Sequence[str]) -> dict[str, sympy.Symbol]:
     """The sympy symbols for ``symbols``: those of :data:`solver.symbolic.SYMBOLS` when it names
     them (same assumptions, so expressions compare equal to the solver's), else real symbols."""
+    import sympy  # here, not at the top: reading numbers (eulertop check) needs no sympy
+
     try:
         from solver.symbolic import SYMBOLS
     except ImportError:  # the solver's derivations are optional for reading expressions
@@ -362,6 +371,14 @@ def parse_expression(text: str, symbols: Sequence[str]) -> sympy.Expr:
 
 @lru_cache(maxsize=1024)
 def _sympy_expression(text: str, symbols: tuple[str, ...]) -> sympy.Expr:
+    global parse_expr, auto_number
+    import sympy
+
+    if parse_expr is None:  # each on its own: a test may have replaced the other
+        from sympy.parsing.sympy_parser import parse_expr
+    if auto_number is None:
+        from sympy.parsing.sympy_parser import auto_number
+
     global_dict: dict[str, object] = {"__builtins__": {}}
     for name in ("Integer", "Float", "Rational", "Add", "Mul", "Pow", *FUNCTIONS, *CONSTANTS):
         global_dict[name] = getattr(sympy, name)

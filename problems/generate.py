@@ -61,7 +61,7 @@ from typing import Any
 import numpy as np
 
 from problems.answers import Answer
-from problems.notebook import build_notebook, notebook_text
+from problems.notebook import build_notebooks, notebook_text
 from problems.roster import Roster
 from problems.variant import Variant, variable_name
 
@@ -176,6 +176,18 @@ def _compact(obj: Any) -> str:
     return json.dumps(obj, sort_keys=True, ensure_ascii=False, allow_nan=False)
 
 
+class CompactJSON(str):
+    """A value already written as :func:`json_text` writes a student's entry (sorted keys, one
+    line): worker processes hand back their students' entries as text, which :func:`json_text`
+    copies as is — cheaper to send between processes than the nested dicts, and encoded in
+    parallel rather than by the parent at the end."""
+
+    @classmethod
+    def of(cls, obj: Any) -> CompactJSON:
+        """``obj`` encoded."""
+        return cls(_compact(obj))
+
+
 def json_text(document: Mapping[str, Any]) -> str:
     """Deterministic JSON for the manifest and the key: one line per top-level field, and one
     line per student under ``"students"``.
@@ -188,11 +200,16 @@ def json_text(document: Mapping[str, Any]) -> str:
     for name in sorted(document):
         value = document[name]
         if name == "students" and value:
-            rows = ",\n".join(f"  {_compact(sid)}: {_compact(value[sid])}" for sid in sorted(value))
+            rows = ",\n".join(f"  {_compact(sid)}: {_entry_text(value[sid])}"
+                              for sid in sorted(value))
             fields.append(f' "students": {{\n{rows}\n }}')
         else:
             fields.append(f" {_compact(name)}: {_compact(value)}")
     return "{\n" + ",\n".join(fields) + "\n}\n"
+
+
+def _entry_text(entry: Any) -> str:
+    return entry if isinstance(entry, CompactJSON) else _compact(entry)
 
 
 def key_hash(questions: Sequence[Mapping]) -> str:
@@ -234,11 +251,16 @@ def student_answers(key: Mapping, student_id: str) -> dict[str, Answer]:
 
 
 def _write_student(
-    folder: Path, title: str, row: Mapping[str, str], variants: Sequence[Variant]
+    folder: Path, title: str, row: Mapping[str, str], variants: Sequence[Variant],
+    validate: bool = True,
 ) -> None:
-    for sub, solutions in ((RELEASE, False), (SOLUTIONS, True)):
-        nb = build_notebook(title, row, variants, solutions=solutions)
-        (folder / sub / f"{row['id']}.ipynb").write_text(notebook_text(nb), encoding="utf-8")
+    """Write a student's release and solutions notebooks; ``validate`` checks them against the
+    nbformat schema (:func:`problems.notebook.notebook_text`)."""
+    notebooks = build_notebooks(title, row, variants)  # sharing their common cells
+    memo: dict = {}  # so that notebook_text encodes each shared cell once
+    for sub, nb in zip((RELEASE, SOLUTIONS), notebooks, strict=True):
+        text = notebook_text(nb, validate=validate, memo=memo)
+        (folder / sub / f"{row['id']}.ipynb").write_text(text, encoding="utf-8")
 
 
 PARALLEL_MIN = 16
@@ -251,20 +273,23 @@ _FORKED: dict = {}
 """What worker processes inherit by ``fork`` (template modules cannot be pickled)."""
 
 
-def _student_files(task: tuple[Path, str, Mapping[str, str], int]) -> tuple[dict, dict]:
+def _student_files(
+    task: tuple[Path, str, Mapping[str, str], int, bool],
+) -> tuple[CompactJSON, CompactJSON]:
     """In a worker process: draw one student's questions, write their two notebooks into the
-    staging folder, and return their manifest and key entries."""
-    tmp, title, row, reroll = task
+    staging folder (schema-checked when the task says so: the first student's), and return
+    their manifest and key entries, encoded."""
+    tmp, title, row, reroll, validate = task
     families, problems, seed = _FORKED["families"], _FORKED["problems"], _FORKED["seed"]
     variants = student_variants(families, problems, seed, row["id"], reroll)
-    _write_student(tmp, title, row, variants)
-    return manifest_entry(variants, reroll), key_entry(variants)
+    _write_student(tmp, title, row, variants, validate)
+    return CompactJSON.of(manifest_entry(variants, reroll)), CompactJSON.of(key_entry(variants))
 
 
 def _students_in_parallel(
     tmp: Path, title: str, rows: Sequence[Mapping[str, str]], rerolls: Mapping[str, int],
     families: Mapping[str, ModuleType], problems: Sequence[str], seed: int, jobs: int,
-) -> Iterator[tuple[dict, dict]]:
+) -> Iterator[tuple[CompactJSON, CompactJSON]]:
     """``(manifest entry, key entry)`` of each row, in roster order, computed by ``jobs``
     forked processes that each write their students' notebooks (:func:`_student_files`).
 
@@ -274,13 +299,27 @@ def _students_in_parallel(
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
+    prepare_families(families, problems)  # once here, inherited by every worker
     _FORKED.update(families=families, problems=tuple(problems), seed=seed)
-    tasks = [(tmp, title, row, rerolls.get(row["id"], 0)) for row in rows]
+    tasks = [(tmp, title, row, rerolls.get(row["id"], 0), i == 0) for i, row in enumerate(rows)]
     try:
         with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("fork")) as pool:
             yield from pool.map(_student_files, tasks, chunksize=CHUNK)
     finally:
         _FORKED.clear()
+
+
+def prepare_families(families: Mapping[str, ModuleType], problems: Sequence[str]) -> None:
+    """Call the optional ``prepare()`` of each family in ``problems`` (its one-time work, such as
+    sympy derivations, which ``generate`` would otherwise do on first use in every worker)."""
+    for name in dict.fromkeys(problems):
+        prepare = getattr(families[name], "prepare", None)
+        if prepare is not None:
+            try:
+                prepare()
+            except Exception as e:
+                raise TemplateError(f"template {name!r}: prepare() failed: "
+                                    f"{type(e).__name__}: {e}") from e
 
 
 def _parallel_jobs(jobs: int | None, students: int) -> int:
@@ -388,8 +427,11 @@ def generate_assignment(
     """Generate an assignment folder ``out`` (layout, seeding, ``force``: module docstring).
 
     ``jobs`` processes draw the students' questions and write their notebooks (default: one
-    per usable core, from :data:`PARALLEL_MIN` students on; forked, so Linux and macOS); the
-    files are byte-identical to those of ``jobs=1``.
+    per usable core, from :data:`PARALLEL_MIN` students on); the files are byte-identical to
+    those of ``jobs=1``. The workers are forked (Linux, macOS) after the families' one-time work
+    (:func:`prepare_families`: sympy derivations) is done here, so they inherit it instead of
+    each repeating it. Where ``fork`` is not available (Windows) everything runs in this
+    process, and each family does its one-time work on first use, once.
 
     Raises
     ------
@@ -435,8 +477,8 @@ def generate_assignment(
                                             problems, seed, workers)
         else:
             _FORKED.update(families=families, problems=tuple(problems), seed=seed)
-            entries = (_student_files((tmp, title, row, rerolls.get(row["id"], 0)))
-                       for row in roster.rows)
+            entries = (_student_files((tmp, title, row, rerolls.get(row["id"], 0), i == 0))
+                       for i, row in enumerate(roster.rows))
         for done, (row, (entry, answers)) in enumerate(zip(roster.rows, entries, strict=True),
                                                        start=1):
             manifest["students"][row["id"]] = entry

@@ -29,6 +29,8 @@ scientific notation (``1.23e-4``, ``1.23e5``). Zero prints as ``0``."""
 
 
 def _check_sig(sig: int) -> int:
+    if type(sig) is int and sig >= 1:
+        return sig
     if isinstance(sig, bool) or not isinstance(sig, numbers.Integral) or sig < 1:
         raise ParameterError("sig", f"must be an integer ≥ 1, got {sig!r}")
     return int(sig)
@@ -67,6 +69,8 @@ def round_sig(x: ArrayLike, sig: int) -> float | NDArray[np.float64]:
     [0.000123, -10.0]
     """
     sig = _check_sig(sig)
+    if isinstance(x, float):  # one number, the common case: what the array path gives for it
+        return float(_digits(float(as_real("x", x)), sig))
     values = as_real("x", x)
     rounded = np.array([float(_digits(v, sig)) for v in values.ravel().tolist()], dtype=float)
     rounded = rounded.reshape(values.shape)

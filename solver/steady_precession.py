@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from solver.parameters import ParameterError, as_real, positive
+from solver.parameters import ParameterError, any_true, as_real, positive
 
 __all__ = ["critical_spin", "fast_top_rates", "sleeping_top_stable", "steady_precession_rates"]
 
@@ -158,7 +158,7 @@ def fast_top_rates(
 def _tilt(name: str, value: ArrayLike) -> NDArray[np.float64]:
     """An angle from the upward vertical: finite and within [0, π]."""
     arr = as_real(name, value)
-    if np.any((arr < 0) | (arr > np.pi)):
+    if any_true((arr < 0) | (arr > np.pi)):
         bad = arr[(arr < 0) | (arr > np.pi)].ravel()[0]
         raise ParameterError(name, f"must lie in [0, π] (from the upward vertical), got {bad:.6g}")
     return arr

@@ -115,6 +115,12 @@ def _expression_answer() -> Answer:
     )
 
 
+def prepare() -> None:
+    """Derive the expression answer (about a third of a second of sympy) before the first
+    :func:`generate`; the generator calls it once, before forking its worker processes."""
+    _expression_answer()
+
+
 def _energy_answer(moments, angles, rates, swap: tuple[int, int]) -> Answer | None:
     """``T`` with its mistakes, or None if two of them are within SEPARATION tolerances."""
     beta, gamma = angles

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -107,18 +108,18 @@ class Top:
     def _dims(self) -> dict[str, float]:
         return {"radius": self.R} | ({} if self.h is None else {"height": self.h})
 
-    @property
+    @cached_property  # computed once per top (several templates ask often)
     def I_cm(self) -> float:
         """Transverse moment about the centre of mass, kg m² (R2)."""
         return float(shape_tensor(self.kind.shape, self.M, **self._dims())[0, 0])
 
-    @property
+    @cached_property  # computed once per top (several templates ask often)
     def I1(self) -> float:
         """Transverse moment about the tip, kg m² (parallel-axis theorem, R2)."""
         tensor = shape_tensor(self.kind.shape, self.M, **self._dims())
         return float(parallel_axis(tensor, self.M, [0.0, 0.0, self.arm])[0, 0])
 
-    @property
+    @cached_property  # computed once per top (several templates ask often)
     def I3(self) -> float:
         """Moment about the symmetry axis, kg m²."""
         return float(shape_tensor(self.kind.shape, self.M, **self._dims())[2, 2])

@@ -266,6 +266,13 @@ def _compiled(index: int) -> _Compiled:
     return _Compiled(answer, sp.lambdify(args, key, "math"), numeric)
 
 
+def prepare() -> None:
+    """Derive and compile every quantity (:func:`_compiled`) before the first :func:`generate`;
+    the generator calls it once, before forking its worker processes."""
+    for index in range(len(QUANTITIES)):
+        _compiled(index)
+
+
 def _state(rng: np.random.Generator) -> dict[str, float]:
     """Every parameter a quantity may need: a real top in a plausible state (rounded)."""
     top = draw_top(rng)

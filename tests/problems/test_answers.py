@@ -388,6 +388,9 @@ def test_bad_verdicts_are_refused(fields: dict) -> None:
         ({"kind": "scalar", "value": math.nan}, "value"),
         ({"kind": "scalar", "value": None}, "value"),
         ({"kind": "scalar", "value": 0.0}, "atol"),  # a zero key needs atol
+        ({"kind": "angle", "value": -0.0}, "atol"),
+        ({"kind": "scalar", "value": 1.0, "rtol": math.inf}, "rtol"),
+        ({"kind": "scalar", "value": 1.0, "rtol": np.float64(math.nan)}, "rtol"),
         ({"kind": "vector", "value": [0.0, 0.0]}, "atol"),
         ({"kind": "vector", "value": []}, "value"),
         ({"kind": "vector", "value": [[1.0, 2.0]]}, "value"),

@@ -12,6 +12,7 @@ import pytest
 
 from problems.answers import Answer
 from problems.generate import (
+    CompactJSON,
     GenerateError,
     TemplateError,
     generate_assignment,
@@ -328,3 +329,66 @@ def test_a_template_failing_in_a_worker_process_leaves_nothing(tmp_path, write_r
         generate_assignment(roster, tmp_path / "HW", make_families(fail_on_call=3),
                             problems=PROBLEMS, seed=7, jobs=2)
     assert sorted(os.listdir(tmp_path)) == before
+
+
+def test_entries_encoded_by_workers_are_written_as_the_parent_would():
+    """Workers hand back each student's entries as encoded lines; the files are the same."""
+    students = {"b": {"reroll": 0, "questions": [{"x": [0.1, 1e-300], "t": "θ\n\"q\""}]},
+                "a": {"reroll": 2, "questions": []}}
+    document = {"title": "T", "seed": 1, "students": students}
+    encoded = {**document, "students": {k: CompactJSON.of(v) for k, v in students.items()}}
+    assert json_text(encoded) == json_text(document)
+    assert json.loads(json_text(encoded)) == document
+
+
+def prepared_families(calls: list[int], fail: bool = False) -> dict:
+    """The rod families, with a prepare() that generate() relies on (as a real template's
+    cached sympy work): a worker that did not inherit it fails."""
+    families = make_families()
+    for family in families.values():
+        state = {"ready": False}
+
+        def prepare(state=state):
+            calls.append(os.getpid())
+            if fail:
+                raise RuntimeError("cannot derive")
+            state["ready"] = True
+
+        def generate(rng, state=state, original=family.generate):
+            if not state["ready"]:
+                raise RuntimeError("generate() before prepare()")
+            return original(rng)
+
+        family.prepare, family.generate = prepare, generate
+    return families
+
+
+def test_prepare_runs_once_in_the_parent_and_the_workers_inherit_it(tmp_path, write_roster,
+                                                                     read_tree):
+    calls: list[int] = []
+    roster = read_roster(write_roster(CLASS))
+    generate_assignment(roster, tmp_path / "HW", prepared_families(calls), problems=PROBLEMS,
+                        seed=7, title="T", jobs=2)
+    assert calls == [os.getpid(), os.getpid()]  # one call per family, here, not per worker
+    generate_assignment(roster, tmp_path / "one", make_families(), problems=PROBLEMS, seed=7,
+                        title="T", jobs=1)
+    assert read_tree(tmp_path / "HW") == read_tree(tmp_path / "one")
+
+
+def test_a_failing_prepare_is_a_template_error_and_leaves_nothing(tmp_path, write_roster):
+    roster = read_roster(write_roster(CLASS))
+    before = sorted(os.listdir(tmp_path))
+    with pytest.raises(TemplateError, match=r"template 'rod': prepare\(\) failed: RuntimeError"):
+        generate_assignment(roster, tmp_path / "HW", prepared_families([], fail=True),
+                            problems=PROBLEMS, seed=7, jobs=2)
+    assert sorted(os.listdir(tmp_path)) == before
+
+
+def test_the_templates_that_prepare_do_all_their_sympy_work_there():
+    from problems.templates import euler_kinetic_energy, symbolic_derivation
+
+    euler_kinetic_energy.prepare()
+    symbolic_derivation.prepare()
+    assert symbolic_derivation._compiled.cache_info().currsize == len(
+        symbolic_derivation.QUANTITIES)
+    assert euler_kinetic_energy._expression_answer.cache_info().currsize == 1

@@ -10,7 +10,14 @@ import nbformat
 import pytest
 
 from problems.generate import generate_assignment, student_answers
-from problems.notebook import answer_line, python_literal
+from problems.notebook import (
+    answer_line,
+    build_notebook,
+    build_notebooks,
+    indented_json,
+    notebook_text,
+    python_literal,
+)
 from problems.roster import read_roster
 
 PROBLEMS = ("rod", "rod2")
@@ -158,3 +165,57 @@ def test_executed_notebook_yields_the_key_or_nothing(hw, kind):
         assert got == expected  # exact: floats are written by repr
     else:
         assert got == dict.fromkeys(expected)
+
+
+def dumps(value):
+    return json.dumps(value, indent=1, sort_keys=True, ensure_ascii=False, allow_nan=False)
+
+
+@pytest.mark.parametrize("kind", ["release", "solutions"])
+def test_notebook_files_are_exactly_what_json_dumps_writes(hw, kind):
+    """The generator's own JSON writer gives json.dumps's bytes (nbformat's layout)."""
+    for sid in ("alice", "bob", "carol"):
+        text = (hw / kind / f"{sid}.ipynb").read_text(encoding="utf-8")
+        nb = json.loads(text)
+        assert text == dumps(nb) + "\n"
+        assert notebook_text(nb, validate=False) == notebook_text(nb) == text
+
+
+@pytest.mark.parametrize("value", [
+    {}, [], [[]], {"a": [{}]}, {"z": 1, "a": [1, 2.5, None, False, True, -0.0, 1e300, 10**30]},
+    "\u2028\x00\"\\ θ", {"é": {"b": "x\ny", "a": [[1], []]}},
+    (1, 2), {1: "non-string key"}, [float("inf")], {"k": {1.5}},
+])
+def test_indented_json_is_json_dumps(value):
+    try:
+        expected = dumps(value)
+    except (TypeError, ValueError) as err:
+        with pytest.raises(type(err)):
+            indented_json(value)
+    else:
+        assert indented_json(value) == expected
+
+
+def test_an_invalid_notebook_is_refused_only_when_validated():
+    nb = {"nbformat": 4, "nbformat_minor": 5, "metadata": {},
+          "cells": [{"cell_type": "nope", "id": "x"}]}
+    with pytest.raises(ValueError, match="generated an invalid notebook"):
+        notebook_text(nb)
+    assert json.loads(notebook_text(nb, validate=False)) == nb
+
+
+def test_the_two_notebooks_built_together_are_the_ones_built_alone(families):
+    """build_notebooks shares the common cells; a memo encodes them once: same notebooks, same
+    text as building and encoding each alone."""
+    from problems.generate import student_variants
+
+    variants = student_variants(families, PROBLEMS, 5, "alice")
+    row = {"id": "alice", "name": "Alice Ng"}
+    release, solutions = build_notebooks("Tops", row, variants)
+    assert release == build_notebook("Tops", row, variants)
+    assert solutions == build_notebook("Tops", row, variants, solutions=True)
+    assert release["cells"][0] is solutions["cells"][0]  # shared, not copied
+    memo: dict = {}
+    texts = [notebook_text(nb, memo=memo) for nb in (release, solutions)]
+    assert memo and texts == [dumps(release) + "\n", dumps(solutions) + "\n"]
+    assert texts[0] != texts[1]

@@ -48,6 +48,17 @@ def test_round_sig_matches_exact_decimal_rounding(samples: np.ndarray, sig: int)
 
 
 @pytest.mark.parametrize("sig", [1, 2, 3, 4, 6, 9])
+def test_one_number_at_a_time_matches_exact_decimal_rounding(samples: np.ndarray,
+                                                              sig: int) -> None:
+    """A float (or numpy float) takes a shorter path than an array: the same rounding."""
+    for x in samples.tolist():
+        for value in (x, np.float64(x)):
+            r = round_sig(value, sig)
+            assert type(r) is float and r == decimal_round(x, sig), (x, sig)
+    assert math.copysign(1.0, round_sig(-0.0, sig)) == -1.0
+
+
+@pytest.mark.parametrize("sig", [1, 2, 3, 4, 6, 9])
 @pytest.mark.parametrize("trailing_zeros", [False, True])
 def test_displayed_string_is_the_rounded_value(
     samples: np.ndarray, sig: int, trailing_zeros: bool
