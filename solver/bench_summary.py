@@ -134,6 +134,8 @@ def _g(x: float) -> str:
     """An error or a plain number: ``3.7e-14``, ``1e-4``, ``0.0016``, ``0``."""
     if x is None or not math.isfinite(x):
         return "n/a"
+    if abs(x) >= 10:
+        return ("-" if x < 0 else "") + _count(abs(x))
     text = f"{x:.2g}" if x == 0 or abs(x) >= 1e-3 else f"{x:.1e}".replace(".0e", "e")
     if "e" in text:
         mantissa, exponent = text.split("e")
