@@ -1,8 +1,10 @@
 """``eulertop bench``: work-precision charts, turning-point methods, invariant drift, ranking.
 
 Pipeline (one stage, one input, one output; composed in :func:`run_bench`):
-measure (``work_precision``, ``turning_point_methods``, ``invariant_drift``) → rows (dicts)
-→ CSV + PNG per chart → ``summary.md`` (ranking at equal accuracy, cost of the exact models).
+measure (``work_precision``, ``scenes_table``, ``turning_point_methods``, ``invariant_drift``,
+``solver.stability_battery``, ``fast_top_errors``) → rows (dicts) → CSV + PNG per chart and
+``run.json`` → ``summary.md`` and, with ``--readme FILE``, FILE's block, both rendered by
+``solver.bench_summary`` from those files alone (so a test can render them again).
 
 Errors are against references computed *independently* of the code under test: mpmath at 40
 digits evaluating Landau–Lifshitz's R10 (``mp.ellipfun``) and R20 (``mp.polyroots`` of the cubic,
