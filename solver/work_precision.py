@@ -1,8 +1,10 @@
 """``eulertop bench``: work-precision charts, turning-point methods, invariant drift, ranking.
 
 Pipeline (one stage, one input, one output; composed in :func:`run_bench`):
-measure (``work_precision``, ``turning_point_methods``, ``invariant_drift``) → rows (dicts)
-→ CSV + PNG per chart → ``summary.md`` (ranking at equal accuracy, cost of the exact models).
+measure (``work_precision``, ``scenes_table``, ``turning_point_methods``, ``invariant_drift``,
+``solver.stability_battery``, ``fast_top_errors``) → rows (dicts) → CSV + PNG per chart and
+``run.json`` → ``summary.md`` and, with ``--readme FILE``, FILE's block, both rendered by
+``solver.bench_summary`` from those files alone (so a test can render them again).
 
 Errors are against references computed *independently* of the code under test: mpmath at 40
 digits evaluating Landau–Lifshitz's R10 (``mp.ellipfun``) and R20 (``mp.polyroots`` of the cubic,
@@ -17,6 +19,7 @@ from __future__ import annotations
 import argparse
 import csv
 import itertools
+import json
 import math
 import os
 import statistics
@@ -344,24 +347,43 @@ def _separatrix_scene() -> FreeBody:
     return FreeBody(1.0, 2.0, 3.0, (1.0, 0.0, (1 + 1e-6) / math.sqrt(3.0)))
 
 
+SYMMETRIC_SCENE = FreeBody(2.0, 2.0, 3.0, (0.5, 0.0, 1.0))
+
+
+def free_symmetric_reference(scene: FreeBody, t: float) -> np.ndarray:
+    """ω(t) of a free symmetric top (``I1 = I2``, Landau–Lifshitz §33) in mpmath: ω3 constant,
+    ``ω1 + iω2`` turning at ``Ω = (I3 − I1) ω3 / I1``."""
+    with mp.workdps(40):
+        I1, I3 = mp.mpf(scene.I1), mp.mpf(scene.I3)
+        w1, w2, w3 = (mp.mpf(x) for x in scene.omega0)
+        turned = mp.mpc(w1, w2) * mp.expj((I3 - I1) * w3 / I1 * mp.mpf(t))
+        return np.array([float(turned.real), float(turned.imag), float(w3)])
+
+
 def scene_states() -> dict[str, FreeBody | HeavyBody]:
-    """The initial states of the scenes table: generic, near a pole, near the separatrix, fast."""
+    """The initial states of the scenes table: generic, near a pole, near the separatrix, fast,
+    and a free symmetric top (R8)."""
     return {
         "heavy, generic": HEAVY_SCENE,
         "heavy, near the vertical": _near_pole_scene(),
         "heavy, fast (ω3 = 200)": HeavyBody(1.0, 1.0, 0.6, 1.0, 0.8, 0.0, 0.1, 200.0),
         "free, generic": FREE_SCENE,
         "free, near the separatrix": _separatrix_scene(),
+        "free, symmetric (I1 = I2)": SYMMETRIC_SCENE,
     }
 
 
 def _period_of(scene) -> float:
+    if isinstance(scene, FreeBody) and scene.kind == "free_symmetric":
+        return 2 * math.pi * scene.I1 / abs((scene.I3 - scene.I1) * scene.omega0[2])
     if isinstance(scene, FreeBody):
         return float(asymmetric_top_period(scene.I1, scene.I2, scene.I3, scene.omega0))
     return float(nutation_period(*scene.heavy_top_state()))
 
 
 def _reference_at(scene, times: np.ndarray) -> np.ndarray:
+    if isinstance(scene, FreeBody) and scene.kind == "free_symmetric":
+        return np.array([free_symmetric_reference(scene, float(t)) for t in times])
     if isinstance(scene, FreeBody):
         return np.array([free_reference(scene, float(t)) for t in times])
     return np.array([heavy_reference(scene, float(t)) for t in times])
@@ -390,6 +412,27 @@ def scenes_table(config: BenchConfig) -> list[dict]:
                 rows.append({"scene": label, "periods": horizon, "method": method,
                              "control": control, "error": error, "seconds": seconds,
                              "nfev": traj.nfev})
+    return rows
+
+
+FAST_TOP_EPSILONS = (1e-4, 1e-3, 0.01, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5)
+
+
+def fast_top_errors() -> list[dict]:
+    """R21's approximation against the exact steady rates: relative errors of the slow and fast
+    rate (``solver.scenes.fast_top_error``) for ``ε`` in ``FAST_TOP_EPSILONS`` (``ε = ½`` is R19's
+    critical spin), at β0 = 0 and π/3; ``ε`` recomputed by ``fast_top_parameter`` from the top."""
+    from solver.scenes import fast_top_error, fast_top_parameter
+
+    I1, I3, Mgl = 1.0, 0.6, 1.0
+    rows = []
+    for eps in FAST_TOP_EPSILONS:
+        p_gamma = math.sqrt(2 * I1 * Mgl / eps)
+        for label, beta0 in (("0", 0.0), ("π/3", math.pi / 3)):
+            slow, fast = fast_top_error(I1, I3, Mgl, beta0, p_gamma)
+            rows.append({"epsilon": float(fast_top_parameter(I1, I3, Mgl, p_gamma / I3)),
+                         "beta0": label, "beta0_rad": beta0, "slow_error": float(slow),
+                         "fast_error": float(fast)})
     return rows
 
 
@@ -498,77 +541,15 @@ def _plot_turning_points(plt, rows, path: Path) -> None:
     plt.close(fig)
 
 
-def _fmt(x) -> str:
-    if x is None:
-        return "—"
-    if isinstance(x, float):
-        return "n/a" if not math.isfinite(x) else f"{x:.2g}"
-    return str(x)
-
-
-def _table(rows: list[dict], keys: list[str]) -> str:
-    lines = ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
-    lines += ["| " + " | ".join(_fmt(r[k]) for k in keys) + " |" for r in rows]
-    return "\n".join(lines)
-
-
-def _summary(results: dict, config: BenchConfig, wall: float) -> str:
-    out = [f"# eulertop bench — {'quick' if config.free_periods < 100 else 'full'} run",
-           "",
-           f"Free asymmetric top {FREE_SCENE} over {config.free_periods} periods of ω; heavy top "
-           f"{HEAVY_SCENE} over {config.heavy_periods} nutation periods. Errors against mpmath "
-           "(40 digits) evaluations of R10 / R20 at "
-           f"{config.samples} sampled times, none a period multiple (t_k = (k + {SAMPLE_PHASE:.3f})"
-           f" × horizon / {config.samples}): free top {ERROR_NAMES['free']}; heavy top "
-           f"{ERROR_NAMES['heavy']}. Times: median of repeats, one machine (2 shared cores), one "
-           f"run. Total bench wall time {wall:.0f} s. Every number here is written by this run.",
-           ""]
-    for key, title in (("free", "free asymmetric top"), ("heavy", "heavy symmetric top")):
-        rows = results[key]
-        out += [f"## Ranking at equal accuracy — {title}", ""]
-        for target in (1e-6, 1e-10, 1e-12):
-            ranked = rank_at_accuracy(rows, target)
-            fastest = ranked[0]["seconds"]
-            for r in ranked:
-                r["× fastest"] = r["seconds"] / fastest
-            out += [f"Error ≤ {target:g}:", "", _table(ranked, ["method", "seconds", "nfev",
-                                                             "× fastest"]), ""]
-        stalls = [{"method": k, **v} for k, v in stall_points(rows).items()]
-        out += ["Smallest error each adaptive method reached, at which rtol, and the tightest "
-                "rtol swept (a floor above the tightest rtol's error is where it stalls):", "",
-                _table(stalls, ["method", "error", "control", "tightest"]), ""]
-        exact = [r for r in rows if r["control"] is None]
-        out += ["Exact models (error vs mpmath over the sampled times, time for all of them):", "",
-                _table(exact, ["method", "error", "seconds"]), "",
-                f"![work-precision {key}](wp_{key}_time.png) ![](wp_{key}_nfev.png)", ""]
-    out += [f"## Initial states × horizons (DOP853 at rtol {SCENE_RTOL:g} against the exact "
-            "model; error over the sampled times)", "",
-            _table(results["scenes"], ["scene", "periods", "method", "error", "seconds",
-                                       "nfev"]), ""]
-    out += ["## Turning points", "", _table(results["turning"],
-                                             ["case", "method", "error_rad", "seconds"]), "",
-            "![turning points](turning_points.png)", "",
-            f"## Invariant drift over {config.drift_periods} periods (sampled {SAMPLE_PHASE:.3f} "
-            "of a period past log-spaced whole periods)", "",
-            f"(adaptive methods at rtol {config.drift_rtol:g}; fixed-step at period/"
-            f"{config.drift_steps_per_period}; Radau only to "
-            f"{min(config.drift_periods, config.radau_drift_periods)} periods; the table shows "
-            "each method's last sample)", ""]
-    last = {}
-    for r in results["drift"]:
-        last[r["method"]] = r
-    out += [_table(list(last.values()), ["method", "energy_error", "L2_error", "seconds_total"]),
-            "", "![drift](drift.png)", ""]
-    out += [f"Models chosen by `solver.scenes.choose_model`: free asymmetric → "
-            f"{choose_model(FREE_SCENE)}, heavy symmetric → {choose_model(HEAVY_SCENE)}.", ""]
-    return "\n".join(out)
-
-
 def add_bench_arguments(parser: argparse.ArgumentParser) -> None:
     """``eulertop bench [--out DIR] [--quick]`` or ``eulertop bench --fuzz N [--seed S]``."""
     parser.add_argument("--out", type=Path, default=Path("bench-results"),
                         help="directory for the PNG charts, their CSV data and summary.md "
                         "(with --fuzz: for fuzz.md)")
+    parser.add_argument("--readme", type=Path, metavar="FILE",
+                        help="also write the measured text into FILE between the lines "
+                        "'<!-- eulertop bench: begin -->' and '<!-- eulertop bench: end -->' "
+                        "(the same text opens summary.md)")
     parser.add_argument("--quick", action="store_true",
                         help="a reduced sweep (< 1 min; what the tests run)")
     parser.add_argument("--fuzz", type=int, metavar="N",
@@ -591,9 +572,21 @@ def run_bench(args: argparse.Namespace) -> int:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from solver import bench_summary
+
+    readme = getattr(args, "readme", None)
+    if readme is not None:  # fail before minutes of measuring, not after
+        try:
+            bench_summary.replace_block(readme.read_text(encoding="utf-8"), "", str(readme))
+        except (OSError, UnicodeDecodeError, bench_summary.BlockError) as exc:
+            print(f"eulertop bench: --readme {readme}: {exc}", file=sys.stderr)
+            return 2
     config = BenchConfig.quick() if args.quick else BenchConfig.full()
     out: Path = args.out
     out.mkdir(parents=True, exist_ok=True)
+    command = " ".join(["eulertop bench", "--out", str(out), *(["--quick"] if args.quick else []),
+                        *(["--readme", str(readme)] if readme is not None else [])])
+    load_before = os.getloadavg()
     start = time.perf_counter()
     free_period = float(asymmetric_top_period(FREE_SCENE.I1, FREE_SCENE.I2, FREE_SCENE.I3,
                                               FREE_SCENE.omega0))
@@ -610,6 +603,8 @@ def run_bench(args: argparse.Namespace) -> int:
         "scenes": ("initial states × horizons", lambda: scenes_table(config)),
         "turning": ("turning points, four ways", turning_point_methods),
         "drift": ("invariant drift", lambda: invariant_drift(FREE_SCENE, free_period, config)),
+        "stability": ("stability battery", _stability_battery),
+        "fast_top": ("fast-top approximation (R21)", fast_top_errors),
     }
     results = {}
     for i, (key, (label, stage)) in enumerate(stages.items(), start=1):
@@ -628,10 +623,33 @@ def run_bench(args: argparse.Namespace) -> int:
     _plot_turning_points(plt, results["turning"], out / "turning_points.png")
     _write_csv(out / "drift.csv", results["drift"])
     _plot_drift(plt, results["drift"], out / "drift.png")
-    (out / "summary.md").write_text(_summary(results, config, time.perf_counter() - start))
-    print(f"eulertop bench: wrote {out}/summary.md and charts in "
-          f"{time.perf_counter() - start:.0f} s")
+    _write_csv(out / "stability.csv", results["stability"])
+    _write_csv(out / "fast_top.csv", results["fast_top"])
+    record = bench_summary.run_record(command, config, time.perf_counter() - start, load_before)
+    (out / bench_summary.RUN_FILE).write_text(json.dumps(record, indent=1) + "\n")
+    # The text is rendered from the files just written, as the tests re-render it.
+    results, record = bench_summary.load_results(out)
+    (out / "summary.md").write_text(bench_summary.summary_markdown(results, record))
+    written = f"{out}/summary.md and charts"
+    if readme is not None:
+        block = bench_summary.readme_block(results, record, _relative_dir(out, readme))
+        text = readme.read_text(encoding="utf-8")
+        readme.write_text(bench_summary.replace_block(text, block, str(readme)), encoding="utf-8")
+        written += f", and its block in {readme}"
+    print(f"eulertop bench: wrote {written} in {record['wall_seconds']:.0f} s")
     return 0
+
+
+def _stability_battery() -> list[dict]:
+    from solver.stability_battery import stability_battery
+
+    return stability_battery()
+
+
+def _relative_dir(out: Path, readme: Path) -> str:
+    """``out`` as a link prefix from ``readme``'s folder (``"docs/bench/"``)."""
+    relative = os.path.relpath(out.resolve(), readme.resolve().parent)
+    return "" if relative == "." else Path(relative).as_posix() + "/"
 
 
 def _run_fuzz(args: argparse.Namespace) -> int:

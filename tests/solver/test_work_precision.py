@@ -12,11 +12,16 @@ import pytest
 from eulertop.cli import main
 from solver.work_precision import rank_at_accuracy
 
+README_BEFORE = "# Notes\n\nprose 1.5 s\n\n<!-- eulertop bench: begin -->\nstale 9.9 s\n"
+README_AFTER = "<!-- eulertop bench: end -->\n\n## Next\n"
+
 
 @pytest.fixture(scope="module")
 def bench_dir(tmp_path_factory):
-    out = tmp_path_factory.mktemp("bench")
-    assert main(["bench", "--quick", "--out", str(out)]) == 0
+    root = tmp_path_factory.mktemp("bench")
+    (root / "README.md").write_text(README_BEFORE + README_AFTER)
+    out = root / "docs" / "bench"
+    assert main(["bench", "--quick", "--out", str(out), "--readme", str(root / "README.md")]) == 0
     return out
 
 
@@ -79,7 +84,7 @@ def test_errors_are_sampled_off_period_multiples(bench_dir):
     assert all(abs(p - round(p)) > 0.1 for p in periods)
     summary = (bench_dir / "summary.md").read_text()
     assert "max over sampled t of |cos β(t) − cos β_ref(t)|" in summary
-    assert "Smallest error each adaptive method reached" in summary
+    assert "Smallest error each method's sweep reached" in summary
 
 
 def test_scenes_table_covers_states_and_horizons(bench_dir):
@@ -96,3 +101,47 @@ def test_scenes_table_covers_states_and_horizons(bench_dir):
     sep = {r["periods"]: float(r["error"]) for r in rows
            if r["scene"] == "free, near the separatrix" and r["method"] == "DOP853"}
     assert sep["10"] > sep["1"]
+
+
+def test_readme_block_is_written_from_the_run_files(bench_dir):
+    """--readme replaces only the block, with the text the run's files render to (chart links
+    relative to the README), and summary.md opens with the same text."""
+    from solver.bench_summary import load_results, readme_block
+
+    readme = (bench_dir.parents[1] / "README.md").read_text()
+    results, run = load_results(bench_dir)
+    block = readme_block(results, run, "docs/bench/")
+    assert readme == "# Notes\n\nprose 1.5 s\n\n" + block + "\n## Next\n"
+    assert "stale" not in readme and "](docs/bench/wp_free_time.png)" in readme
+    assert run["command"].startswith("eulertop bench --out ") and "--quick" in run["command"]
+    assert readme_block(results, run, "") in (bench_dir / "summary.md").read_text()
+
+
+def test_bad_readme_stops_before_measuring(tmp_path, capsys):
+    """A README without the markers: exit 2 and a message naming it, before minutes of work."""
+    readme = tmp_path / "README.md"
+    readme.write_text("# no markers\n")
+    out = tmp_path / "out"
+    assert main(["bench", "--quick", "--out", str(out), "--readme", str(readme)]) == 2
+    err = capsys.readouterr().err
+    assert str(readme) in err and "eulertop bench: end" in err
+    assert not out.exists()
+    missing = tmp_path / "nope.md"
+    assert main(["bench", "--out", str(out), "--readme", str(missing)]) == 2
+    assert str(missing) in capsys.readouterr().err
+
+
+def test_stability_battery_ours_at_rounding_naive_loses_digits(bench_dir):
+    """The measured battery shows the phenomena (against mpmath or a closed form)."""
+    rows = _rows(bench_dir / "stability.csv")
+
+    def errors(method):
+        return [float(r["error"]) for r in rows if r["method"] == method]
+
+    assert max(errors("cubic_roots")) < 4e-16 and max(errors("np.roots")) > 1e-10
+    assert max(errors("flip_time")) < 1e-15 and max(errors("DOP853, rtol 1e-10")) > 1e-6
+    assert max(errors("Carlson R_F")) < 1e-15
+    assert max(errors("quaternions")) < 5e-10
+    euler = [r for r in rows if r["method"] == "Euler angles"]
+    assert any(r["note"] for r in euler)  # the sleeping top: Euler angles divide by sin 0
+    assert max(float(r["error"]) for r in euler if not r["note"]) > 1e-8
