@@ -1,0 +1,102 @@
+"""Where a graded notebook's time goes on the kernel's side (issue 17): a kernel forked from a
+warm zygote, from the fork request to its first answer, and three small cells.
+
+For ``--kernels`` (12) kernels, one after another, of a one-slot :class:`grader.kernel_pool.
+KernelPool` without prewarming (so each start is timed whole):
+
+* **start**: ``PooledKernel.start`` — fork, the kernel's own world when sandboxed, ipykernel's
+  initialisation, the grader connecting and the first ``kernel_info`` answered — wall time,
+  sandboxed and not; and, not sandboxed (its pid is then this machine's), the CPU time the
+  kernel process spent up to then (``/proc/<pid>/stat``);
+* **cells**: three small cells (``import numpy``, a product, an assignment) executed, wall and
+  the kernel's CPU;
+* **memory**: the kernel's private dirty memory after a full ``gc.collect()``
+  (``/proc/<pid>/smaps_rollup``): what it copied of the zygote's pages.
+
+Medians, the first two kernels of each pool left out (warming). Run from the repository root:
+``PYTHONPATH=. python benchmarks/bench_kernel_start.py [--kernels 12]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import os
+import statistics
+import time
+
+from grader.kernel_pool import KernelPool
+from grader.limits import Limits
+from grader.sandbox import fresh_folder, probe, run_folder
+
+CELLS = ("import numpy as np\nx = np.eye(3)", "y = x @ x", "z = 1")
+TICK = os.sysconf("SC_CLK_TCK")
+
+
+def cpu_of(pid: int) -> float:
+    """User + system CPU seconds of process ``pid`` so far."""
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / TICK
+
+
+def private_dirty_mib(pid: int) -> float:
+    with open(f"/proc/{pid}/smaps_rollup") as f:
+        for line in f:
+            if line.startswith("Private_Dirty:"):
+                return int(line.split()[1]) / 1024
+    raise RuntimeError("no Private_Dirty")
+
+
+async def _wait(kc, msg_id: str) -> None:
+    while (await kc.get_shell_msg(timeout=10))["parent_header"].get("msg_id") != msg_id:
+        pass
+
+
+def one_pool(kernels: int, sandbox) -> list[dict[str, float]]:
+    rows = []
+    with run_folder() as run, KernelPool(1, prewarm=False, sandbox=sandbox) as pool:
+        for _ in range(kernels):
+            kernel = pool.kernel(fresh_folder(run, "w"), fresh_folder(run, "c"), Limits())
+
+            async def measure(kernel=kernel) -> dict[str, float]:
+                t0 = time.perf_counter()
+                kc = await kernel.start()
+                row = {"start wall": time.perf_counter() - t0}
+                pid = None if sandbox is not None else kernel.forked.pid
+                if pid is not None:
+                    row["start CPU"] = cpu_of(pid)
+                t1 = time.perf_counter()
+                for code in CELLS:
+                    await _wait(kc, kc.execute(code))
+                row["cells wall"] = time.perf_counter() - t1
+                if pid is not None:
+                    row["cells CPU"] = cpu_of(pid) - row["start CPU"]
+                    await _wait(kc, kc.execute("import gc; gc.collect()"))
+                    row["private dirty MiB"] = private_dirty_mib(pid) / 1000  # shown ×1000
+                await kernel.stop()
+                return row
+
+            rows.append(asyncio.run(measure()))
+    return rows[2:]
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--kernels", type=int, default=12)
+    args = parser.parse_args(argv)
+    print(f"load average before: {os.getloadavg()[0]:.2f}; medians of {args.kernels - 2} "
+          "kernels each")
+    for label, sandbox in (("not sandboxed", None), ("sandboxed", probe())):
+        rows = one_pool(args.kernels, sandbox)
+        parts = []
+        for key in rows[0]:
+            value = statistics.median(r[key] for r in rows)
+            parts.append(f"{key} {value * 1000:.1f}" + ("" if "MiB" in key else " ms"))
+        print(f"{label}: " + "; ".join(parts), flush=True)
+    print(f"load average after: {os.getloadavg()[0]:.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
