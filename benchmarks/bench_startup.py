@@ -69,28 +69,21 @@ def machine_cpu() -> float:
     return sum(fields[i] for i in (0, 1, 2, 5, 6, 7)) / os.sysconf("SC_CLK_TCK")
 
 
-CPU: list[tuple[float, float]] = []
-"""(wall, machine CPU) seconds of each timed run, in order."""
-
-
-def wall(cmd: list[str]) -> float:
-    """Wall seconds of ``cmd`` as a fresh process (it must succeed); its machine CPU is
-    appended to :data:`CPU`."""
+def timed(cmd: list[str]) -> tuple[float, float]:
+    """(wall, machine CPU) seconds of ``cmd`` as a fresh process (it must succeed)."""
     c0, t0 = machine_cpu(), time.perf_counter()
     done = subprocess.run(cmd, cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)},
                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                           check=False)
     if done.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd[2:5])} failed: {done.stderr[-400:]}")
-    CPU.append((time.perf_counter() - t0, machine_cpu() - c0))
-    return CPU[-1][0]
+    return time.perf_counter() - t0, machine_cpu() - c0
 
 
 def grade(hw: Path, subs: Path, jobs: int) -> tuple[float, float]:
     """(wall, machine CPU) seconds of one ``eulertop grade --force``."""
-    wall([sys.executable, "-m", "eulertop", "grade", str(hw), str(subs), "--jobs", str(jobs),
-          "--force"])
-    return CPU[-1]
+    return timed([sys.executable, "-m", "eulertop", "grade", str(hw), str(subs), "--jobs",
+                  str(jobs), "--force"])
 
 
 def split(small: float, large: float, n_small: int, n_large: int) -> tuple[float, float]:
@@ -138,7 +131,7 @@ def main(argv: list[str] | None = None) -> int:
               f"(median of the rounds' ratios; each round's: "
               f"{', '.join(f'{x:.2f}' for x in ratios)})")
         notebook = classes[args.small][0] / "solutions" / "s000.ipynb"
-        checks = [wall([sys.executable, "-m", "eulertop", "check", str(notebook)])
+        checks = [timed([sys.executable, "-m", "eulertop", "check", str(notebook)])[0]
                   for _ in range(5)]
         print(f"eulertop check of one notebook: median {statistics.median(checks):.2f} s "
               f"(5 runs: {', '.join(f'{x:.2f}' for x in checks)})")

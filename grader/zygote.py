@@ -400,7 +400,6 @@ def _become_kernel(request: dict, zygote_pid: int, link: socket.socket | None = 
     With ``request["world"]`` (sandboxed) this runs in G, the kernel's own namespaces already
     made by :func:`world.enter`; it builds the kernel's mounts (:func:`world.build`) and seals
     them once the kernel is initialised (:func:`world.seal`)."""
-    gc.enable()  # frozen in the zygote: what it imported is never visited (main)
     scratch = request.get("scratch")
     in_world = request.get("world") is not None
     if in_world:
@@ -483,7 +482,8 @@ def main() -> None:
     # What is imported here is shared with every kernel until written to; a garbage
     # collection in a kernel writes to every object it visits (copying the page). So: no
     # collection while importing, then everything frozen (out of the collector's sight) before
-    # the first fork; each kernel collects again (its own objects only).
+    # the first fork; collections after that (the zygote's, its kernels') visit only newer
+    # objects.
     gc.disable()
     preload = PRELOAD
     for arg in sys.argv[1:]:
@@ -500,6 +500,7 @@ def main() -> None:
         _send({"ready": False, "error": f"not fork-safe after imports ({threads} threads)"})
         return
     gc.freeze()
+    gc.enable()
     zygote = Zygote()
     _send({"ready": True, "pid": zygote.pid, "preloaded": list(preload)})
     try:
