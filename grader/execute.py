@@ -123,7 +123,8 @@ _LAUNCHER = (
     "runpy.run_module('ipykernel_launcher', run_name='__main__', alter_sys=True)"
 )
 
-_CELL_FILE = re.compile(r"\(\d+\.py, line (\d+)\)")
+_CELL_FILE = re.compile(r"\((?:\d+\.py|<ipython-input-\d+-[0-9a-f]+>), line (\d+)\)")
+"""A cell's file name in an error message: ipykernel's, or IPython's (a forked kernel's)."""
 
 _HINTS = {
     "SystemExit": "sys.exit() and exit() stop a script, not a notebook cell: remove it",
@@ -434,6 +435,7 @@ class _Run:
     problem: str | None = None
     truncated: bool = False
     out_of_time: CodeCell | None = None  # the cell running when the notebook's time ran out
+    kept: int = 0  # characters of output so far (a cell server's count)
 
 
 class _KernelDied(Exception):
@@ -555,6 +557,8 @@ async def _session(run: _Run, kernel: KernelProcess, variables: tuple[str, ...])
     except Exception as err:
         run.problem = f"could not start a Python kernel ({type(err).__name__}: {err})"
         return "error"
+    if getattr(kc, "runs_cells", False):  # a forked kernel's cell server
+        return await _cell_session(run, kernel, kc, variables)
     client = _capped_client(executable_notebook(run.cells), run, kernel)
     client.kc = kc
     if hasattr(kernel, "on_iopub_lost"):  # no output (nor idle status) will come: don't wait
@@ -566,10 +570,89 @@ async def _session(run: _Run, kernel: KernelProcess, variables: tuple[str, ...])
         await _run_cell(client, run, index, cell)
     run.phase = "extracting"
     run.answers, run.problem = await _extract(kc, kernel, variables, run.limits)
+    return _done(run)
+
+
+def _done(run: _Run) -> str:
     run.phase = "done"
     if run.problem is not None:
         return "error"
     return "ok" if run.out_of_time is None else "timeout"
+
+
+async def _cell_session(run: _Run, kernel: KernelProcess, channel: Any,
+                        variables: tuple[str, ...]) -> str:
+    """The cells, then the extraction, through a forked kernel's cell server
+    (:mod:`grader.cell_channel`): what :func:`_run_cell` and :func:`_extract` do through
+    nbclient and a Jupyter client, with the same time limits and records."""
+    from grader.cell_channel import ChannelClosed
+
+    run.phase = "running"
+    try:
+        for cell in run.cells:
+            if run.out_of_time is not None:
+                break
+            run.running = cell
+            n = channel.send("execute", cell.source)
+            reply = await _cell_reply(channel, n, run, kernel, run.limits.effective_cell_timeout)
+            _note_reply(run, cell, reply)
+            run.running = None
+        run.phase = "extracting"
+        request = extraction_request(variables)
+        n = channel.send("answers", request.code, user_expressions=request.user_expressions)
+        deadline = min(EXTRACTION_TIMEOUT, run.limits.total_timeout)
+        reply = await _cell_reply(channel, n, run, kernel, deadline, interrupt=False)
+    except ChannelClosed:
+        await _exit_reported(kernel)
+        raise _KernelDied from None
+    if reply is None:
+        run.answers, run.problem = {}, (f"{EXTRACTION_FAILED}: reading them took more than "
+                                        f"{EXTRACTION_TIMEOUT:g} s")
+    else:
+        run.answers, run.problem = parse_answers(reply, variables)
+    return _done(run)
+
+
+async def _cell_reply(channel: Any, n: int, run: _Run, kernel: KernelProcess, timeout: float,
+                      interrupt: bool = True) -> dict | None:
+    """The reply to request ``n``. Past ``timeout`` seconds the running cell is marked timed
+    out and interrupted, and its reply still awaited (the whole-notebook limit bounds that);
+    without ``interrupt``, None then."""
+    waiting = asyncio.ensure_future(channel.reply(n))
+    done, _ = await asyncio.wait({waiting}, timeout=timeout)
+    if not done:
+        if not interrupt:
+            waiting.cancel()
+            return None
+        if run.running is not None:
+            run.timed_out.add(run.running.position)
+        await kernel.interrupt()
+    reply, output = await waiting
+    if output and not run.truncated:
+        run.kept += output
+        run.truncated = run.kept > run.limits.output_bytes
+    return reply
+
+
+def _note_reply(run: _Run, cell: CodeCell, reply: dict) -> None:
+    """Record how one cell ended (as :func:`_run_cell` does)."""
+    if run.out_of_time is cell:
+        run.errors.append(f"{cell.label}: the notebook's time limit "
+                          f"({run.limits.total_timeout:g} s) ran out while it ran; it was "
+                          "interrupted and the cells after it were not run")
+    elif cell.position in run.timed_out:
+        run.errors.append(f"{cell.label}: timed out after "
+                          f"{run.limits.effective_cell_timeout:g} s and was interrupted")
+    elif reply.get("status") == "error":
+        run.errors.append(f"{cell.label}: {_error_line(reply, run.limits)}")
+
+
+async def _exit_reported(kernel: KernelProcess, wait: float = 2.0) -> None:
+    """After a kernel hung up: give its exit status a moment to be reported (it comes from
+    its zygote, a little after the connection closes), for the record to name the cause."""
+    deadline = time.monotonic() + wait
+    while kernel.exit_status() is None and time.monotonic() < deadline:
+        await asyncio.sleep(0.005)
 
 
 async def _run_cell(client: Any, run: _Run, index: int, cell: CodeCell) -> None:
@@ -580,16 +663,7 @@ async def _run_cell(client: Any, run: _Run, index: int, cell: CodeCell) -> None:
         await client.async_execute_cell(client.nb.cells[index], index, execution_count=index + 1)
     except DeadKernelError:
         raise _KernelDied from None
-    reply = client.replies.get(index) or {}
-    if run.out_of_time is cell:
-        run.errors.append(f"{cell.label}: the notebook's time limit "
-                          f"({run.limits.total_timeout:g} s) ran out while it ran; it was "
-                          "interrupted and the cells after it were not run")
-    elif cell.position in run.timed_out:
-        run.errors.append(f"{cell.label}: timed out after "
-                          f"{run.limits.effective_cell_timeout:g} s and was interrupted")
-    elif reply.get("status") == "error":
-        run.errors.append(f"{cell.label}: {_error_line(reply, run.limits)}")
+    _note_reply(run, cell, client.replies.get(index) or {})
     run.running = None
 
 

@@ -74,9 +74,9 @@ import json
 import math
 import os
 import queue
-import secrets
 import shutil
 import signal
+import socket
 import subprocess
 import sys
 import threading
@@ -85,6 +85,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from grader.cell_channel import SOCKET_NAME, CellChannel, listen
 from grader.execute import LocalKernel, kernel_environment
 from grader.limits import Limits
 from grader.sandbox import (
@@ -114,6 +115,8 @@ __all__ = [
 ZYGOTE_SCRIPT = Path(__file__).with_name("zygote.py")
 WORLD_FILES = tuple(Path(__file__).parent / "sandbox" / f for f in ("world.py", "seccomp.py"))
 """Bound beside the zygote in the sandbox: each kernel's own namespaces and seccomp filter."""
+CELL_SERVER = Path(__file__).with_name("cell_server.py")
+"""What a forked kernel runs (:mod:`grader.cell_server`); bound beside the zygote."""
 
 ZYGOTE_START_TIMEOUT = 60.0
 """Seconds a zygote may take to import its modules (a loaded machine: several seconds)."""
@@ -206,7 +209,7 @@ class Zygote:
             argv[1] = inside
             argv.append("--world")
             files = {str(ZYGOTE_SCRIPT): inside,
-                     **{str(f): f"{TOOLS}/{f.name}" for f in WORLD_FILES}}
+                     **{str(f): f"{TOOLS}/{f.name}" for f in (CELL_SERVER, *WORLD_FILES)}}
             launch = sandbox.command(argv, env, bind or self.folder, self.folder, files=files,
                                      uid=uid)
             argv, options = launch.argv, launch.popen_options()
@@ -334,13 +337,13 @@ class Zygote:
 
 @dataclass
 class _Forked:
-    """A kernel forked by a slot's zygote, with its folders and connection info."""
+    """A kernel forked by a slot's zygote, with its folders and the socket it connects to."""
 
     zygote: Zygote
     pid: int
     workdir: Path
     control: Path
-    connection: dict
+    listener: socket.socket  # grader.cell_channel.listen: the kernel connects to it
     limits: Limits
     sandboxed: bool = False  # workdir is inside the sandbox: not a path of this machine
     uid: int | None = None  # the uid of the slot's sandbox (as root)
@@ -381,14 +384,12 @@ class Slot:
 
     def fork(self, limits: Limits) -> _Forked:
         """Fork a new kernel (restarting a dead zygote first); :class:`ZygoteError`."""
-        from jupyter_client.connect import write_connection_file
-
         if not self.zygote.alive:
             self.start_zygote()
         self.zygote.wait_ready()
         self.folder.mkdir(mode=0o700, parents=True, exist_ok=True)  # a closed zygote's rmdir
         os.chmod(self.folder, self.mode)
-        # short names: an IPC socket's path must fit in 107 bytes (sun_path)
+        # short names: a Unix socket's path must fit in 107 bytes (sun_path)
         control = fresh_folder(self.folder, "c")
         sandboxed = self.sandbox is not None
         extra: dict[str, Any] = {}
@@ -405,23 +406,23 @@ class Slot:
             workdir = fresh_folder(self.folder, "w")
             env = kernel_environment(workdir, control)
         rlimits = child_limits(limits)
+        listener = None
         try:
-            _, info = write_connection_file(
-                str(control / "kernel.json"), ip=str(control / "k"), transport="ipc",
-                key=secrets.token_hex(32).encode(), kernel_name="eulertop-grader")
+            listener = listen(control, uid)
             if uid is not None:
                 os.chown(control, uid, uid)
-                os.chown(control / "kernel.json", uid, uid)
             reply = self.zygote.request(
                 "fork", workdir=str(workdir), control=str(control),
-                connection_file=str(control / "kernel.json"), env=env, limits=rlimits, **extra)
+                channel=str(control / SOCKET_NAME), env=env, limits=rlimits, **extra)
         except BaseException:
+            if listener is not None:
+                listener.close()
             if not sandboxed:
                 shutil.rmtree(workdir, ignore_errors=True)
             shutil.rmtree(control, ignore_errors=True)
             raise
         self.forks += 1
-        return _Forked(self.zygote, int(reply["pid"]), workdir, control, dict(info), limits,
+        return _Forked(self.zygote, int(reply["pid"]), workdir, control, listener, limits,
                        sandboxed, uid)
 
     def take(self, limits: Limits) -> _Forked:
@@ -487,6 +488,7 @@ def release(forked: _Forked) -> int:
             zygote.request("kill", pid=forked.pid)  # the exit event comes before the reply
     status = zygote.exit_status(forked.pid)
     zygote.forget(forked.pid)
+    forked.listener.close()
     if not forked.sandboxed:  # a sandboxed one's is inside the sandbox (the zygote removed it)
         shutil.rmtree(forked.workdir, ignore_errors=True)
     with contextlib.suppress(OSError):
@@ -593,22 +595,6 @@ class KernelPool:
         self.close()
 
 
-def _pool_client_class() -> type:
-    from jupyter_client.asynchronous import AsyncKernelClient
-
-    class PoolClient(AsyncKernelClient):
-        """A client whose liveness is the forked process's, as the zygote reports it."""
-
-        alive_check: Any = None
-
-        async def _async_is_alive(self) -> bool:
-            return self.alive_check is None or self.alive_check()
-
-        is_alive = _async_is_alive
-
-    return PoolClient
-
-
 class PooledKernel(LocalKernel):
     """A forked kernel from a :class:`KernelPool` slot (:class:`grader.execute.KernelProcess`).
 
@@ -625,6 +611,7 @@ class PooledKernel(LocalKernel):
         self.slot: Slot | None = None
         self.forked: _Forked | None = None
         self.cold = False
+        self.channel: CellChannel | None = None
         self._status: int | None = None
         self._released = False
 
@@ -643,19 +630,14 @@ class PooledKernel(LocalKernel):
             for entry in self.workdir.iterdir():  # the submission, into the kernel's own folder
                 os.replace(entry, self.forked.workdir / entry.name)
         forked = self.forked
-
-        def make_client(context: Any) -> Any:
-            kc = _pool_client_class()(context=context)
-            kc.load_connection_info(forked.connection)
-            kc.alive_check = lambda: self.exit_status() is None
-            return kc
-
-        kc = await self._connect(make_client)
-        if forked.sandboxed:  # sockets bound: no more writing in a folder of this machine
+        self.channel = CellChannel(forked.listener)
+        await self.channel.connect(self.limits.total_timeout,
+                                   lambda: self.exit_status() is None)
+        if forked.sandboxed:  # connected and sealed: no more writing in a folder of this machine
             await asyncio.to_thread(_lock_control, forked)
         if self.pool.prewarm:
             self.slot.prewarm_soon(self.limits)
-        return kc
+        return self.channel
 
     @property
     def sandboxed(self) -> bool:
@@ -709,11 +691,9 @@ class PooledKernel(LocalKernel):
     async def stop(self) -> None:
         if self.cold:
             return await super().stop()
-        self._disconnect()
+        if self.channel is not None:
+            self.channel.close()
         await asyncio.to_thread(self.kill_group)
-        with contextlib.suppress(Exception):
-            if self._context is not None:
-                self._context.destroy(linger=0)
 
     def kill_group(self) -> None:
         """Kill the kernel's group and leftovers, remove its folders, free the slot (once)."""

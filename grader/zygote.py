@@ -73,24 +73,22 @@ import sys
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS"):
     os.environ[_var] = "1"  # before numpy is imported: a single-threaded zygote forks safely
 
-PRELOAD = ("ipykernel.kernelapp", "IPython", "numpy", "scipy", "scipy.linalg", "scipy.special",
-           "scipy.integrate", "scipy.optimize", "sympy")
+PRELOAD = ("IPython", "numpy", "scipy", "scipy.linalg", "scipy.special", "scipy.integrate",
+           "scipy.optimize", "sympy")
 """Modules imported once in the zygote; every kernel forked from it has them already."""
 
-KERNEL_MODULES = ("ipykernel.ipkernel", "ipykernel.zmqshell", "ipykernel.debugger",
-                  "IPython.core.interactiveshell", "IPython.core.completerlib",
-                  "pygments.styles.default", "tornado.gen", "tornado.locks", "tornado.queues",
-                  "tornado.platform.asyncio", "faulthandler", "IPython.core.debugger", "pdb",
-                  "IPython.core.logger", "IPython.core.oinspect", "IPython.utils.wildcard",
-                  "IPython.extensions.storemagic", "sqlite3")
-"""What a kernel imports while it starts and runs its first cells (measured with ipykernel 7.4
-and IPython 9: the debugger alone, debugpy, is a third of a start; the history's sqlite3 and
-the %store extension are imported by every start); imported too, when present."""
+KERNEL_MODULES = ("IPython.core.interactiveshell", "IPython.core.completerlib",
+                  "IPython.core.debugger", "pdb", "IPython.core.logger", "IPython.core.oinspect",
+                  "IPython.utils.wildcard", "sqlite3", "faulthandler")
+"""What a kernel's shell imports while it runs its first cells (measured with IPython 9:
+the history's sqlite3, the debugger and the inspector); imported too, when present."""
 
 WORLD_TIMEOUT = 10.0
 """Seconds a forked kernel may take to make its own world (mounts) before it is given up."""
 
 world = None  # grader/sandbox/world.py, bound beside this script in the sandbox
+cell_server = None  # grader/cell_server.py, beside this script (bound beside it in the sandbox)
+shell = None  # the IPython shell every kernel runs its cells in (cell_server.make_shell)
 
 PR_SET_PDEATHSIG, PR_SET_DUMPABLE, PR_SET_CHILD_SUBREAPER = 1, 4, 36
 IGNORED = (signal.SIGINT, signal.SIGHUP, signal.SIGQUIT, signal.SIGUSR1, signal.SIGUSR2)
@@ -366,6 +364,8 @@ class Zygote:
         here = os.getcwd()
         with contextlib.suppress(OSError):
             os.unlink(os.path.join(here, "zygote-stderr.txt"))
+        # the profile folder the shell made (IPYTHONDIR); rmtree does not follow symlinks
+        shutil.rmtree(os.path.join(here, "ipython"), ignore_errors=True)
         for folder in (here, os.path.dirname(here), os.path.dirname(os.path.dirname(here))):
             with contextlib.suppress(OSError):
                 os.rmdir(folder)  # fails unless empty: never removes anything else
@@ -445,30 +445,25 @@ def _become_kernel(request: dict, zygote_pid: int, link: socket.socket | None = 
     tempfile.tempdir = None  # gettempdir() is cached; TMPDIR changed
     if "numpy" in sys.modules:  # fork copied numpy's global random state: draw a fresh one
         sys.modules["numpy"].random.seed()
-    argv = ["-f", request["connection_file"], "--HistoryManager.hist_file=:memory:"]
-    sys.argv = ["ipykernel_launcher", *argv]
-    from ipykernel.kernelapp import IPKernelApp
-
-    app = IPKernelApp.instance()
-    app.initialize(argv)
-    # loaded: remove it, so that the key to this kernel's sockets is on disk as briefly as
-    # possible (a prewarmed kernel waits beside a running one; the grader keeps its own copy)
-    with contextlib.suppress(OSError):
-        os.unlink(request["connection_file"])
-    if in_world:  # sockets bound: nothing of the world can be changed from here on
+    channel = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    channel.connect(request["channel"])  # the grader's socket in the control folder
+    if in_world:  # connected: nothing of the world can be changed from here on
         sealed = world.seal(request)
         print(f"eulertop: kernel sealed ({json.dumps(sealed)})", file=sys.stderr, flush=True)
-    app.start()
+    cell_server.serve(shell, channel)
 
 
 def main() -> None:
     """Entry point: make the server ready (imports), then serve until the grader leaves."""
-    global world
+    global world, cell_server, shell
     if sys.path and os.path.abspath(sys.path[0]) == os.path.dirname(os.path.abspath(__file__)):
         if "--world" in sys.argv:  # sandboxed: world.py and seccomp.py are bound beside us
             import world as world_module
 
             world = world_module
+        import cell_server as cell_server_module
+
+        cell_server = cell_server_module
         del sys.path[0]  # run as a script: the grader's folder is not for kernels to import
     prctl(PR_SET_DUMPABLE, 0)
     prctl(PR_SET_CHILD_SUBREAPER, 1)
@@ -488,12 +483,13 @@ def main() -> None:
     preload = PRELOAD
     for arg in sys.argv[1:]:
         if arg.startswith("--preload="):
-            preload = ("ipykernel.kernelapp", *filter(None, arg.split("=", 1)[1].split(",")))
+            preload = tuple(filter(None, arg.split("=", 1)[1].split(",")))
     for name in preload:
         importlib.import_module(name)
     for name in KERNEL_MODULES:
         with contextlib.suppress(ImportError):
             importlib.import_module(name)
+    shell = cell_server.make_shell()
     threads = len(os.listdir("/proc/self/task"))
     zmq = sys.modules.get("zmq")
     if threads != 1 or (zmq is not None and zmq.Context._instance is not None):

@@ -1,0 +1,177 @@
+"""The cell server: what a kernel forked from a zygote runs instead of a Jupyter kernel.
+
+Bound beside :mod:`grader.zygote` (a script: like it, this module imports nothing of the
+grader) and imported by it. The zygote makes one IPython shell (:func:`make_shell`) before
+its first fork; each forked kernel, once confined, connects to the grader's socket in its own
+control folder and runs what the grader sends (:func:`serve`) in its own copy of that shell —
+the same ``InteractiveShell`` (magics, ``display``, top-level ``await``, IPython's error
+messages) a Jupyter kernel runs, without what a notebook's *grading* never
+uses: ZeroMQ, five channels and their threads, message signing, a debugger. A kernel then
+costs milliseconds of CPU where ipykernel's start-up alone cost about fifty (issue 17;
+``benchmarks/bench_kernel_start.py``).
+
+Protocol: one JSON object per line, UTF-8, on a ``SOCK_STREAM`` Unix socket. The kernel first
+says ``{"ready": true}``; then, for each request of the grader, in order::
+
+    {"n": 1, "op": "execute", "code": C}
+        -> {"n": 1, "reply": {"status": "ok"}, "output": characters}
+        -> {"n": 1, "reply": {"status": "error", "ename": E, "evalue": V}, "output": ...}
+    {"n": 2, "op": "answers", "code": C, "user_expressions": {name: expression}}
+        -> {"n": 2, "reply": {"status": "ok", "user_expressions": {...}}, "output": ...}
+
+``reply`` is what an ipykernel ``execute_reply`` would hold (``user_expressions`` evaluated
+only when the code raised nothing, as ipykernel does). ``output``: characters the request
+printed or displayed — counted, never kept or sent, since output is never graded.
+Everything the kernel says is untrusted (it is the student's process): the grader bounds
+each line (:data:`grader.execute.MAX_MESSAGE`) and matches replies by ``n``.
+
+Interrupts: SIGINT raises ``KeyboardInterrupt`` while a request runs and is ignored between
+requests (as in ipykernel). ``input()`` reads an empty standard input (``EOFError``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import os
+import signal
+import socket
+import sys
+from typing import Any
+
+INLINE_BACKEND = "module://matplotlib_inline.backend_inline"
+"""matplotlib's backend in a kernel, as in ipykernel: figures are displayed, not opened."""
+
+
+class OutputCount(io.TextIOBase):
+    """``sys.stdout``/``sys.stderr`` of a kernel: counts the characters written, keeps none
+    (output is never graded; only whether it went over the limit is recorded)."""
+
+    encoding = "utf-8"
+    errors = "strict"
+
+    def __init__(self, name: str) -> None:
+        super().__init__()
+        self.name = name
+        self.count = 0
+
+    def write(self, text: str) -> int:
+        if not isinstance(text, str):
+            raise TypeError(f"write() argument must be str, not {type(text).__name__}")
+        self.count += len(text)
+        return len(text)
+
+    def writable(self) -> bool:
+        return True
+
+    def isatty(self) -> bool:
+        return False
+
+    def fileno(self) -> int:
+        return 1  # /dev/null in a kernel: what a library writes at the fd level is dropped
+
+
+def _content_size(content: Any) -> int:
+    """Characters of text in displayed data (as the grader counts an output message)."""
+    if isinstance(content, str):
+        return len(content)
+    if isinstance(content, dict):
+        return sum(_content_size(v) for v in content.values())
+    if isinstance(content, (list, tuple)):
+        return sum(_content_size(v) for v in content)
+    return 8
+
+
+def make_shell() -> Any:
+    """The IPython shell every forked kernel runs its cells in (made once, in the zygote).
+
+    No history file (an in-memory database and no saving thread: the zygote must stay
+    single-threaded to fork); displayed data counted, not kept; ``exit()`` does nothing, as in
+    a Jupyter kernel run by nbclient (it asks the front end, which ignores it).
+    """
+    from IPython.core.displaypub import DisplayPublisher
+    from IPython.core.interactiveshell import InteractiveShell
+    from traitlets.config import Config
+
+    class CountingDisplay(DisplayPublisher):
+        """``display()``: counts the characters of what is displayed, keeps nothing."""
+
+        def publish(self, data: Any, metadata: Any = None, *args: Any, **kwargs: Any) -> None:
+            out = sys.stdout
+            if isinstance(out, OutputCount):
+                out.count += _content_size(data)
+
+        def clear_output(self, wait: bool = False) -> None:
+            pass
+
+    config = Config()
+    config.HistoryManager.hist_file = ":memory:"
+    config.HistoryManager.enabled = False
+    config.InteractiveShell.colors = "nocolor"
+    shell = InteractiveShell.instance(config=config)
+    shell.display_pub = CountingDisplay(shell=shell, parent=shell)
+    shell.ask_exit = lambda: None  # what exit() and quit() call
+    return shell
+
+
+def _send(sock: socket.socket, message: dict) -> None:
+    sock.sendall((json.dumps(message, default=repr) + "\n").encode())
+
+
+def _reply(shell: Any, result: Any) -> dict:
+    """An ipykernel-shaped ``execute_reply`` content of one ``run_cell`` result."""
+    if result.success:
+        return {"status": "ok"}
+    err = result.error_before_exec if result.error_before_exec is not None \
+        else result.error_in_exec
+    return {"status": "error", "ename": type(err).__name__, "evalue": str(err)}
+
+
+def _run(shell: Any, request: dict) -> dict:
+    """Run one request's code in the shell, interruptible; its reply."""
+    code = request.get("code")
+    if not isinstance(code, str):
+        return {"status": "error", "ename": "ValueError", "evalue": "no code"}
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        result = shell.run_cell(code, store_history=request.get("op") == "execute",
+                                silent=False)
+        reply = _reply(shell, result)
+        if request.get("op") == "answers":
+            expressions = request.get("user_expressions")
+            reply["user_expressions"] = (
+                shell.user_expressions(expressions if isinstance(expressions, dict) else {})
+                if reply["status"] == "ok" else {})
+    except KeyboardInterrupt:  # landed outside the cell's own code (IPython's machinery)
+        reply = {"status": "error", "ename": "KeyboardInterrupt", "evalue": ""}
+    finally:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    return reply
+
+
+def serve(shell: Any, sock: socket.socket) -> None:
+    """In the forked kernel: say ready, then run the grader's requests until it hangs up."""
+    os.environ.setdefault("MPLBACKEND", INLINE_BACKEND)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # until a request runs
+    out, err = OutputCount("<stdout>"), OutputCount("<stderr>")
+    sys.stdout, sys.stderr = out, err
+    sys.stdin = io.StringIO()  # input(): EOFError
+    requests = sock.makefile("rb")
+    _send(sock, {"ready": True})
+    while True:
+        try:
+            line = requests.readline()
+        except KeyboardInterrupt:  # an interrupt between requests: ignored (and so here)
+            continue
+        if not line:
+            return  # the grader hung up
+        try:
+            request = json.loads(line)
+            n = request["n"]
+        except (ValueError, KeyError, TypeError):
+            continue
+        before = out.count + err.count
+        reply = _run(shell, request)
+        with contextlib.suppress(KeyboardInterrupt):
+            _send(sock, {"n": n, "reply": reply, "output": out.count + err.count - before})
