@@ -1,13 +1,15 @@
 """Where a graded notebook's time goes on the kernel's side (issue 17): a kernel forked from a
-warm zygote, from the fork request to its first answer, and three small cells.
+warm zygote (IPython's shell behind the cell server, :mod:`grader.cell_server`), from the fork
+request to its first answer, and three small cells; a cold Jupyter kernel (ipykernel, as
+``--cold-kernels`` runs it) beside it.
 
 For ``--kernels`` (12) kernels, one after another, of a one-slot :class:`grader.kernel_pool.
 KernelPool` without prewarming (so each start is timed whole):
 
-* **start**: ``PooledKernel.start`` — fork, the kernel's own world when sandboxed, ipykernel's
-  initialisation, the grader connecting and the first ``kernel_info`` answered — wall time,
-  sandboxed and not; and, not sandboxed (its pid is then this machine's), the CPU time the
-  kernel process spent up to then (``/proc/<pid>/stat``);
+* **start**: ``PooledKernel.start`` — fork, the kernel's own world when sandboxed, the kernel
+  connecting to the grader and saying it is ready — wall time, sandboxed and not; and, not
+  sandboxed (its pid is then this machine's), the CPU time the kernel process spent up to then
+  (``/proc/<pid>/stat``);
 * **cells**: three small cells (``import numpy``, a product, an assignment) executed, wall and
   the kernel's CPU;
 * **memory**: the kernel's private dirty memory after a full ``gc.collect()``
@@ -48,31 +50,41 @@ def private_dirty_mib(pid: int) -> float:
     raise RuntimeError("no Private_Dirty")
 
 
-async def _wait(kc, msg_id: str) -> None:
-    while (await kc.get_shell_msg(timeout=10))["parent_header"].get("msg_id") != msg_id:
+async def _run(client, code: str) -> None:
+    """Run ``code`` and wait for its reply: through a forked kernel's cell channel, or a
+    Jupyter client (matched by ``msg_id``)."""
+    if getattr(client, "runs_cells", False):
+        await client.reply(client.send("execute", code))
+        return
+    msg_id = client.execute(code)
+    while (await client.get_shell_msg(timeout=10))["parent_header"].get("msg_id") != msg_id:
         pass
 
 
-def one_pool(kernels: int, sandbox) -> list[dict[str, float]]:
+def one_pool(kernels: int, sandbox, cold: bool = False) -> list[dict[str, float]]:
     rows = []
-    with run_folder() as run, KernelPool(1, prewarm=False, sandbox=sandbox) as pool:
+    with run_folder() as run, KernelPool(1, prewarm=False, sandbox=sandbox, cold=cold) as pool:
         for _ in range(kernels):
             kernel = pool.kernel(fresh_folder(run, "w"), fresh_folder(run, "c"), Limits())
 
             async def measure(kernel=kernel) -> dict[str, float]:
                 t0 = time.perf_counter()
-                kc = await kernel.start()
+                client = await kernel.start()
                 row = {"start wall": time.perf_counter() - t0}
-                pid = None if sandbox is not None else kernel.forked.pid
+                pid = None
+                if cold:
+                    pid = kernel.process.pid
+                elif sandbox is None:
+                    pid = kernel.forked.pid
                 if pid is not None:
                     row["start CPU"] = cpu_of(pid)
                 t1 = time.perf_counter()
                 for code in CELLS:
-                    await _wait(kc, kc.execute(code))
+                    await _run(client, code)
                 row["cells wall"] = time.perf_counter() - t1
                 if pid is not None:
                     row["cells CPU"] = cpu_of(pid) - row["start CPU"]
-                    await _wait(kc, kc.execute("import gc; gc.collect()"))
+                    await _run(client, "import gc; gc.collect()")
                     row["private dirty MiB"] = private_dirty_mib(pid) / 1000  # shown ×1000
                 await kernel.stop()
                 return row
@@ -87,8 +99,10 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     print(f"load average before: {os.getloadavg()[0]:.2f}; medians of {args.kernels - 2} "
           "kernels each")
-    for label, sandbox in (("not sandboxed", None), ("sandboxed", probe())):
-        rows = one_pool(args.kernels, sandbox)
+    for label, sandbox, cold in (("forked, not sandboxed", None, False),
+                                 ("forked, sandboxed", probe(), False),
+                                 ("cold ipykernel, not sandboxed", None, True)):
+        rows = one_pool(args.kernels, sandbox, cold)
         parts = []
         for key in rows[0]:
             value = statistics.median(r[key] for r in rows)

@@ -81,7 +81,7 @@ class CellChannel:
         remaining = max(0.1, deadline - loop.time())
         try:
             hello = await asyncio.wait_for(self._line(), remaining)
-        except asyncio.TimeoutError:
+        except TimeoutError:
             raise ChannelClosed(f"the kernel did not say it was ready in {timeout:g} s") from None
         if not (isinstance(hello, dict) and hello.get("ready") is True):
             raise ChannelClosed("the kernel did not say it was ready")

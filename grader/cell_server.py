@@ -26,7 +26,8 @@ Everything the kernel says is untrusted (it is the student's process): the grade
 each line (:data:`grader.execute.MAX_MESSAGE`) and matches replies by ``n``.
 
 Interrupts: SIGINT raises ``KeyboardInterrupt`` while a request runs and is ignored between
-requests (as in ipykernel). ``input()`` reads an empty standard input (``EOFError``).
+requests, and ``input()`` and ``getpass()`` raise ``StdinNotImplementedError``, as in ipykernel
+run by a front end that allows no input (nbclient, nbgrader).
 """
 
 from __future__ import annotations
@@ -150,13 +151,25 @@ def _run(shell: Any, request: dict) -> dict:
     return reply
 
 
+def _no_input(*args: Any, **kwargs: Any) -> str:
+    """``input()`` in a kernel: there is no one to answer (ipykernel's own message)."""
+    from IPython.core.error import StdinNotImplementedError
+
+    raise StdinNotImplementedError(
+        "raw_input was called, but this frontend does not support input requests.")
+
+
 def serve(shell: Any, sock: socket.socket) -> None:
     """In the forked kernel: say ready, then run the grader's requests until it hangs up."""
     os.environ.setdefault("MPLBACKEND", INLINE_BACKEND)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # until a request runs
     out, err = OutputCount("<stdout>"), OutputCount("<stderr>")
     sys.stdout, sys.stderr = out, err
-    sys.stdin = io.StringIO()  # input(): EOFError
+    sys.stdin = io.StringIO()
+    import builtins
+    import getpass
+
+    builtins.input = getpass.getpass = _no_input
     requests = sock.makefile("rb")
     _send(sock, {"ready": True})
     while True:

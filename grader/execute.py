@@ -14,9 +14,11 @@ What one run does
        the grader's own interpreter running ipykernel (whatever the notebook's kernelspec or
        language says), in its own session and process group, with a scrubbed environment, an
        address-space limit, one BLAS/OpenMP thread, and stdin/stdout closed.
-    4. Every code cell runs in order through nbclient (``allow_errors``: a cell that raises does
-       not stop the rest). A cell that runs longer than the cell time limit is interrupted
-       (``KeyboardInterrupt``) and the next one runs.
+    4. Every code cell runs in order (``allow_errors``: a cell that raises does not stop the
+       rest) — through nbclient for a Jupyter kernel (:class:`LocalKernel`), through its cell
+       server for a kernel forked from a zygote (:mod:`grader.cell_channel`). A cell that runs
+       longer than the cell time limit is interrupted (``KeyboardInterrupt``) and the next one
+       runs.
     5. The answers are read by one more request the student never saw (:mod:`grader.extract`).
     6. A whole-notebook deadline is enforced here, outside nbclient: when it passes the kernel's
        process group is killed, whatever it was doing (a loop that swallows
@@ -25,7 +27,8 @@ What one run does
        removed.
 
 Output
-    Output is never graded. :class:`_CappedClient` keeps at most ``Limits.output_bytes``
+    Output is never graded. A forked kernel only counts it (:mod:`grader.cell_server`); from a
+    Jupyter kernel, :class:`_CappedClient` keeps at most ``Limits.output_bytes``
     characters of it per notebook and drops the rest on arrival; display updates and widget
     (comm) messages, which nbclient would otherwise accumulate, are ignored. A single message
     larger than :data:`MAX_MESSAGE` is refused by ZeroMQ before it is read

@@ -12,13 +12,12 @@ for submission *k + 1* is forked and initialises (``prewarm``): it does not depe
 submission until the submission is moved into its (until then empty) working folder.
 
 :class:`KernelPool` is the ``kernel_factory`` of :func:`grader.execute.execute_submission`:
-``pool.kernel(workdir, control, limits) -> PooledKernel``. The grader talks to a pooled
-kernel through nbclient exactly as to a cold one (same IPC transport, same client setup, same
-output cap); only launch, interrupt, kill and the exit status go through the zygote.
-
-Measured (``benchmarks/bench_grade.py``, 40 submissions, 2 cores shared with other work): a
-warm kernel costs ≈ 0.1 s of CPU per notebook against ≈ 0.35–0.5 s cold; prewarming the next
-kernel halves the wall time of a serial run (0.09 against 0.24 s per trivial notebook).
+``pool.kernel(workdir, control, limits) -> PooledKernel``. A pooled kernel is not a Jupyter
+kernel: it runs its cells in the IPython shell the zygote made (:mod:`grader.cell_server`),
+and the grader talks to it over one Unix socket in its control folder
+(:mod:`grader.cell_channel`) — same cells, same error lines, same answers and limits as a cold
+ipykernel (``tests/grader/test_cell_server.py`` runs both), at a fraction of the CPU. Launch,
+interrupt, kill and the exit status go through the zygote.
 
 Why one zygote per slot (and not one per run), and how issue 5's sandbox fits
     Issue 5 puts every kernel in a bubblewrap sandbox: read-only system and Python, a private

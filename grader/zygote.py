@@ -9,15 +9,16 @@ environment of :func:`grader.execute.kernel_environment`, never the grader's own
    process a kernel leaves behind is re-parented here, where it is found and killed), and
    deaf to the catchable termination signals but SIGTERM;
 2. with one BLAS/OpenMP thread set *before* numpy is imported, imports what every kernel
-   needs — :data:`PRELOAD` (ipykernel's kernel app, IPython, numpy, scipy, sympy) and
-   :data:`KERNEL_MODULES` — and checks that it is still single-threaded and has no ZeroMQ
-   context (both are unsafe across ``fork``);
+   needs — :data:`PRELOAD` (IPython, numpy, scipy, sympy) and :data:`KERNEL_MODULES` — makes
+   the IPython shell every kernel runs its cells in (:func:`cell_server.make_shell`), and
+   checks that it is still single-threaded and has no ZeroMQ context (both are unsafe across
+   ``fork``);
 3. writes ``{"ready": ...}`` and then serves requests, one JSON object per line on stdin,
    answering on stdout; it reaps its children and reports each exit as an event.
 
 Requests (``seq`` is echoed in the reply)::
 
-    {"seq": 1, "op": "fork", "workdir": W, "control": C, "connection_file": F,
+    {"seq": 1, "op": "fork", "workdir": W, "control": C, "channel": S,
      "env": {...}, "limits": {"as": bytes, "cpu": s, "nproc": n, "fsize": bytes}}
         -> {"seq": 1, "pid": P}
     {"seq": 2, "op": "signal", "pid": P, "signal": 2}      # to P's whole process group
@@ -51,9 +52,11 @@ for its keeper to read its memory; seccomp refuses ``ptrace``), closes every inh
 (the zygote's pipes to the grader included), applies the resource limits, replaces its
 environment, chdirs into its private working folder, sends stdin/stdout to ``/dev/null`` and
 stderr to ``control/kernel-stderr.txt``, reseeds what fork would otherwise share (numpy's
-global random state), and runs ``IPKernelApp`` with the given connection file — exactly the
-kernel the cold launcher (:func:`grader.execute.kernel_command`) runs, minus the imports —
-removing the connection file once it is loaded.
+global random state), connects to the grader's socket ``S`` in its control folder (then, in its
+own world, seals it: :func:`world.seal`), and serves the grader's requests there with its copy
+of the zygote's shell (:func:`cell_server.serve`): no Jupyter kernel is started — the cells run
+in the same IPython shell a Jupyter kernel runs them in, without its ZeroMQ channels, threads
+and start-up (:mod:`grader.cell_server`).
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ by the submission and extracted as answers — and ``/proc`` from outside for pr
 folders left behind. Nothing here is compared with a value the pool computed.
 
 One pool (one slot, the default modules: a zygote start ≈ 1 s) is shared by the module; the
-tests that break or kill zygotes make their own, importing only ipykernel (``LIGHT``).
+tests that break or kill zygotes make their own, importing only IPython (``LIGHT``).
 """
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ def _required_here():
 
 ROOT = Path(__file__).resolve().parents[2]
 LIMITS = Limits(cell_timeout=1.0, total_timeout=20.0, memory_bytes=3 * 1024**3 // 2)
-LIGHT = ()  # zygotes of the tests that kill them: ipykernel only, a faster start
+LIGHT = ()  # zygotes of the tests that kill them: IPython only, a faster start
 
 
 def gone(pid: int, timeout: float = 5.0) -> bool:
@@ -170,14 +170,14 @@ def test_the_child_is_confined_like_a_cold_kernel(pool, run):
     assert 0 < nproc[0] == nproc[1] < 1_000_000  # finite, positive
     allowed = set(kernel_environment(Path("w"), Path("c"))) | {
         "JPY_PARENT_PID", "PYDEVD_USE_FRAME_EVAL", "TERM", "CLICOLOR", "CLICOLOR_FORCE",
-        "FORCE_COLOR", "PAGER", "GIT_PAGER"}  # what ipykernel itself sets
+        "FORCE_COLOR", "PAGER", "GIT_PAGER", "MPLBACKEND"}  # what the kernel itself sets
     assert set(a["env"]) <= allowed
     # the environment block the process started with is the zygote's: scrubbed too
     assert CANARY not in a["environ_block"] and "canary-in-the-grader" not in a["environ_block"]
     zygote = pool.slots[0].zygote.process  # its pipes to the grader are not inherited
     pipes = {os.readlink(f"/proc/self/fd/{f.fileno()}") for f in (zygote.stdin, zygote.stdout)}
     assert a["stdin"] == "/dev/null" and not pipes & set(a["files"])
-    assert a["key_on_disk"] is False  # the connection file is removed once loaded
+    assert a["key_on_disk"] is False  # no connection file: its channel is one socket
 
 
 def test_interrupt_and_exit_status_go_through_the_zygote(run):
