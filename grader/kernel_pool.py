@@ -223,6 +223,7 @@ class Zygote:
         self._changed = threading.Condition()
         self._replies: dict[int, dict] = {}
         self._exits: dict[int, int] = {}
+        self._forgotten: set[int] = set()  # released kernels whose exit event is to come
         self.memory_held: dict[int, int] = {}  # kernel pid -> bytes, when killed for memory
         self._seq = 0
         self.ready: dict | None = None
@@ -238,9 +239,13 @@ class Zygote:
                     if "ready" in message:
                         self.ready = message
                     elif message.get("event") == "exit":
-                        self._exits[int(message["pid"])] = int(message["status"])
+                        pid = int(message["pid"])
+                        if pid in self._forgotten:  # released: no one asks any more
+                            self._forgotten.discard(pid)
+                            continue
+                        self._exits[pid] = int(message["status"])
                         if "memory" in message:
-                            self.memory_held[int(message["pid"])] = int(message["memory"])
+                            self.memory_held[pid] = int(message["memory"])
                     elif "seq" in message:
                         self._replies[int(message["seq"])] = message
                     self._changed.notify_all()
@@ -309,9 +314,11 @@ class Zygote:
             return -signal.SIGKILL if self.dead else None
 
     def forget(self, pid: int) -> None:
-        """Drop ``pid``'s exit status (it is no longer asked about)."""
+        """Drop ``pid``'s exit status (it is no longer asked about), now or when it comes
+        (a killed kernel is reaped a little after the kill's reply)."""
         with self._changed:
-            self._exits.pop(pid, None)
+            if self._exits.pop(pid, None) is None:
+                self._forgotten.add(pid)
 
     def end_input(self) -> None:
         """Close its input: it kills its kernels and leftovers and exits (:meth:`close`
@@ -484,7 +491,7 @@ def release(forked: _Forked) -> int:
     zygote = forked.zygote
     with contextlib.suppress(ZygoteError):
         if zygote.alive and zygote.exit_status(forked.pid) is None:
-            zygote.request("kill", pid=forked.pid)  # the exit event comes before the reply
+            zygote.request("kill", pid=forked.pid)  # reaped later: -SIGKILL below
     status = zygote.exit_status(forked.pid)
     zygote.forget(forked.pid)
     forked.listener.close()
