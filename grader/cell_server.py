@@ -89,7 +89,8 @@ def make_shell() -> Any:
 
     No history file (an in-memory database and no saving thread: the zygote must stay
     single-threaded to fork); displayed data counted, not kept; ``exit()`` does nothing, as in
-    a Jupyter kernel run by nbclient (it asks the front end, which ignores it).
+    a Jupyter kernel run by nbclient (it asks the front end, which ignores it); ``%matplotlib``
+    starts no GUI event loop (there is no screen).
     """
     from IPython.core.displaypub import DisplayPublisher
     from IPython.core.interactiveshell import InteractiveShell
@@ -113,6 +114,7 @@ def make_shell() -> Any:
     shell = InteractiveShell.instance(config=config)
     shell.display_pub = CountingDisplay(shell=shell, parent=shell)
     shell.ask_exit = lambda: None  # what exit() and quit() call
+    shell.enable_gui = lambda gui=None: None  # %matplotlib: no event loop to run, no screen
     return shell
 
 

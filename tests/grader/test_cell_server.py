@@ -43,6 +43,12 @@ CASES = {
                     "x = len(plt.get_fignums())"], ("x",)),
     "the shell": (["ip = get_ipython()\nx = ip.user_ns['__name__']\ny = __name__"],
                   ("x", "y")),
+    "inline figures": (["%matplotlib inline\nimport matplotlib.pyplot as plt\n"
+                        "fig, ax = plt.subplots()\nax.plot([1, 2])\ndisplay(fig)", "x = 1"],
+                       ("x",)),
+    "cell magic, shell, stderr, warnings": (["%%time\nx = 1", "!echo hello", "import sys\n"
+                                             "print('e', file=sys.stderr)\nimport warnings\n"
+                                             "warnings.warn('careful')\ny = 2"], ("x", "y")),
     "cell timeout": (["import time\nwhile True:\n    time.sleep(0.01)", "x = 1"], ("x",)),
 }
 
