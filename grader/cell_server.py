@@ -32,7 +32,9 @@ run by a front end that allows no input (nbclient, nbgrader).
 
 from __future__ import annotations
 
+import builtins
 import contextlib
+import getpass
 import io
 import json
 import os
@@ -115,6 +117,9 @@ def make_shell() -> Any:
     shell.display_pub = CountingDisplay(shell=shell, parent=shell)
     shell.ask_exit = lambda: None  # what exit() and quit() call
     shell.enable_gui = lambda gui=None: None  # %matplotlib: no event loop to run, no screen
+    # once here, not in every kernel: what IPython sets up on its first cell (it leaves
+    # nothing in the namespace: no history, no output)
+    shell.run_cell("pass", store_history=False, silent=True)
     return shell
 
 
@@ -131,6 +136,32 @@ def _reply(shell: Any, result: Any) -> dict:
     return {"status": "error", "ename": type(err).__name__, "evalue": str(err)}
 
 
+def _answers(shell: Any, request: dict) -> dict:
+    """The extraction: its code run in the notebook's namespace as a cell's would be, but
+    straight (none of IPython's input transformations, hooks or output: the grader's own
+    code, not the student's), then its expressions evaluated there, each given as the
+    ``text/plain`` of its value — its ``repr``, which is what IPython's formatter gives for
+    the string the extraction makes (ipykernel's ``user_expressions``, without the other
+    formats nobody reads)."""
+    try:
+        exec(compile(request["code"], "<eulertop-answers>", "exec"), shell.user_global_ns,
+             shell.user_ns)
+    except (Exception, SystemExit) as err:  # a notebook that broke what the code needs
+        return {"status": "error", "ename": type(err).__name__, "evalue": str(err),
+                "user_expressions": {}}
+    expressions = request.get("user_expressions")
+    values = {}
+    for name, expression in (expressions if isinstance(expressions, dict) else {}).items():
+        try:
+            text = repr(eval(str(expression), shell.user_global_ns, shell.user_ns))
+        except (Exception, SystemExit) as err:
+            values[name] = {"status": "error", "ename": type(err).__name__,
+                            "evalue": str(err), "traceback": []}
+        else:
+            values[name] = {"status": "ok", "data": {"text/plain": text}, "metadata": {}}
+    return {"status": "ok", "user_expressions": values}
+
+
 def _run(shell: Any, request: dict) -> dict:
     """Run one request's code in the shell, interruptible; its reply."""
     code = request.get("code")
@@ -138,19 +169,13 @@ def _run(shell: Any, request: dict) -> dict:
         return {"status": "error", "ename": "ValueError", "evalue": "no code"}
     signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
-        result = shell.run_cell(code, store_history=request.get("op") == "execute",
-                                silent=False)
-        reply = _reply(shell, result)
         if request.get("op") == "answers":
-            expressions = request.get("user_expressions")
-            reply["user_expressions"] = (
-                shell.user_expressions(expressions if isinstance(expressions, dict) else {})
-                if reply["status"] == "ok" else {})
+            return _answers(shell, request)
+        return _reply(shell, shell.run_cell(code, store_history=True, silent=False))
     except KeyboardInterrupt:  # landed outside the cell's own code (IPython's machinery)
-        reply = {"status": "error", "ename": "KeyboardInterrupt", "evalue": ""}
+        return {"status": "error", "ename": "KeyboardInterrupt", "evalue": ""}
     finally:
         signal.signal(signal.SIGINT, signal.SIG_IGN)
-    return reply
 
 
 def _no_input(*args: Any, **kwargs: Any) -> str:
@@ -168,9 +193,6 @@ def serve(shell: Any, sock: socket.socket) -> None:
     out, err = OutputCount("<stdout>"), OutputCount("<stderr>")
     sys.stdout, sys.stderr = out, err
     sys.stdin = io.StringIO()
-    import builtins
-    import getpass
-
     builtins.input = getpass.getpass = _no_input
     requests = sock.makefile("rb")
     _send(sock, {"ready": True})
