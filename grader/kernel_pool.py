@@ -73,13 +73,14 @@ import json
 import math
 import os
 import queue
+import re
 import shutil
 import signal
 import socket
 import subprocess
 import sys
 import threading
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -131,6 +132,46 @@ FILE_BYTES = 64 * 1024**2
 
 PROCESSES = 64
 """Processes/threads a kernel may add to those its user has (``RLIMIT_NPROC``)."""
+
+
+PRELOADABLE: dict[str, tuple[str, ...]] = {
+    "numpy": ("numpy",),
+    "scipy": ("scipy", "scipy.linalg", "scipy.special", "scipy.integrate", "scipy.optimize"),
+    "sympy": ("sympy",),
+}
+"""What a zygote may import for the class, by the package a notebook imports: the zygote's
+default (:data:`grader.zygote.PRELOAD`) split by package. Nothing else is ever preloaded."""
+
+_IMPORT_LINE = re.compile(r"^\s*(?:from|import)\s+(.+)$", re.MULTILINE)
+_PACKAGE = re.compile(r"\b(" + "|".join(PRELOADABLE) + r")\b")
+
+
+def packages_imported(notebook: bytes) -> set[str]:
+    """Which of :data:`PRELOADABLE`'s packages a notebook's code cells import (``import`` and
+    ``from`` lines; the assignment's own Markdown names numpy and sympy, so only code counts).
+    A notebook that cannot be read gives none (the run itself will say what is wrong)."""
+    try:
+        cells = json.loads(notebook).get("cells", [])
+        code = "\n".join(
+            "".join(c["source"]) if isinstance(c["source"], list) else c["source"]
+            for c in cells if isinstance(c, dict) and c.get("cell_type") == "code")
+        lines = _IMPORT_LINE.findall(code)
+    except Exception:
+        return set()
+    return {name for line in lines for name in _PACKAGE.findall(line)}
+
+
+def preload_for(packages: Iterable[str]) -> tuple[str, ...]:
+    """The modules the zygotes import for a class whose notebooks import ``packages``
+    (:func:`packages_imported`): numpy always, scipy's or sympy's modules if asked for.
+
+    Every kernel then has them without importing them (sympy alone is 0.3 s of CPU a
+    kernel), and a class that uses neither does not make each zygote pay for them (0.5 s of
+    CPU at its start, and a larger process to fork for every notebook). An import this does
+    not see (``exec``, ``importlib``) only costs that kernel the import; nothing else changes.
+    """
+    wanted = {"numpy", *packages}
+    return tuple(m for package in PRELOADABLE if package in wanted for m in PRELOADABLE[package])
 
 
 class ZygoteError(RuntimeError):

@@ -377,12 +377,16 @@ def _unchanged(old: StudentResult | None, sha: str | None, key_hash: str,
 
 def _plan(a: Assignment, found, out: Path, force: bool, sandboxed: bool = False,
           max_bytes: int = DEFAULT_MAX_BYTES):
-    """Split the roster: (submissions to execute with their hashes, records to write, kept).
+    """Split the roster: (submissions to execute with their hashes, records to write, kept,
+    the packages the ones to execute import).
 
     Each submission is read once here, safely (:func:`grader.submission_file.read_submission`:
-    a regular file under ``max_bytes``), only to hash it; one that is not is recorded
-    "invalid submission: <why>"."""
-    to_run, to_write, kept = [], [], []
+    a regular file under ``max_bytes``), to hash it and to see what its code imports
+    (:func:`grader.kernel_pool.packages_imported`: what the zygotes preload); one that is not
+    is recorded "invalid submission: <why>"."""
+    from grader.kernel_pool import packages_imported
+
+    to_run, to_write, kept, packages = [], [], [], set()
     problems = {p.student_id: p for p in found.problems if p.student_id is not None}
     by_id = {s.student_id: s for s in found.submissions}
     for sid in a.ids:
@@ -390,7 +394,7 @@ def _plan(a: Assignment, found, out: Path, force: bool, sandboxed: bool = False,
         expected, key_hash = key_answers(a.key, sid), a.key_hash(sid)
         if sid in by_id:
             try:
-                sha = hashlib.sha256(read_submission(by_id[sid].path, max_bytes)).hexdigest()
+                data = read_submission(by_id[sid].path, max_bytes)
             except (OSError, InvalidSubmission) as e:
                 why = (f"invalid submission: {e}" if isinstance(e, InvalidSubmission) else
                        f"cannot read {by_id[sid].path.name}: {e.strerror}")
@@ -400,10 +404,12 @@ def _plan(a: Assignment, found, out: Path, force: bool, sandboxed: bool = False,
                 else:
                     to_write.append(fresh)
                 continue
+            sha = hashlib.sha256(data).hexdigest()
             if _unchanged(old, sha, key_hash, sandboxed=sandboxed):
                 kept.append(sid)
             else:
                 to_run.append((by_id[sid], expected, key_hash, sha))
+                packages |= packages_imported(data)
             continue
         fresh = (ungraded_result(sid, "failed", problems[sid].message, expected, key_hash)
                  if sid in problems else
@@ -412,7 +418,7 @@ def _plan(a: Assignment, found, out: Path, force: bool, sandboxed: bool = False,
             kept.append(sid)
         else:
             to_write.append(fresh)
-    return to_run, to_write, kept
+    return to_run, to_write, kept, packages
 
 
 def _publish(a: Assignment, out: Path, result: StudentResult, reveal: bool) -> None:
@@ -530,7 +536,7 @@ def grade_assignment(
         else:  # a previous run's LMS table would describe other files
             (out / LMS_SUBMISSIONS).unlink(missing_ok=True)
         sandboxed = found_sandbox is not None if cluster is None else sandbox and not execute
-        to_run, to_write, kept = _plan(a, found, out, force, sandboxed,
+        to_run, to_write, kept, packages = _plan(a, found, out, force, sandboxed,
                                        getattr(limits, "submission_bytes", DEFAULT_MAX_BYTES))
         if on_plan is not None:
             progress = on_plan(len(to_run) + len(to_write)) or progress
@@ -540,7 +546,10 @@ def grade_assignment(
             _run_on_cluster(cluster, a, out, to_run, execute, limits, reveal, progress,
                             sandbox=sandbox, cold=cold_kernels)
         else:  # the kernels' zygotes start first: they import while this process writes
-            with _kernels(warm and bool(to_run), min(jobs, len(to_run)), found_sandbox) as f:
+            from grader.kernel_pool import preload_for
+
+            with _kernels(warm and bool(to_run), min(jobs, len(to_run)), found_sandbox,
+                          preload_for(packages)) as f:
                 _publish_all(a, out, to_write, reveal, progress)
                 if to_run:
                     _prepare_report()
@@ -596,15 +605,17 @@ def _sandbox(wanted: bool) -> Any:
 
 
 @contextmanager
-def _kernels(warm: bool, slots: int, sandbox: Any = None) -> Iterator[Callable | None]:
-    """The kernel factory of the run: a warm pool's (closed at the end), or None (default)."""
+def _kernels(warm: bool, slots: int, sandbox: Any = None,
+             preload: Sequence[str] | None = None) -> Iterator[Callable | None]:
+    """The kernel factory of the run: a warm pool's (closed at the end), or None (default);
+    its zygotes import ``preload`` (:func:`grader.kernel_pool.preload_for`)."""
     if not warm:
         yield None
         return
     from grader.kernel_pool import KernelPool
     from grader.sandbox import run_folder
 
-    with run_folder(), KernelPool(slots, sandbox=sandbox) as pool:
+    with run_folder(), KernelPool(slots, sandbox=sandbox, preload=preload) as pool:
         yield pool.kernel
 
 

@@ -1,0 +1,106 @@
+"""What the zygotes preload for a class: what its notebooks' code imports
+(grader/kernel_pool.py ``packages_imported``, ``preload_for``; grader/pipeline.py).
+
+References: notebooks written here with known import lines, and ``sys.modules`` read inside a
+forked kernel (by the submission, before it imports anything itself).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import shutil
+from pathlib import Path
+
+import nbformat
+import pytest
+from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook
+
+from grader import pipeline
+from grader.execute import execute_submission
+from grader.kernel_pool import KernelPool, packages_imported, preload_for
+from grader.limits import Limits
+from tests.grader.test_pipeline import FakeExecute, _notebook
+
+
+def notebook_bytes(*cells, markdown: str = "", as_list: bool = False) -> bytes:
+    nb = new_notebook(cells=[new_markdown_cell(markdown), *map(new_code_cell, cells)])
+    data = json.loads(nbformat.writes(nb))
+    for cell in data["cells"]:  # lists of lines, as Jupyter writes them, or one string
+        source = "".join(cell["source"]) if isinstance(cell["source"], list) else cell["source"]
+        cell["source"] = source.splitlines(keepends=True) if as_list else source
+    return json.dumps(data).encode()
+
+
+@pytest.mark.parametrize(("cells", "expected"), [
+    (["x = 1"], set()),
+    (["import numpy as np"], {"numpy"}),
+    (["import math, sympy as sp"], {"sympy"}),
+    (["from scipy.integrate import solve_ivp\nimport numpy"], {"scipy", "numpy"}),
+    (["def f():\n    import sympy\n    return sympy.pi"], {"sympy"}),
+    (["# import sympy\nx = 'sympy'"], set()),  # neither a comment nor a string imports
+    (["import sympyx", "from numpyish import y"], set()),  # other packages
+])
+@pytest.mark.parametrize("as_list", [False, True])
+def test_only_the_code_cells_imports_count(cells, expected, as_list):
+    data = notebook_bytes(*cells, markdown="Use numpy or sympy as you like.\nimport scipy",
+                          as_list=as_list)
+    assert packages_imported(data) == expected
+
+
+@pytest.mark.parametrize("data", [b"{not json", b"[1, 2]", b'{"cells": 3}',
+                                  b'{"cells": [{"cell_type": "code", "source": 5}]}'])
+def test_a_notebook_that_cannot_be_read_asks_for_nothing(data):
+    assert packages_imported(data) == set()
+
+
+def test_numpy_always_the_rest_when_asked():
+    assert preload_for(set()) == ("numpy",)
+    assert preload_for({"sympy"}) == ("numpy", "sympy")
+    scipy = preload_for({"scipy"})
+    assert scipy[0] == "numpy" and "scipy.integrate" in scipy and "sympy" not in scipy
+
+
+def test_a_kernel_of_the_pool_has_what_was_preloaded(tmp_path):
+    probe = "import sys\nhad = sorted(m for m in ('numpy', 'scipy', 'sympy') if m in sys.modules)"
+    path = tmp_path / "alice.ipynb"
+    nbformat.write(new_notebook(cells=[new_code_cell(probe)]), path)
+    limits = Limits(total_timeout=30)
+    for packages, had in ((set(), ["numpy"]), ({"sympy"}, ["numpy", "sympy"])):
+        with KernelPool(1, preload=preload_for(packages)) as pool:
+            done = execute_submission(path, ("had",), limits, kernel_factory=pool.kernel)
+        assert done.status == "ok", done.message
+        assert done.answers["had"] == had
+
+
+@pytest.fixture
+def preloads(monkeypatch):
+    """What each grading run asks its zygotes to preload (the pool itself is not started)."""
+    asked = []
+
+    @contextlib.contextmanager
+    def kernels(warm, slots, sandbox=None, preload=None):
+        asked.append(preload)
+        yield None
+
+    monkeypatch.setattr(pipeline, "_kernels", kernels)
+    return asked
+
+
+def test_grading_preloads_what_the_submissions_to_run_import(assignment, tmp_path, preloads):
+    hw = Path(shutil.copytree(assignment, tmp_path / "HW"))
+    subs = tmp_path / "subs"
+    subs.mkdir()
+    (subs / "alice.ipynb").write_text(_notebook(hw, "alice"))  # its Markdown names sympy
+    (subs / "bob.ipynb").write_text(_notebook(hw, "bob"))
+    pipeline.grade_assignment(hw, subs, limits="LIMITS", execute=FakeExecute(), jobs=2)
+    (subs / "bob.ipynb").write_text(_notebook(hw, "bob", "import sympy as sp"))
+    pipeline.grade_assignment(hw, subs, limits="LIMITS", execute=FakeExecute(), jobs=2)
+    assert preloads == [("numpy",), ("numpy", "sympy")]  # only bob ran again: his import
+
+
+@pytest.fixture(scope="module")
+def assignment(tmp_path_factory) -> Path:
+    from tests.grader.test_pipeline import assignment as make
+
+    return make.__wrapped__(tmp_path_factory)
