@@ -37,14 +37,10 @@ import contextlib
 import getpass
 import io
 import json
-import os
 import signal
 import socket
 import sys
 from typing import Any
-
-INLINE_BACKEND = "module://matplotlib_inline.backend_inline"
-"""matplotlib's backend in a kernel, as in ipykernel: figures are displayed, not opened."""
 
 
 class OutputCount(io.TextIOBase):
@@ -188,7 +184,6 @@ def _no_input(*args: Any, **kwargs: Any) -> str:
 
 def serve(shell: Any, sock: socket.socket) -> None:
     """In the forked kernel: say ready, then run the grader's requests until it hangs up."""
-    os.environ.setdefault("MPLBACKEND", INLINE_BACKEND)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # until a request runs
     out, err = OutputCount("<stdout>"), OutputCount("<stderr>")
     sys.stdout, sys.stderr = out, err

@@ -36,6 +36,7 @@ def notebook_bytes(*cells, markdown: str = "", as_list: bool = False) -> bytes:
     (["x = 1"], set()),
     (["import numpy as np"], {"numpy"}),
     (["import math, sympy as sp"], {"sympy"}),
+    (["import matplotlib.pyplot as plt"], {"matplotlib"}),
     (["from scipy.integrate import solve_ivp\nimport numpy"], {"scipy", "numpy"}),
     (["def f():\n    import sympy\n    return sympy.pi"], {"sympy"}),
     (["# import sympy\nx = 'sympy'"], set()),  # neither a comment nor a string imports
@@ -59,6 +60,7 @@ def test_numpy_always_the_rest_when_asked():
     assert preload_for({"sympy"}) == ("numpy", "sympy")
     scipy = preload_for({"scipy"})
     assert scipy[0] == "numpy" and "scipy.integrate" in scipy and "sympy" not in scipy
+    assert preload_for({"matplotlib"}) == ("numpy", "matplotlib", "matplotlib.pyplot")
 
 
 def test_a_kernel_of_the_pool_has_what_was_preloaded(tmp_path):
@@ -104,3 +106,20 @@ def assignment(tmp_path_factory) -> Path:
     from tests.grader.test_pipeline import assignment as make
 
     return make.__wrapped__(tmp_path_factory)
+
+
+def test_a_notebook_that_plots_runs_the_same_with_matplotlib_preloaded(tmp_path):
+    """Same backend (the kernels' ``Agg``), same figures, same record as a Jupyter kernel."""
+    from grader.execute import LocalKernel
+
+    cells = ["import matplotlib.pyplot as plt\nfig, ax = plt.subplots()\nax.plot([1, 2, 3])\n"
+             "plt.show()\nbackend = plt.get_backend()", "plt.figure()\nn = len(plt.get_fignums())"]
+    path = tmp_path / "alice.ipynb"
+    nbformat.write(new_notebook(cells=list(map(new_code_cell, cells))), path)
+    limits = Limits(total_timeout=30)
+    jupyter = execute_submission(path, ("backend", "n"), limits, kernel_factory=LocalKernel)
+    with KernelPool(1, preload=preload_for({"matplotlib"})) as pool:
+        forked = execute_submission(path, ("backend", "n"), limits, kernel_factory=pool.kernel)
+    assert jupyter.status == forked.status == "ok", (jupyter.message, forked.message)
+    assert forked.answers == jupyter.answers == {"backend": "Agg", "n": 2}
+    assert forked.cell_errors == jupyter.cell_errors == ()
