@@ -17,8 +17,13 @@ of 5), and, unless ``--no-nbgrader``, nbgrader's ``autograde`` on the same two c
 (installed into a temporary virtual environment, as ``bench_grade.py`` does; fewer runs, it is
 slow).
 
+With ``--imports``, every submission first imports numpy, scipy, sympy and matplotlib, so that
+the zygotes preload all of them (what they preload is what the class's code imports). The
+speed of a pure-Python loop is printed before and after (the machines are shared; their speed
+varies by a third from one minute to the next).
+
 Run from the repository root: ``PYTHONPATH=. python benchmarks/bench_startup.py [--rounds 4]
-[--small 10] [--large 50] [--no-nbgrader]``.
+[--small 10] [--large 50] [--no-nbgrader] [--imports]``.
 """
 
 from __future__ import annotations
@@ -45,8 +50,15 @@ from bench_grade import (  # a script beside this one
 PROBLEMS = ["inertia_tensor", "euler_rotation"]
 
 
-def make_correct_class(root: Path, students: int) -> tuple[Path, Path]:
-    """An assignment of ``students`` and one correct (lightly noisy) submission each."""
+IMPORT_CELL = ("import numpy as np\nimport scipy.integrate\nimport sympy as sp\n"
+               "import matplotlib.pyplot as plt")
+"""With ``--imports``: a first code cell in every submission, importing every package the
+zygotes can preload (``grader.kernel_pool.PRELOADABLE``), so that they all are."""
+
+
+def make_correct_class(root: Path, students: int, imports: bool = False) -> tuple[Path, Path]:
+    """An assignment of ``students`` and one correct (lightly noisy) submission each (each
+    importing :data:`IMPORT_CELL` first, with ``imports``)."""
     from problems.generate import generate_assignment
     from problems.roster import Roster
     from problems.templates import FAMILIES
@@ -56,8 +68,12 @@ def make_correct_class(root: Path, students: int) -> tuple[Path, Path]:
     generate_assignment(roster, hw, FAMILIES, problems=PROBLEMS, seed=2024)
     subs.mkdir()
     for i, row in enumerate(roster.rows):
-        nb = json.loads((hw / "solutions" / f"{row['id']}.ipynb").read_text())
-        (subs / f"{row['id']}.ipynb").write_text(json.dumps(noisy_notebook(nb, i, False)))
+        nb = noisy_notebook(json.loads((hw / "solutions" / f"{row['id']}.ipynb").read_text()),
+                            i, False)
+        if imports:
+            nb["cells"].insert(0, {"cell_type": "code", "execution_count": None, "id": "imports",
+                                   "metadata": {}, "outputs": [], "source": IMPORT_CELL})
+        (subs / f"{row['id']}.ipynb").write_text(json.dumps(nb))
     return hw, subs
 
 
@@ -80,6 +96,19 @@ def timed(cmd: list[str]) -> tuple[float, float]:
     return time.perf_counter() - t0, machine_cpu() - c0
 
 
+def python_speed() -> str:
+    """How fast this machine runs Python right now (a shared machine's speed varies): the
+    seconds of a pure-Python loop of 10⁷ additions, median of 3."""
+    def loop() -> float:
+        t0, x = time.perf_counter(), 0
+        for i in range(10_000_000):
+            x += i
+        return time.perf_counter() - t0
+
+    seconds = statistics.median(loop() for _ in range(3))
+    return f"a pure-Python loop of 10^7 additions takes {seconds:.2f} s"
+
+
 def grade(hw: Path, subs: Path, jobs: int) -> tuple[float, float]:
     """(wall, machine CPU) seconds of one ``eulertop grade --force``."""
     return timed([sys.executable, "-m", "eulertop", "grade", str(hw), str(subs), "--jobs",
@@ -99,14 +128,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--large", type=int, default=50)
     parser.add_argument("--nbgrader-runs", type=int, default=1)
     parser.add_argument("--no-nbgrader", action="store_true")
+    parser.add_argument("--imports", action="store_true",
+                        help="every submission first imports numpy, scipy, sympy and "
+                        "matplotlib (all of what the zygotes can preload)")
     args = parser.parse_args(argv)
     print(f"machine: {machine()}")
     with tempfile.TemporaryDirectory(prefix="bench-startup-") as tmp:
         tmp = Path(tmp)
-        classes = {n: make_correct_class(tmp / f"c{n}", n) for n in (args.small, args.large)}
+        classes = {n: make_correct_class(tmp / f"c{n}", n, args.imports)
+                   for n in (args.small, args.large)}
+        imported = f", each first importing: {IMPORT_CELL!r}" if args.imports else \
+            ", importing nothing"
         print(f"classes of {args.small} and {args.large} correct submissions, problems "
-              f"{','.join(PROBLEMS)}; {args.rounds} rounds; load average before: "
-              f"{os.getloadavg()[0]:.2f}", flush=True)
+              f"{','.join(PROBLEMS)}{imported}; {args.rounds} rounds; load average before: "
+              f"{os.getloadavg()[0]:.2f}; {python_speed()}", flush=True)
         samples: dict[int, list[tuple[float, ...]]] = {1: [], 2: []}
         for r in range(args.rounds):
             for jobs in ((1, 2) if r % 2 == 0 else (2, 1)):
@@ -147,7 +182,7 @@ def main(argv: list[str] | None = None) -> int:
                       f"{args.large} in {t[args.large]:.1f} s -> start-up {s:.2f} s, marginal "
                       f"{1000 * m:.0f} ms/notebook; eulertop --jobs 2 is "
                       f"{m / medians[2][1]:.1f}x faster at the margin")
-        print(f"load average after: {os.getloadavg()[0]:.2f}")
+        print(f"load average after: {os.getloadavg()[0]:.2f}; {python_speed()}")
     return 0
 
 
