@@ -23,7 +23,8 @@ speed of a pure-Python loop is printed before and after (the machines are shared
 varies by a third from one minute to the next).
 
 Run from the repository root: ``PYTHONPATH=. python benchmarks/bench_startup.py [--rounds 4]
-[--small 10] [--large 50] [--no-nbgrader] [--imports]``.
+[--small 10] [--large 50] [--no-nbgrader] [--imports] [--work S]``. ``--work S`` adds a cell
+that keeps the kernel's CPU busy for S seconds: the class of a notebook that computes.
 """
 
 from __future__ import annotations
@@ -56,9 +57,17 @@ IMPORT_CELL = ("import numpy as np\nimport scipy.integrate\nimport sympy as sp\n
 zygotes can preload (``grader.kernel_pool.PRELOADABLE``), so that they all are."""
 
 
-def make_correct_class(root: Path, students: int, imports: bool = False) -> tuple[Path, Path]:
+def work_cell(seconds: float) -> str:
+    """A cell that keeps the CPU busy for ``seconds`` of the kernel's own CPU time."""
+    return ("import time\nstart = time.process_time()\n"
+            f"while time.process_time() - start < {seconds!r}:\n    pass")
+
+
+def make_correct_class(root: Path, students: int, imports: bool = False,
+                       work: float = 0.0) -> tuple[Path, Path]:
     """An assignment of ``students`` and one correct (lightly noisy) submission each (each
-    importing :data:`IMPORT_CELL` first, with ``imports``)."""
+    importing :data:`IMPORT_CELL` first, with ``imports``; with a cell computing for ``work``
+    seconds of CPU, if any)."""
     from problems.generate import generate_assignment
     from problems.roster import Roster
     from problems.templates import FAMILIES
@@ -70,9 +79,11 @@ def make_correct_class(root: Path, students: int, imports: bool = False) -> tupl
     for i, row in enumerate(roster.rows):
         nb = noisy_notebook(json.loads((hw / "solutions" / f"{row['id']}.ipynb").read_text()),
                             i, False)
-        if imports:
-            nb["cells"].insert(0, {"cell_type": "code", "execution_count": None, "id": "imports",
-                                   "metadata": {}, "outputs": [], "source": IMPORT_CELL})
+        for name, source in (("imports", IMPORT_CELL if imports else ""),
+                             ("work", work_cell(work) if work else "")):
+            if source:
+                nb["cells"].insert(0, {"cell_type": "code", "execution_count": None, "id": name,
+                                       "metadata": {}, "outputs": [], "source": source})
         (subs / f"{row['id']}.ipynb").write_text(json.dumps(nb))
     return hw, subs
 
@@ -131,14 +142,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--imports", action="store_true",
                         help="every submission first imports numpy, scipy, sympy and "
                         "matplotlib (all of what the zygotes can preload)")
+    parser.add_argument("--work", type=float, default=0.0, metavar="S",
+                        help="every submission also computes for S seconds of CPU (a notebook "
+                        "that does something, rather than only state its answers)")
     args = parser.parse_args(argv)
     print(f"machine: {machine()}")
     with tempfile.TemporaryDirectory(prefix="bench-startup-") as tmp:
         tmp = Path(tmp)
-        classes = {n: make_correct_class(tmp / f"c{n}", n, args.imports)
+        classes = {n: make_correct_class(tmp / f"c{n}", n, args.imports, args.work)
                    for n in (args.small, args.large)}
         imported = f", each first importing: {IMPORT_CELL!r}" if args.imports else \
             ", importing nothing"
+        if args.work:
+            imported += f", each computing for {args.work:g} s of CPU"
         print(f"classes of {args.small} and {args.large} correct submissions, problems "
               f"{','.join(PROBLEMS)}{imported}; {args.rounds} rounds; load average before: "
               f"{os.getloadavg()[0]:.2f}; {python_speed()}", flush=True)
