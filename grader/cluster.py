@@ -179,9 +179,21 @@ def cluster_client(spec: str) -> Iterator[Any]:
 # on the worker
 
 
-def plugin_name(sandbox: bool, cold: bool) -> str:
-    """The name of the :class:`WorkerKernels` plugin for these settings."""
-    return "eulertop-kernels" + ("" if sandbox else "-unsandboxed") + ("-cold" if cold else "")
+PRELOAD_MARK = "-preload:"
+
+
+def plugin_name(sandbox: bool, cold: bool, preload: Sequence[str] | None = None) -> str:
+    """The name of the :class:`WorkerKernels` plugin for these settings (a worker keeps one
+    per name: a class that preloads other modules gets pools of its own)."""
+    return ("eulertop-kernels" + ("" if sandbox else "-unsandboxed") + ("-cold" if cold else "")
+            + ("" if preload is None else PRELOAD_MARK + ",".join(preload)))
+
+
+def _settings(name: str) -> dict[str, Any]:
+    """The :class:`WorkerKernels` settings a :func:`plugin_name` stands for."""
+    base, _, preload = name.partition(PRELOAD_MARK)
+    return {"sandbox": "unsandboxed" not in base, "cold": base.endswith("-cold"),
+            "preload": tuple(filter(None, preload.split(","))) if PRELOAD_MARK in name else None}
 
 
 class WorkerKernels(_PluginBase):
@@ -192,9 +204,11 @@ class WorkerKernels(_PluginBase):
     slot per worker thread, in this machine's sandbox unless ``sandbox`` is False.
     """
 
-    def __init__(self, sandbox: bool = True, cold: bool = False) -> None:
+    def __init__(self, sandbox: bool = True, cold: bool = False,
+                 preload: Sequence[str] | None = None) -> None:
         self.sandbox, self.cold = sandbox, cold
-        self.name = plugin_name(sandbox, cold)
+        self.preload = None if preload is None else tuple(preload)
+        self.name = plugin_name(sandbox, cold, self.preload)
 
     def setup(self, worker: Any = None) -> None:
         self._lock = threading.Lock()
@@ -222,7 +236,8 @@ class WorkerKernels(_PluginBase):
             if warm and factory is None and not self.cold:
                 from grader.kernel_pool import KernelPool
 
-                pool = self._stack.enter_context(KernelPool(self._slots, sandbox=self._found))
+                pool = self._stack.enter_context(
+                    KernelPool(self._slots, sandbox=self._found, preload=self.preload))
                 self._ready = (staging, copies, pool.kernel)
             return self._ready
 
@@ -233,7 +248,7 @@ def _plugin(name: str) -> WorkerKernels:
     worker = get_worker()
     plugin = worker.plugins.get(name)
     if plugin is None:  # registered before this worker joined and not yet sent: make it here
-        plugin = WorkerKernels(sandbox="unsandboxed" not in name, cold=name.endswith("-cold"))
+        plugin = WorkerKernels(**_settings(name))
         plugin.setup(worker)
         worker.plugins[name] = plugin
     return plugin
@@ -330,6 +345,7 @@ def grade_on_cluster(
     sandbox: bool = True,
     cold: bool = False,
     stop: threading.Event | None = None,
+    preload: Sequence[str] | None = None,
 ) -> int:
     """Grade ``to_run`` (the pipeline's plan) on the cluster of ``client``; the count published.
 
@@ -347,6 +363,9 @@ def grade_on_cluster(
         Start every kernel from scratch on the workers (``--cold-kernels``).
     stop : threading.Event, optional
         Set to stop submitting (Ctrl-C is handled by the caller).
+    preload : sequence of str, optional
+        What the workers' zygotes import (:func:`grader.kernel_pool.preload_for`: what the
+        class's notebooks import); default: the zygote's own default.
 
     Raises
     ------
@@ -357,7 +376,7 @@ def grade_on_cluster(
 
     from grader.sandbox import SandboxUnavailable
 
-    plugin = WorkerKernels(sandbox, cold)
+    plugin = WorkerKernels(sandbox, cold, preload)
     _register(client, plugin)
     max_bytes = getattr(limits, "submission_bytes", DEFAULT_MAX_BYTES)
     pending = list(reversed(to_run))

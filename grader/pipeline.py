@@ -541,13 +541,13 @@ def grade_assignment(
         if on_plan is not None:
             progress = on_plan(len(to_run) + len(to_write)) or progress
         jobs = jobs or os.cpu_count() or 1
+        from grader.kernel_pool import preload_for
+
         if cluster is not None:
             _publish_all(a, out, to_write, reveal, progress)
             _run_on_cluster(cluster, a, out, to_run, execute, limits, reveal, progress,
-                            sandbox=sandbox, cold=cold_kernels)
+                            sandbox=sandbox, cold=cold_kernels, preload=preload_for(packages))
         else:  # the kernels' zygotes start first: they import while this process writes
-            from grader.kernel_pool import preload_for
-
             with _kernels(warm and bool(to_run), min(jobs, len(to_run)), found_sandbox,
                           preload_for(packages)) as f:
                 _publish_all(a, out, to_write, reveal, progress)
@@ -640,7 +640,7 @@ def _require_cluster(cluster: str) -> None:
 
 
 def _run_on_cluster(cluster, a, out, to_run, execute, limits, reveal, progress, *,
-                    sandbox: bool, cold: bool) -> None:
+                    sandbox: bool, cold: bool, preload: Sequence[str] | None = None) -> None:
     """:func:`_run_all` on a Dask cluster (:func:`grader.cluster.grade_on_cluster`): the
     workers run :func:`grade_one`; this process writes every record, as they come back."""
     if not to_run:
@@ -660,7 +660,7 @@ def _run_on_cluster(cluster, a, out, to_run, execute, limits, reveal, progress, 
         with cluster_client(cluster) as client:
             try:
                 grade_on_cluster(client, to_run, limits, publish, execute=execute,
-                                 sandbox=sandbox, cold=cold, stop=stop)
+                                 sandbox=sandbox, cold=cold, stop=stop, preload=preload)
             except KeyboardInterrupt:
                 stop.set()  # in-flight tasks are cancelled when the client closes
                 raise Interrupted(len(published), len(to_run)) from None

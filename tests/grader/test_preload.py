@@ -123,3 +123,17 @@ def test_a_notebook_that_plots_runs_the_same_with_matplotlib_preloaded(tmp_path)
     assert jupyter.status == forked.status == "ok", (jupyter.message, forked.message)
     assert forked.answers == jupyter.answers == {"backend": "Agg", "n": 2}
     assert forked.cell_errors == jupyter.cell_errors == ()
+
+
+@pytest.mark.parametrize("settings", [
+    {"sandbox": True, "cold": False, "preload": ("numpy", "sympy")},
+    {"sandbox": False, "cold": True, "preload": None},
+    {"sandbox": True, "cold": False, "preload": ("numpy",)},
+])
+def test_a_dask_worker_rebuilds_the_preload_from_the_plugins_name(settings):
+    """A worker that joins after the plugin was registered makes it from its name alone."""
+    from grader.cluster import WorkerKernels, _settings
+
+    plugin = WorkerKernels(**settings)
+    assert _settings(plugin.name) == settings
+    assert plugin.name != WorkerKernels(settings["sandbox"], settings["cold"], ("scipy",)).name
