@@ -193,6 +193,7 @@ def serve(shell: Any, sock: socket.socket) -> None:
     _send(sock, {"ready": True})
     while True:
         try:
+            sock.setblocking(True)  # a cell may have made it non-blocking (a shared descriptor)
             line = requests.readline()
         except KeyboardInterrupt:  # an interrupt between requests: ignored (and so here)
             continue

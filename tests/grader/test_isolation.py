@@ -169,24 +169,42 @@ ATTACKS = {
         print('reached', reached)
         """,
     "a06-huge-messages": """
-        k = get_ipython().kernel
-        big = 'x' * (192 * 1024**2)
-        for channel in ('iopub', 'shell'):
+        import os, socket, stat
+        ip = get_ipython()
+        k = getattr(ip, 'kernel', None)  # a Jupyter kernel (cold): its ZeroMQ channels
+        if k is not None:
+            big = 'x' * (192 * 1024**2)
+            for channel in ('iopub', 'shell'):
+                try:
+                    if channel == 'iopub':
+                        k.session.send(k.iopub_socket, 'stream', {'name': 'stdout', 'text': big},
+                                       parent=k.get_parent())
+                    else:
+                        stream = getattr(k, 'shell_stream', None) or k.shell_streams[0]
+                        k.session.send(stream, 'execute_reply', {'status': 'ok', 'pad': big},
+                                       parent=k.get_parent('shell'),
+                                       ident=k._parent_ident['shell'])
+                except Exception as e:
+                    print(channel, type(e).__name__, e)
+            for _ in range(150):  # and a flood of messages just under any cap
+                k.session.send(k.iopub_socket, 'stream',
+                               {'name': 'stdout', 'text': 'y' * (3 * 1024**2)},
+                               parent=k.get_parent())
+            del big
+        # a forked kernel: its one channel to the grader, a Unix socket among its descriptors
+        chunk = b'z' * (16 * 1024**2)
+        for fd in map(int, os.listdir('/proc/self/fd')):
             try:
-                if channel == 'iopub':
-                    k.session.send(k.iopub_socket, 'stream', {'name': 'stdout', 'text': big},
-                                   parent=k.get_parent())
-                else:
-                    stream = getattr(k, 'shell_stream', None) or k.shell_streams[0]
-                    k.session.send(stream, 'execute_reply', {'status': 'ok', 'pad': big},
-                                   parent=k.get_parent('shell'), ident=k._parent_ident['shell'])
-            except Exception as e:
-                print(channel, type(e).__name__, e)
-        for _ in range(150):  # and a flood of messages just under any cap
-            k.session.send(k.iopub_socket, 'stream',
-                           {'name': 'stdout', 'text': 'y' * (3 * 1024**2)},
-                           parent=k.get_parent())
-        del big
+                if not stat.S_ISSOCK(os.fstat(fd).st_mode):
+                    continue
+                s = socket.socket(fileno=os.dup(fd))
+                for _ in range(12):  # 192 MiB in one line that never ends
+                    s.sendall(chunk)
+                for _ in range(60):  # then lines just under the grader's cap
+                    s.sendall(b'y' * (4 * 1024**2 - 64) + b'\\n')
+                s.sendall(b'\\n')
+            except OSError as e:
+                print('channel', fd, type(e).__name__, e)
         """,
     "a07-ipc-leftovers": """
         import ctypes, mmap, os
