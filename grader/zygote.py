@@ -207,7 +207,7 @@ class Zygote:
                 with contextlib.suppress(BaseException):
                     import traceback
 
-                    traceback.print_exc()  # into the kernel's stderr log
+                    traceback.print_exc(file=sys.__stderr__)  # the kernel's stderr log
             finally:
                 os._exit(code)  # never return into the server loop
         if child_link is not None:
