@@ -3,7 +3,8 @@
 The grader listens on a Unix socket in the kernel's private control folder
 (:func:`listen`) before asking the zygote to fork; the kernel connects once confined and says
 it is ready; :class:`CellChannel` then sends it requests one at a time and reads the replies.
-Everything the kernel says is untrusted: a line longer than :data:`MAX_LINE` is dropped
+Everything the kernel says is untrusted: a line longer than
+:data:`grader.execute.MAX_MESSAGE` is dropped
 unread, a line that is not a reply to the request in hand is ignored, and a kernel that hangs
 up (it died) raises :class:`ChannelClosed`.
 """
@@ -15,11 +16,11 @@ import contextlib
 import json
 import os
 import socket
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-MAX_LINE = 4 * 1024**2
-"""Longest line (bytes) read from a kernel; longer ones are dropped (the grader's memory)."""
+from grader.execute import MAX_MESSAGE
 
 SOCKET_NAME = "s"
 """The listening socket's name in the control folder (a Unix socket path is ≤ 107 bytes)."""
@@ -63,7 +64,7 @@ class CellChannel:
         self.writer: asyncio.StreamWriter | None = None
         self.sent = 0
 
-    async def connect(self, timeout: float, alive: Any) -> None:
+    async def connect(self, timeout: float, alive: Callable[[], bool]) -> None:
         """Wait (at most ``timeout`` seconds, while ``alive()``) for the kernel to connect
         and say it is ready; :class:`ChannelClosed` otherwise."""
         loop = asyncio.get_running_loop()
@@ -77,7 +78,8 @@ class CellChannel:
                 raise ChannelClosed(f"the kernel {why}")
         conn, _ = accepting.result()
         self.listener.close()
-        self.reader, self.writer = await asyncio.open_unix_connection(sock=conn, limit=MAX_LINE)
+        self.reader, self.writer = await asyncio.open_unix_connection(
+            sock=conn, limit=MAX_MESSAGE)
         remaining = max(0.1, deadline - loop.time())
         try:
             hello = await asyncio.wait_for(self._line(), remaining)
@@ -107,7 +109,7 @@ class CellChannel:
         """The next line, decoded (None if it is not JSON or was too long)."""
         try:
             line = await self.reader.readline()
-        except ValueError:  # longer than MAX_LINE: dropped (asyncio discards it)
+        except ValueError:  # longer than MAX_MESSAGE: dropped (asyncio discards it)
             return None
         except (ConnectionError, OSError):
             line = b""

@@ -23,7 +23,8 @@ says ``{"ready": true}``; then, for each request of the grader, in order::
 only when the code raised nothing, as ipykernel does). ``output``: characters the request
 printed or displayed — counted, never kept or sent, since output is never graded.
 Everything the kernel says is untrusted (it is the student's process): the grader bounds
-each line (:data:`grader.execute.MAX_MESSAGE`) and matches replies by ``n``.
+each line (:data:`grader.execute.MAX_MESSAGE`, read by :mod:`grader.cell_channel`) and
+matches replies by ``n``.
 
 Interrupts: SIGINT raises ``KeyboardInterrupt`` while a request runs and is ignored between
 requests, and ``input()`` and ``getpass()`` raise ``StdinNotImplementedError``, as in ipykernel
@@ -72,7 +73,9 @@ class OutputCount(io.TextIOBase):
 
 
 def _content_size(content: Any) -> int:
-    """Characters of text in displayed data (as the grader counts an output message)."""
+    """Characters of text in displayed data, counted as :func:`grader.execute._content_size`
+    counts a Jupyter kernel's output message (written again here: this module, bound alone
+    beside the zygote, imports nothing of the grader)."""
     if isinstance(content, str):
         return len(content)
     if isinstance(content, dict):
@@ -123,7 +126,7 @@ def _send(sock: socket.socket, message: dict) -> None:
     sock.sendall((json.dumps(message, default=repr) + "\n").encode())
 
 
-def _reply(shell: Any, result: Any) -> dict:
+def _reply(result: Any) -> dict:
     """An ipykernel-shaped ``execute_reply`` content of one ``run_cell`` result."""
     if result.success:
         return {"status": "ok"}
@@ -167,7 +170,7 @@ def _run(shell: Any, request: dict) -> dict:
     try:
         if request.get("op") == "answers":
             return _answers(shell, request)
-        return _reply(shell, shell.run_cell(code, store_history=True, silent=False))
+        return _reply(shell.run_cell(code, store_history=True, silent=False))
     except KeyboardInterrupt:  # landed outside the cell's own code (IPython's machinery)
         return {"status": "error", "ename": "KeyboardInterrupt", "evalue": ""}
     finally:

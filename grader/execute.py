@@ -288,10 +288,10 @@ class LocalKernel:
                 **self.launch_options(),
             )
         self.process = self.km.provisioner.process
-        return await self._connect(self.km.client)
+        return await self._connect()
 
-    async def _connect(self, make_client: Callable[..., Any]) -> Any:
-        """Open the channels of ``make_client(context=...)`` and wait until the kernel answers.
+    async def _connect(self) -> Any:
+        """Open the kernel manager's client's channels and wait until the kernel answers.
 
         Every channel refuses messages over :data:`MAX_MESSAGE` (issue 11). Ready means a
         ``kernel_info`` reply on the shell channel *and* a message on IOPub (so the
@@ -310,7 +310,7 @@ class LocalKernel:
         # a kernel handed out before it has bound its sockets refuses the first connection;
         # ZeroMQ's default is to try again 100 ms later, which a fresh kernel would wait out
         self._context.setsockopt(zmq.RECONNECT_IVL, RECONNECT_INTERVAL_MS)
-        self.kc = make_client(context=self._context)
+        self.kc = self.km.client(context=self._context)
         self.kc.start_channels()
         self._watch_iopub(zmq)
         await self._ready(self.limits.total_timeout)
