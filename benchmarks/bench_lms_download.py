@@ -57,7 +57,7 @@ def main() -> None:
             out = root / f"out{run}"
             out.mkdir()
             t0 = time.perf_counter()
-            folder = extract_download(archive, out / "download")
+            folder = extract_download(archive, out / "download").folder
             t1 = time.perf_counter()
             found = discover(folder, roster.ids, roster.rows)
             t2 = time.perf_counter()

@@ -14,6 +14,9 @@ What is found is sorted into four kinds, so that nothing is guessed and nothing 
 * a name that is not a roster id, or a folder without a notebook → a :class:`Problem` that is
   reported and not graded (an id differing from a roster id only in case is pointed out).
 
+A file that stands for an archive entry refused unread (:mod:`grader.lms.archive`: too large, a
+zip bomb, names that collide) makes only its own student's submission invalid, saying why.
+
 Hidden entries (``.ipynb_checkpoints``, ``.DS_Store``) are ignored; other files that are not
 notebooks are reported.
 """
@@ -21,7 +24,7 @@ notebooks are reported.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 SUFFIX = ".ipynb"
@@ -61,6 +64,8 @@ class Discovery:
     problems: tuple[Problem, ...]
     notes: tuple[str, ...] = ()  # what an LMS download's matching decided (late, newest …)
     layout: str = "folder"  # or the LMS whose bulk download it was (grader/lms)
+    set_aside: tuple[Problem, ...] = ()  # files matched to a student and not graded, and why
+    # (older uploads, several notebooks, entries refused from an archive): submissions.csv
 
 
 def _candidates(folder: Path) -> dict[str, list[Path]]:
@@ -107,7 +112,8 @@ def _resolve(folder: Path, sid: str, entries: list[Path]) -> Submission | Proble
 
 
 def discover(folder: Path, roster_ids: Sequence[str],
-             roster_rows: Sequence[Mapping[str, str]] = ()) -> Discovery:
+             roster_rows: Sequence[Mapping[str, str]] = (),
+             refused: Mapping[Path, str] | None = None) -> Discovery:
     """Sort the contents of ``folder`` (module docstring).
 
     Parameters
@@ -119,20 +125,47 @@ def discover(folder: Path, roster_ids: Sequence[str],
     roster_rows : sequence of dict, optional
         The roster rows (``"id"`` and the class list's columns): a bulk download of Canvas,
         Moodle, Blackboard or Gradescope is matched through them (:mod:`grader.lms.download`).
+    refused : dict, optional
+        Files of ``folder`` that stand for archive entries refused unread, each with why
+        (:attr:`grader.lms.archive.Extraction.refused`): the student such a file would be the
+        submission of gets an invalid submission saying why; everyone else is unaffected.
     """
     from grader.lms.download import discover_download
 
-    lms = discover_download(Path(folder), roster_rows or [{"id": s} for s in roster_ids])
-    if lms is not None:
-        return lms
-    found = _candidates(Path(folder))
+    refused = refused or {}
+    lms = discover_download(Path(folder), roster_rows or [{"id": s} for s in roster_ids],
+                            refused)
+    found = lms if lms is not None else _discover_folder(Path(folder), roster_ids)
+    return _refusals(found, refused) if refused else found
+
+
+def _refusals(found: Discovery, refused: Mapping[Path, str]) -> Discovery:
+    """A submission whose file was refused → its student's invalid submission; any other
+    problem about a refused file says why it was refused."""
+    submissions, problems = [], []
+    for s in found.submissions:
+        if s.path in refused:
+            problems.append(Problem(s.path, f"invalid submission: {refused[s.path]}",
+                                    s.student_id))
+        else:
+            submissions.append(s)
+    for p in found.problems:
+        if p.path in refused and not p.message.startswith("invalid submission"):
+            p = replace(p, message=f"{p.message} ({refused[p.path]})")
+        problems.append(p)
+    return replace(found, submissions=tuple(submissions), problems=tuple(problems))
+
+
+def _discover_folder(folder: Path, roster_ids: Sequence[str]) -> Discovery:
+    """A folder of ``<id>.ipynb`` or ``<id>/<notebook>.ipynb`` (module docstring)."""
+    found = _candidates(folder)
     by_lower = {sid.lower(): sid for sid in roster_ids}
     submissions, missing, problems = [], [], []
     for sid in roster_ids:
         if sid not in found:
             missing.append(sid)
             continue
-        outcome = _resolve(Path(folder), sid, found[sid])
+        outcome = _resolve(folder, sid, found[sid])
         (submissions if isinstance(outcome, Submission) else problems).append(outcome)
     for name, entries in found.items():
         if name in by_lower.values():

@@ -8,8 +8,10 @@ Class list — Grade Center → Work Offline → Download (user information)
 
 Bulk download — Grade Center column → Assignment File Download (a zip)
     ``<assignment>_<username>_attempt_<YYYY-MM-DD-HH-MM-SS>_<file name>`` per file, and
-    ``<assignment>_<username>_attempt_<time>.txt``, the submission's receipt. **Matched** by
-    the Username; of several attempts the newest (its time) is graded.
+    ``<assignment>_<username>_attempt_<time>.txt``, the submission's receipt. The student's
+    own file name comes last, so the *first* ``_attempt_<time>`` is Blackboard's, and the
+    username is read before it. **Matched** by the Username; of several attempts the newest
+    (its time) is graded.
 
 Upload — Grade Center → Work Offline → Upload
     ``Last Name, First Name, Username, <title> [Total Pts: <N> Score] |<column id>``, every
@@ -44,6 +46,7 @@ CLASS_LIST = ClassListFormat(
 
 ATTEMPT = re.compile(r"_attempt_(?P<time>\d{4}-\d{2}-\d{2}-\d{2}-\d{2}-\d{2})"
                      r"(?:_(?P<file>.+)|\.txt)$")
+"""Blackboard's part of a download file name; ``search`` finds the first, Blackboard's own."""
 
 
 def _username(name: str, usernames: list[str]) -> str | None:
@@ -54,11 +57,14 @@ def _username(name: str, usernames: list[str]) -> str | None:
     return max(fits, key=len) if fits else None
 
 
+def recognises(entry: Path) -> bool:
+    """Is ``entry`` a file named as Blackboard's download names one?"""
+    return entry.is_file() and ATTEMPT.search(entry.name) is not None
+
+
 def match_download(folder: Path, students: Students) -> Matched | None:
     """Blackboard's layout in ``folder``, or None."""
     entries = sorted(folder.iterdir())
-    if not any(e.is_file() and ATTEMPT.search(e.name) for e in entries):
-        return None
     found = Matched("blackboard")
     key = "Username" if students.has_column("Username") else "id"
     usernames = [cell(r, key) if key != "id" else r["id"] for r in students.rows]

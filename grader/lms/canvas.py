@@ -9,12 +9,18 @@ Class list — the gradebook export (Grades → Export → CSV)
 
 Bulk download — "Download Submissions" (a zip of flat files)
     ``<sortable name>[_LATE]_<canvas user id>_<attachment id>_<file name>``: the sortable name
-    lower-cased with every non-word character removed, ``LATE`` (``late`` in older Canvas)
-    when the submission was late, the user id, then the id and display name of the uploaded
-    file — a re-uploaded file name gains ``-1``, ``-2`` before its extension, and a later
-    upload a larger attachment id. Anonymous grading writes ``anon_<id>`` for the user id.
-    **Matched** by the Canvas user id against the class list's ``ID`` column; of several
-    notebooks the one with the largest attachment id (the newest upload) is graded.
+    lower-cased with every non-word character removed (and ``_<digits>_`` in it reduced to the
+    digits), ``LATE`` (``late`` in older Canvas) when the submission was late, the user id,
+    then the id and display name of the uploaded file — a re-uploaded file name gains ``-1``,
+    ``-2`` before its extension, and a later upload a larger attachment id. Anonymous grading
+    writes ``anon_<id>`` for the user id. The student's own file name comes last, so the
+    *first* ``_<user id>_<attachment id>_`` is Canvas's (as Canvas itself reads it back when
+    graded files are uploaded). **Matched** by the Canvas user id against the class list's
+    ``ID`` column; of several notebooks the one with the largest attachment id (the newest
+    upload) is graded. Where a name can be read as two roster users' (a sortable name that
+    holds ``_<digits>_`` after all: punctuation between the digits and ``_`` survives Canvas's
+    reduction), the reading whose name part is that user's sortable name on the class list is
+    taken; when none or several are, the file is listed and graded for no one.
 
 Import — Grades → Import
     ``Student, ID, SIS User ID, SIS Login ID, Section, <title> (<assignment id>)``, a
@@ -56,7 +62,9 @@ CLASS_LIST = ClassListFormat(
 FILE_NAME = re.compile(
     r"^(?:(?P<name>.*?)_)??(?:(?P<late>LATE|late)_)?"
     r"(?P<user>\d+|anon_[A-Za-z0-9]+)_(?P<attachment>\d+)_(?P<original>.+)$")
-"""A file of "Download Submissions" (module docstring)."""
+"""A file of "Download Submissions" (module docstring), read at its first possible split."""
+_IDS = re.compile(r"(?:(?P<late>LATE|late)_)?(?P<user>\d+|anon_[A-Za-z0-9]+)_"
+                  r"(?P<attachment>\d+)_(?P<original>.+)$")
 
 
 def parse_file_name(name: str) -> dict | None:
@@ -73,12 +81,39 @@ def parse_file_name(name: str) -> dict | None:
     return m.groupdict() if m else None
 
 
+def readings(name: str) -> list[dict]:
+    """Every way ``name`` splits into Canvas's parts, first split first.
+
+    Examples
+    --------
+    >>> [r["user"] for r in readings("lee_ann_77_5_hw_2_3_x.ipynb")]
+    ['77', '2']
+    """
+    starts = [0] + [i + 1 for i, c in enumerate(name) if c == "_"]
+    found = [(s, _IDS.match(name, s)) for s in starts]
+    return [{"name": name[:s - 1] if s else None, **m.groupdict()} for s, m in found if m]
+
+
+def name_in_file_names(sortable: str) -> str:
+    """A sortable name as Canvas writes it into download file names (module docstring).
+
+    Examples
+    --------
+    >>> name_in_file_names("O'Neil_2_, Sam")
+    'oneil2sam'
+    """
+    return re.sub(r"\W", "", re.sub(r"_(\d+)_", r"\1", sortable)).lower()
+
+
+def recognises(entry: Path) -> bool:
+    """Is ``entry`` a file named as Canvas's download names one?"""
+    return entry.is_file() and "_assignsubmission_" not in entry.name \
+        and parse_file_name(entry.name) is not None
+
+
 def match_download(folder: Path, students: Students) -> Matched | None:
     """Canvas's layout in ``folder`` (flat files named as above), or None."""
     entries = sorted(folder.iterdir())
-    if not any(e.is_file() and "_assignsubmission_" not in e.name and parse_file_name(e.name)
-               for e in entries):
-        return None
     if any(e.name.endswith(NOTEBOOK) and e.stem in students.ids for e in entries):
         return None  # an eulertop folder of <id>.ipynb, not a Canvas download
     found = Matched("canvas")
@@ -105,13 +140,42 @@ def _one(entry: Path, students: Students, have_ids: bool, found: Matched) -> Non
         return found.unmatched(entry, "the roster has no Canvas 'ID' column to match Canvas "
                                       f"user {user}: generate with the Canvas gradebook "
                                       "export as --roster")
-    ids = students.by_column("ID", user)
-    if len(ids) != 1:
-        why = "is on the roster twice" if ids else "is not on the roster"
-        return found.unmatched(entry, f"Canvas user {user} {why}")
-    found.candidates.append(Candidate(ids[0], entry, (int(parts["attachment"]),),
+    parts, why = _owner(entry.name, students)
+    if why:
+        return found.unmatched(entry, why)
+    found.candidates.append(Candidate(students.by_column("ID", parts["user"])[0], entry,
+                                      (int(parts["attachment"]),),
                                       late=parts["late"] is not None,
-                                      how=f"Canvas user id {user}"))
+                                      how=f"Canvas user id {parts['user']}"))
+
+
+def _owner(name: str, students: Students) -> tuple[dict, str]:
+    """The reading of ``name`` that names its owner, and ``""``; or a reading and why no one
+    (module docstring)."""
+    options = readings(name)
+    by_user: dict[str, dict] = {}
+    for r in options:
+        if students.by_column("ID", r["user"]):
+            by_user.setdefault(r["user"], r)  # each user's first reading
+    if len(by_user) > 1:
+        named = [r for r in by_user.values() if _named(r, students)]
+        if len(named) != 1:
+            return options[0], (f"its name reads as Canvas user {' or '.join(by_user)}, and "
+                                "the class list's names tell it for neither; not guessing whose")
+        by_user = {named[0]["user"]: named[0]}
+    reading = next(iter(by_user.values()), options[0])
+    ids = students.by_column("ID", reading["user"])
+    if len(ids) != 1:
+        is_ = "is on the roster twice" if ids else "is not on the roster"
+        return reading, f"Canvas user {reading['user']} {is_}"
+    return reading, ""
+
+
+def _named(reading: dict, students: Students) -> bool:
+    """Is the reading's name part the sortable name the class list gives its user?"""
+    ids = students.by_column("ID", reading["user"])
+    sortable = cell(students.row(ids[0]), "Student") if len(ids) == 1 else ""
+    return bool(sortable) and fold(name_in_file_names(sortable)) == fold(reading["name"] or "")
 
 
 IMPORT_KEYS = ("ID", "SIS User ID", "SIS Login ID")

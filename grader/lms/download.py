@@ -1,19 +1,28 @@
 """A bulk download of submissions → the ``(student id, notebook)`` pairs of :mod:`grader.discover`.
 
-Each LMS module's ``match_download(folder, students)`` recognises its own layout from file and
-folder names (or returns None) and proposes :class:`Candidate` notebooks, each matched to a
-roster student through the LMS's own identifiers (:class:`Students`) — never from the notebook's
-content. :func:`settle` then decides, once for every LMS:
+Each LMS module says which entries of a folder are named as its downloads name them
+(``recognises(entry)``); the folder is read as the download of the LMS that recognises the most
+of its entries (ties in :data:`grader.lms.registry.LMS` order), so that a student's file name,
+which can make only that student's own entries look like another LMS's, cannot change how the
+class is read. That module's ``match_download(folder, students)`` then proposes
+:class:`Candidate` notebooks, each matched to a roster student through the identifiers the LMS
+itself writes into its names (:class:`Students`), in positions the student's own file name
+cannot reach — never from the notebook's content. :func:`settle` then decides, once for every
+LMS:
 
 * one candidate for a student → that notebook is graded;
 * several, with an order the LMS gives (Canvas attachment ids, Blackboard attempt times,
   Gradescope submission times) → the newest is graded, and a note says which and what was left;
 * several with no such order → not guessed: the student's submission fails with the list;
+* a candidate refused from the archive (:mod:`grader.lms.archive`) and chosen → its student's
+  invalid submission, saying why;
 * files that match no one, or are not notebooks (``.DS_Store``, a PDF, an online-text page) →
   listed with the reason and not graded.
 
-The layout is recognised in the folder given, or in its only sub-folder (a zip that holds one
-folder, a download unzipped into a folder of its own).
+Every file matched to a student and not graded is kept in :attr:`Discovery.set_aside` with why,
+for ``submissions.csv`` (:func:`submissions_table`). The layout is recognised in the folder
+given, or in its only sub-folder (a zip that holds one folder, a download unzipped into a folder
+of its own).
 """
 
 from __future__ import annotations
@@ -21,6 +30,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import ModuleType
 
 from grader.discover import Discovery, Problem, Submission
 from grader.lms.classlist import cell, fold
@@ -74,6 +84,7 @@ class Students:
     def __init__(self, rows: Sequence[Mapping[str, str]]):
         self.rows = tuple(rows)
         self.ids = tuple(r["id"] for r in self.rows)
+        self._rows = {r["id"]: r for r in self.rows}
         self._index: dict[str, dict[str, list[str]]] = {}  # column -> folded value -> ids
 
     def by_column(self, column: str, value: str) -> list[str]:
@@ -86,6 +97,10 @@ class Students:
                     index.setdefault(key, []).append(r["id"])
             self._index[column] = index
         return list(self._index[column].get(fold(value), [])) if value else []
+
+    def row(self, student_id: str) -> Mapping[str, str]:
+        """The roster row of ``student_id``."""
+        return self._rows[student_id]
 
     def has_column(self, column: str) -> bool:
         return any(cell(r, column) for r in self.rows)
@@ -118,25 +133,37 @@ def files_under(folder: Path) -> list[Path]:
     return out
 
 
-def download_root(folder: Path, recognise) -> tuple[Path, object] | None:
-    """``(folder, match)`` where ``recognise(folder)`` succeeds: ``folder`` or its only child."""
-    match = recognise(folder)
-    if match is not None:
-        return folder, match
+def _roots(folder: Path) -> list[Path]:
+    """``folder``, then its only sub-folder (if it has exactly one)."""
     children = [c for c in folder.iterdir() if not is_system_file(c) and not c.name.startswith(".")]
-    if len(children) == 1 and children[0].is_dir() and not children[0].is_symlink():
-        match = recognise(children[0])
-        if match is not None:
-            return children[0], match
-    return None
+    only = children[0] if len(children) == 1 and children[0].is_dir() \
+        and not children[0].is_symlink() else None
+    return [folder] + ([only] if only else [])
 
 
-def settle(student_ids: Sequence[str], matched: Matched) -> Discovery:
-    """The module docstring's rules, applied to what an LMS module found."""
+def layout(folder: Path) -> ModuleType | None:
+    """The LMS module that recognises the most entries of ``folder`` (ties: registry order), or
+    None when none recognises any (module docstring)."""
+    from grader.lms.registry import LMS
+
+    entries = [e for e in folder.iterdir() if not is_system_file(e)]
+    counts = {m: sum(map(m.recognises, entries)) for m in LMS.values()}
+    best = max(counts, key=counts.get, default=None)
+    return best if best is not None and counts[best] else None
+
+
+def settle(student_ids: Sequence[str], matched: Matched,
+           refused: Mapping[Path, str] | None = None) -> Discovery:
+    """The module docstring's rules, applied to what an LMS module found.
+
+    ``refused`` maps the placeholder of each entry refused from the archive to why
+    (:attr:`grader.lms.archive.Extraction.refused`).
+    """
+    refused = refused or {}
     by_id: dict[str, list[Candidate]] = {}
     for c in matched.candidates:
         by_id.setdefault(c.student_id, []).append(c)
-    submissions, missing = [], []
+    submissions, missing, set_aside = [], [], []
     problems, notes = list(matched.problems), list(matched.notes)
     for sid in student_ids:
         found = by_id.get(sid, [])
@@ -144,16 +171,24 @@ def settle(student_ids: Sequence[str], matched: Matched) -> Discovery:
             missing.append(sid)
             continue
         chosen, note = _choose(sid, found)
+        set_aside += [Problem(c.path, refused.get(c.path) or _not_chosen(chosen, note), sid)
+                      for c in found if c is not chosen]
         if chosen is None:
-            problems.append(Problem(found[0].path, note, sid))
+            why = list(dict.fromkeys(refused[c.path] for c in found if c.path in refused))
+            message = f"invalid submission: {'; '.join(why)}" if why else note
+            problems.append(Problem(found[0].path, message, sid))
             continue
         submissions.append(Submission(sid, chosen.path, late=chosen.late, source=chosen.how))
         if note:
             notes.append(note)
-        if chosen.late:
+        if chosen.late and chosen.path not in refused:
             notes.append(f"{sid}: submitted late ({chosen.path.name})")
     return Discovery(tuple(submissions), tuple(missing), tuple(problems), tuple(notes),
-                     matched.layout)
+                     matched.layout, tuple(set_aside))
+
+
+def _not_chosen(chosen: Candidate | None, note: str) -> str:
+    return note if chosen is None else f"older than {chosen.path.name}, which was graded"
 
 
 def _choose(sid: str, found: list[Candidate]) -> tuple[Candidate | None, str]:
@@ -174,13 +209,31 @@ def _choose(sid: str, found: list[Candidate]) -> tuple[Candidate | None, str]:
                          f"{label(ordered[-1])} (not {older})")
 
 
-def discover_download(folder: Path, student_rows: Sequence[Mapping[str, str]]) -> Discovery | None:
+def discover_download(folder: Path, student_rows: Sequence[Mapping[str, str]],
+                      refused: Mapping[Path, str] | None = None) -> Discovery | None:
     """The discovery of an LMS download in ``folder``, or None when it is no LMS's layout."""
-    from grader.lms.registry import LMS
-
     students = Students(student_rows)
-    for module in LMS.values():
-        found = download_root(folder, lambda f, m=module: m.match_download(f, students))
+    for root in _roots(folder):
+        module = layout(root)
+        found = module.match_download(root, students) if module else None
         if found is not None:
-            return settle(students.ids, found[1])
+            return settle(students.ids, found, refused)
     return None
+
+
+def submissions_table(found: Discovery, root: Path) -> list[list[str]]:
+    """``OUT/submissions.csv``: every file of an LMS download — the one graded for each student
+    and how it was matched, then each one set aside or not graded, with its owner where known
+    and why."""
+    table = [["id", "file", "late", "matched by", "not graded"]]
+    for s in found.submissions:
+        table.append([s.student_id, _relative(s.path, root), "yes" if s.late else "", s.source,
+                      ""])
+    listed = {p.path for p in found.set_aside}
+    for p in (*found.set_aside, *(p for p in found.problems if p.path not in listed)):
+        table.append([p.student_id or "", _relative(p.path, root), "", "", p.message])
+    return table
+
+
+def _relative(path: Path, root: Path) -> str:
+    return str(path.relative_to(root)) if path.is_relative_to(root) else path.name

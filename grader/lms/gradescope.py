@@ -82,6 +82,13 @@ def _field(record: dict, name: str) -> object:
     return record.get(f":{name}", record.get(name))
 
 
+def recognises(entry: Path) -> bool:
+    """Is ``entry`` the metadata file or a submission folder of Gradescope's export?"""
+    if entry.name == METADATA:
+        return entry.is_file()
+    return entry.is_dir() and re.fullmatch(r"submission_\d+", entry.name) is not None
+
+
 def match_download(folder: Path, students: Students) -> Matched | None:
     """Gradescope's layout in ``folder`` (``submission_metadata.yml`` present), or None."""
     meta_path = folder / METADATA

@@ -9,14 +9,21 @@ Bulk download — Assignment → "Download all submissions" (a zip)
     One file per submitted file, ``<Full name>_<participant id>_assignsubmission_file_<file
     name>`` — or, with "Download submissions in folders" (the default since Moodle 3.1), one
     folder per student, ``<Full name>_<participant id>_assignsubmission_file_`` (newer Moodle
-    drops the trailing ``_``), holding the files. The full name has ``_`` replaced by spaces;
-    with team submissions it is prefixed ``<group>-``; with blind marking it is
-    ``Participant``. The participant id is the assignment's own, not the user id nor the ID
+    drops the trailing ``_``), holding the files. Moodle replaces every ``_`` of the full name
+    with a space, so the name ends at the *first* ``_``: the owner is read from that first
+    ``<name>_<id>_assignsubmission_<plugin>`` and never from the student's own file name, which
+    follows it (a file uploaded as ``Ann Lee_7_assignsubmission_file_x.ipynb`` stays its
+    uploader's). With team submissions the name is prefixed ``<group>-``; with blind marking it
+    is ``Participant``. The participant id is the assignment's own, not the user id nor the ID
     number. Online-text pages (``…_assignsubmission_onlinetext_…``) are not notebooks.
     **Matched** by the participant id when the class list has an ``Identifier`` column
     (Moodle's grading worksheet writes ``Participant <id>``) or a ``Participant id`` column;
     otherwise **by name** — "First Last" or "Last First" of the class list, compared without
-    case — and a name that two students share is not guessed. The notes say which was used.
+    case — and a name that two students share is not guessed, nor one that the download gives
+    to two participant ids (someone not on the class list, or a student who renamed themself,
+    carries it too): those files are listed and graded for no one. The notes say which was
+    used. Sources: ``mod/assign/locallib.php`` (``download_submissions``) and, since Moodle
+    4.1, ``mod/assign/classes/downloader.php`` (``get_student_prefix``).
 
 Import — Grades → Import → CSV file
     ``First name, Last name, ID number, Email address, <title>, Feedback``: in the import form,
@@ -48,9 +55,15 @@ CLASS_LIST = ClassListFormat(
     name_columns=("First name", "Last name"),
 )
 
-ENTRY = re.compile(r"^(?P<name>.+)_(?P<pid>\d+)_assignsubmission_(?P<plugin>[A-Za-z]+)"
+ENTRY = re.compile(r"^(?P<name>[^_]*)_(?P<pid>\d+)_assignsubmission_(?P<plugin>[A-Za-z0-9]+)"
                    r"(?:_(?P<file>.*))?$")
-"""A file or folder of "Download all submissions" (module docstring)."""
+"""A file or folder of "Download all submissions": the name holds no ``_`` (module
+docstring), so the first ``_<id>_assignsubmission_`` is Moodle's own."""
+
+
+def recognises(entry: Path) -> bool:
+    """Is ``entry`` named as Moodle's download names a file or folder?"""
+    return ENTRY.match(entry.name) is not None
 
 _NOT_IN_FILE_NAMES = re.compile(r'[\\/:*?"<>|\x00-\x1f]')
 
@@ -88,9 +101,6 @@ class _Names:
 
 def match_download(folder: Path, students: Students) -> Matched | None:
     """Moodle's layout in ``folder``, or None."""
-    entries = sorted(folder.iterdir())
-    if not any(ENTRY.match(e.name) for e in entries):
-        return None
     found = Matched("moodle")
     names = _Names(students)
     found.notes.append(
@@ -99,33 +109,56 @@ def match_download(folder: Path, students: Students) -> Matched | None:
         "Moodle download matched by name: Moodle names its files by full name and its own "
         "participant id, not by ID number (add the grading worksheet's Identifier column to "
         "the class list to match by participant id)")
-    for entry in entries:
+    owned = []
+    for entry in sorted(folder.iterdir()):
         parts = ENTRY.match(entry.name)
         if entry.is_symlink():
             found.stray(entry, "a symbolic link, not followed")
-            continue
-        if is_system_file(entry) or parts is None:
+        elif is_system_file(entry) or parts is None:
             found.stray(entry, "a system file, not a submission" if is_system_file(entry)
                         else "not named as Moodle names submissions")
-            continue
-        files = files_under(entry) if entry.is_dir() else [entry]
-        ids, how = names.find(parts["name"], parts["pid"])
-        for f in files:
-            _one(f, parts, ids, how, found)
+        else:
+            owned.append((entry, parts, *names.find(parts["name"], parts["pid"])))
+    shared = {} if names.pids else _shared_names(owned)
+    for entry, parts, ids, how in owned:
+        owner, how = _owner(ids, how, shared)
+        for f in files_under(entry) if entry.is_dir() else [entry]:
+            _one(f, parts, owner, how, found)
     return found
 
 
-def _one(path: Path, parts: re.Match, ids: list[str], how: str, found: Matched) -> None:
+def _shared_names(owned: list) -> dict[str, str]:
+    """Student id → why their name cannot be trusted here: entries of two participant ids
+    matched to them by name."""
+    pids: dict[str, set[str]] = {}
+    for _, parts, ids, _ in owned:
+        if len(ids) == 1:
+            pids.setdefault(ids[0], set()).add(parts["pid"])
+    return {sid: (f"the name of {sid}, which {len(p)} Moodle participants "
+                  f"({', '.join(sorted(p))}) carry in this download; not guessing whose this is "
+                  "(match by participant id: add the grading worksheet's Identifier column to "
+                  "the class list)")
+            for sid, p in pids.items() if len(p) > 1}
+
+
+def _owner(ids: list[str], how: str, shared: dict[str, str]) -> tuple[str | None, str]:
+    """``(student id, how matched)``, or ``(None, why no one)``."""
+    if len(ids) > 1:
+        return None, f"{len(ids)} roster students match the {how} ({', '.join(ids)}); not guessing"
+    if not ids:
+        return None, f"no roster student matches the {how}"
+    return (None, shared[ids[0]]) if ids[0] in shared else (ids[0], how)
+
+
+def _one(path: Path, parts: re.Match, owner: str | None, how: str, found: Matched) -> None:
     if is_system_file(path):
         return found.stray(path, "a system file, not a submission")
     if not path.name.endswith(NOTEBOOK):
         return found.stray(path, f"not a notebook (.ipynb) — {parts['name']}'s "
                                  f"{parts['plugin']} submission")
-    if len(ids) != 1:
-        why = (f"{len(ids)} roster students match the {how} ({', '.join(ids)}); not guessing"
-               if ids else f"no roster student matches the {how}")
-        return found.unmatched(path, why)
-    found.candidates.append(Candidate(ids[0], path, None, how=how))
+    if owner is None:
+        return found.unmatched(path, how)
+    found.candidates.append(Candidate(owner, path, None, how=how))
 
 
 def write_import(grades: Grades) -> list[list[str]]:

@@ -8,8 +8,10 @@ from grader.lms import blackboard, canvas, gradescope, moodle
 from grader.lms.classlist import ClassListFormat
 
 LMS: dict[str, ModuleType] = {
-    # Gradescope first (its metadata file is unmistakable), Moodle before Canvas (a Moodle
-    # file name can also look like a Canvas one), Blackboard last.
+    # A download is read as the LMS's whose names fit the most of its entries
+    # (grader.lms.download.layout); on a tie, the first here: Gradescope (its metadata file is
+    # unmistakable), Moodle before Canvas (a Moodle file name can also look like a Canvas
+    # one), Blackboard last.
     "gradescope": gradescope,
     "moodle": moodle,
     "canvas": canvas,

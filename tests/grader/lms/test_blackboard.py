@@ -74,3 +74,25 @@ def test_export_is_the_grade_center_upload(blackboard):
     table = read_csv(out)
     assert [r[2] for r in table[1:]] == list(USERS)
     assert [r[3] for r in table[1:]] == [full, full, full, "0", full, ""]
+
+
+def test_a_students_file_name_neither_changes_the_layout_nor_claims_a_classmate(tmp_path,
+                                                                                blackboard):
+    """Ñúñez's files: ``hw_1_2_final.ipynb`` (which also reads as a Canvas download name) and a
+    wrong notebook named like Müller's attempt. Before, the whole download was read as Canvas's
+    and no one in the class was graded; now the class is Blackboard's, Müller is graded on his
+    own attempt, and the later attempt is Ñúñez's own."""
+    hw, _ = blackboard
+    forged = blackboard_file_name("HW_1", "jmuller", "2024-03-09-10-00-00", "hw.ipynb")
+    download = write_zip(tmp_path / "d.zip", {
+        blackboard_file_name("HW_1", "jmuller", "2024-03-01-10-00-00", "hw.ipynb"):
+            notebook(hw, "jmuller"),
+        blackboard_file_name("HW_1", "znunez", "2024-03-01-11-00-00", "hw_1_2_final.ipynb"):
+            notebook(hw, "znunez"),
+        blackboard_file_name("HW_1", "znunez", "2024-03-02-11-00-00", forged):
+            notebook(hw, "znunez", right=False)})
+    report = grade(hw, download, out=tmp_path / "graded")
+    got = results(report)
+    assert got["jmuller"].points == got["jmuller"].max_points > 0
+    assert (got["znunez"].status, got["znunez"].points) == ("graded", 0)
+    assert report.not_graded == ()

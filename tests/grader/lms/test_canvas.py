@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 from grader.gradebook import number
 from grader.lms.export import write_export
+from problems.roster import read_roster
 from tests.grader.lms.conftest import generate, grade, read_csv, results
 from tests.grader.lms.exports import (
     CLASS,
@@ -14,6 +17,7 @@ from tests.grader.lms.exports import (
     MULLER,
     NUNEZ,
     WEI,
+    Person,
     canvas_file_name,
     canvas_gradebook,
     notebook,
@@ -65,11 +69,16 @@ def test_the_newest_upload_is_graded_and_lateness_kept(canvas):
                for n in report.notes)
     assert "4505: submitted late (weili_LATE_4505_90006_homework.ipynb)" in report.notes
     table = read_csv(hw / "graded" / "submissions.csv")
-    assert table[0] == ["id", "file", "late", "matched by"]
-    rows = {r[0]: r for r in table[1:]}
+    assert table[0] == ["id", "file", "late", "matched by", "not graded"]
+    rows = {r[0]: r for r in table[1:] if not r[4]}
     assert rows["4505"][2] == "yes" and rows["jmuller"][2] == ""
     assert rows["znunez"][1] == "ñúñezzoë_4502_90010_hw-1.ipynb"
     assert rows["jmuller"][3] == "Canvas user id 4501"
+    set_aside = {r[1]: (r[0], r[4]) for r in table[1:] if r[4]}
+    assert set_aside["ñúñezzoë_4502_90002_hw.ipynb"] == (
+        "znunez", "older than ñúñezzoë_4502_90010_hw-1.ipynb, which was graded")
+    assert set_aside["dropdrop_4999_90007_hw.ipynb"][0] == ""
+    assert "is not on the roster" in set_aside["dropdrop_4999_90007_hw.ipynb"][1]
 
 
 def test_strays_and_strangers_are_listed_with_the_reason(canvas):
@@ -134,3 +143,58 @@ def test_answers_csv_is_the_long_format_of_the_records(canvas):
         assert sum(float(row[5]) for row in mine) == pytest.approx(r.points)
     wrong = [row for row in table[1:] if row[0] == "agarcia2"]
     assert wrong and all(row[4] == '"no idea"' and row[7] == "invalid" for row in wrong)
+
+
+# A student whose sortable name Canvas writes as "eve_4501_99999": Canvas's own reduction of
+# "_<digits>_" does not see digits followed by punctuation, which it then removes.
+EVE_BEFORE = Person("Eve", "Adams", "eadams@uni.example", "eadams", "S1099", 4599, 700199)
+EVE = dataclasses.replace(EVE_BEFORE, first="_99999", last="Eve_4501,")
+
+
+@pytest.fixture(scope="module")
+def with_eve(tmp_path_factory):
+    """The class and Eve, generated from a gradebook export made before Eve renamed herself;
+    a download where Müller submitted the right answers and Eve, under her new name, wrong
+    ones."""
+    root = tmp_path_factory.mktemp("eve")
+    hw = generate(root, "gradebook.csv", canvas_gradebook((*CLASS, EVE_BEFORE)))
+    assert canvas_file_name(EVE, 90100, "hw.ipynb") == "eve_4501_99999_4599_90100_hw.ipynb"
+    download = write_zip(root / "d.zip", {
+        canvas_file_name(MULLER, 90001, "hw.ipynb"): notebook(hw, "jmuller"),
+        canvas_file_name(EVE, 90100, "hw.ipynb"): notebook(hw, "eadams", right=False)})
+    (root / "fresh.csv").write_text(canvas_gradebook((*CLASS, EVE)), encoding="utf-8")
+    return hw, download, read_roster(root / "fresh.csv").rows
+
+
+@pytest.mark.parametrize("fresh", [False, True], ids=["old-class-list", "fresh-class-list"])
+def test_a_name_holding_a_classmates_ids_does_not_claim_their_upload(tmp_path, with_eve, fresh):
+    """Read at its first split, Eve's file is Müller's, and newer than his (99999 > 90001):
+    before, Müller was graded on Eve's notebook, 0 of 7 points. Now the reading whose name
+    part is its user's name on the class list is taken — Eve's, when the class list knows her
+    new name — and with none, the file is graded for no one."""
+    hw, download, rows = with_eve
+    report = grade(hw, download, out=tmp_path / "graded", class_list=rows if fresh else ())
+    got = results(report)
+    assert (got["jmuller"].status, got["jmuller"].points) == ("graded", got["jmuller"].max_points)
+    if fresh:
+        assert (got["eadams"].status, got["eadams"].points) == ("graded", 0)
+        assert report.not_graded == ()
+    else:
+        assert got["eadams"].status == "missing"
+        assert report.not_graded == (
+            "eve_4501_99999_4599_90100_hw.ipynb: its name reads as Canvas user 4501 or 4599, "
+            "and the class list's names tell it for neither; not guessing whose; not graded",)
+
+
+def test_an_upload_named_like_a_classmates_entry_stays_its_uploaders(tmp_path, canvas):
+    """Ñúñez uploads a wrong notebook named as Canvas names Müller's: it is her newest upload,
+    and Müller's own is graded."""
+    hw, _, _ = canvas
+    download = write_zip(tmp_path / "d.zip", {
+        canvas_file_name(MULLER, 90001, "hw.ipynb"): notebook(hw, "jmuller"),
+        canvas_file_name(NUNEZ, 90002, "hw.ipynb"): notebook(hw, "znunez"),
+        canvas_file_name(NUNEZ, 90003, canvas_file_name(MULLER, 90009, "hw.ipynb")):
+            notebook(hw, "znunez", right=False)})
+    got = results(grade(hw, download, out=tmp_path / "graded"))
+    assert got["jmuller"].points == got["jmuller"].max_points
+    assert (got["znunez"].status, got["znunez"].points) == ("graded", 0)

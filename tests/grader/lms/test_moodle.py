@@ -2,6 +2,11 @@
 
 from __future__ import annotations
 
+import dataclasses
+import json
+import re
+import unicodedata
+
 import pytest
 
 from grader.discover import discover
@@ -15,6 +20,7 @@ from tests.grader.lms.exports import (
     GARCIA2,
     MULLER,
     NUNEZ,
+    ONEIL,
     WEI,
     moodle_participants,
     moodle_prefix,
@@ -116,3 +122,99 @@ def test_every_moodle_layout_gives_the_same_pairs(tmp_path, moodle, layout):
     assert found.layout == "moodle"
     assert {s.student_id for s in found.submissions} >= {"S1001", "S1002", "lwei@uni.example"}
     assert all(s.path.name.endswith("hw.ipynb") for s in found.submissions)
+
+
+def _entries(hw, person, sid, files, *uploads):
+    """``person``'s entries as Moodle writes them: ``uploads`` are (file name, right) pairs."""
+    prefix = f"{moodle_prefix(person)}_assignsubmission_file"
+    return {(f"{prefix}_{name}" if files else f"{prefix}/{name}"): notebook(hw, sid, right)
+            for name, right in uploads}
+
+
+@pytest.mark.parametrize("files", [True, False], ids=["files", "folders"])
+def test_an_upload_named_like_a_classmates_entry_stays_its_uploaders(tmp_path, moodle, files):
+    """Ñúñez uploads, beside her own notebook, two wrong ones named like Müller's entry and like
+    O'Neil's (the second after a '-', the team-prefix rule's mark). Before, in the files
+    layout (by name and by participant id alike): Müller, who submitted, failed with 0 of 7
+    points ("2 notebooks … not guessing"), and O'Neil, who did not, was graded on Ñúñez's
+    notebook. Now both files stay Ñúñez's, and the harm is hers alone."""
+    hw, _, _ = moodle
+    forged = [(f"{moodle_prefix(MULLER)}_assignsubmission_file_hw.ipynb", False),
+              (f"x-{moodle_prefix(ONEIL)}_assignsubmission_file_hw.ipynb", False)]
+    download = write_zip(tmp_path / "d.zip", {
+        **_entries(hw, MULLER, "S1001", files, ("hw.ipynb", True)),
+        **_entries(hw, NUNEZ, "S1002", files, ("hw.ipynb", True), *forged)})
+    out = tmp_path / "graded"
+    got = results(grade(hw, download, out=out))
+    assert (got["S1001"].status, got["S1001"].points) == ("graded", got["S1001"].max_points)
+    assert got["S1006"].status == "missing"
+    assert got["S1002"].status == "failed"
+    assert got["S1002"].message.startswith("3 notebooks (")
+    table = read_csv(out / "submissions.csv")
+    assert sorted(r[0] for r in table[1:]) == ["S1001", "S1002", "S1002", "S1002"]
+    assert [r[1] for r in table[1:] if r[0] == "S1001"] == [
+        next(iter(_entries(hw, MULLER, "S1001", files, ("hw.ipynb", True))))]
+
+
+@pytest.fixture(scope="module")
+def by_name(tmp_path_factory):
+    """An assignment generated from the participants export alone (matched by name)."""
+    return generate(tmp_path_factory.mktemp("by_name"), "participants.csv", moodle_participants())
+
+
+def test_a_name_two_participants_carry_is_graded_for_no_one(tmp_path, by_name):
+    """Matched by name, a second participant id under Müller's name (someone not on the class
+    list, or a student who renamed themself) is not taken for Müller: both files are listed
+    and neither is graded, rather than one of them failing Müller or being graded as his."""
+    impostor = dataclasses.replace(MULLER, participant=700199)
+    download = write_zip(tmp_path / "d.zip", {
+        **_entries(by_name, MULLER, "S1001", False, ("hw.ipynb", True)),
+        **_entries(by_name, impostor, "S1001", False, ("hw.ipynb", False)),
+        **_entries(by_name, NUNEZ, "S1002", False, ("hw.ipynb", True))})
+    report = grade(by_name, download, out=tmp_path / "graded")
+    got = results(report)
+    assert got["S1001"].status == "missing"
+    assert got["S1002"].points == got["S1002"].max_points
+    assert len(report.not_graded) == 2
+    assert all("the name of S1001, which 2 Moodle participants (700101, 700199) carry" in line
+               for line in report.not_graded)
+
+
+def _repeated(hw, sid):
+    """The student's notebook with 9 MiB of one repeated character (it deflates some
+    1000-fold)."""
+    nb = json.loads(notebook(hw, sid))
+    nb["cells"].append({"cell_type": "markdown", "metadata": {}, "source": "x" * 9 * 1024**2})
+    return json.dumps(nb)
+
+
+NAMES = {"case": ("HW.ipynb", "hw.ipynb"),
+         "normalisation": tuple(unicodedata.normalize(f, "Müller.ipynb") for f in ("NFC", "NFD"))}
+
+
+@pytest.mark.parametrize("unsafe", ["ratio", "case", "normalisation"])
+def test_one_students_unsafe_upload_is_their_invalid_submission_alone(tmp_path, moodle,
+                                                                     unsafe):
+    """Ñúñez uploads a 9 MiB notebook of repeated output, or two notebooks whose names differ
+    only in case or in Unicode form. Before, the whole download was refused and no one in the
+    class had a record; now Ñúñez's submission is invalid, saying why, and her classmates are
+    graded in full."""
+    hw, _, _ = moodle
+    prefix = f"{moodle_prefix(NUNEZ)}_assignsubmission_file"
+    mine = ({f"{prefix}_hw.ipynb": _repeated(hw, "S1002")} if unsafe == "ratio" else
+            {f"{prefix}/{name}": notebook(hw, "S1002") for name in NAMES[unsafe]})
+    download = write_zip(tmp_path / "d.zip", {
+        **_entries(hw, MULLER, "S1001", False, ("hw.ipynb", True)), **mine,
+        **_entries(hw, WEI, "lwei@uni.example", True, ("hw.ipynb", True))})
+    out = tmp_path / "graded"
+    got = results(grade(hw, download, out=out))
+    for sid in ("S1001", "lwei@uni.example"):
+        assert (got[sid].status, got[sid].points) == ("graded", got[sid].max_points)
+    assert (got["S1002"].status, got["S1002"].points) == ("failed", 0)
+    why = {"ratio": r"expands \d+ times, to 9\.\d+ MiB \(at most 200 times\): a zip bomb\?",
+           "case": r"differ only in case or Unicode form",
+           "normalisation": r"differ only in case or Unicode form"}[unsafe]
+    assert re.match(rf"invalid submission: '{re.escape(prefix)}[_/].*{why}",
+                    got["S1002"].message)
+    listed = [r for r in read_csv(out / "submissions.csv")[1:] if r[0] == "S1002"]
+    assert listed and all(re.search(why, r[4]) for r in listed)
