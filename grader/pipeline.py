@@ -526,9 +526,10 @@ def grade_assignment(
         raise UsageError(f"{out}: cannot create the output folder: {e.strerror}") from None
     with run_lock(out):
         remove_stale_temporaries(out, out / RESULTS, out / FEEDBACK)
+        refused = None  # archive entries refused one by one: their owners' invalid submissions
         if archive:
-            submissions = _unpack(submissions, out)
-        found = discover(submissions, a.ids, merge_rows(a.rows, class_list))
+            submissions, refused = _unpack(submissions, out)
+        found = discover(submissions, a.ids, merge_rows(a.rows, class_list), refused)
         if archive:
             require_submissions(submissions, found, a.ids)
         if found.layout != "folder":
@@ -564,23 +565,23 @@ def grade_assignment(
                      found.notes)
 
 
-def _unpack(archive: Path, out: Path) -> Path:
-    """A downloaded ``.zip`` extracted, with its checks, into ``OUT/download``."""
+def _unpack(archive: Path, out: Path) -> tuple[Path, dict[Path, str]]:
+    """A downloaded ``.zip`` extracted, with its checks, into ``OUT/download``: that folder,
+    and the entries refused one by one (:class:`grader.lms.archive.Extraction`)."""
     from grader.lms.archive import ArchiveError, extract_download
 
     try:
-        return extract_download(archive, out / DOWNLOAD)
+        extraction = extract_download(archive, out / DOWNLOAD)
     except ArchiveError as e:
         raise UsageError(f"{archive}: {e}") from None
+    return extraction.folder, extraction.refused
 
 
 def _lms_table(found: Any, root: Path) -> list[list[str]]:
-    """``OUT/submissions.csv``: which file of an LMS download was graded for whom, and how."""
-    table = [["id", "file", "late", "matched by"]]
-    for s in found.submissions:
-        table.append([s.student_id, str(s.path.relative_to(root)), "yes" if s.late else "",
-                      s.source])
-    return table
+    """``OUT/submissions.csv``: :func:`grader.lms.download.submissions_table`."""
+    from grader.lms.download import submissions_table
+
+    return submissions_table(found, root)
 
 
 WITHOUT_SANDBOX = ("eulertop grade: WARNING: grading WITHOUT a sandbox (--no-sandbox): student "
