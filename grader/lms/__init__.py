@@ -3,7 +3,7 @@
 Each LMS has one module (:mod:`~grader.lms.canvas`, :mod:`~grader.lms.moodle`,
 :mod:`~grader.lms.blackboard`, :mod:`~grader.lms.gradescope`) holding what that LMS writes and
 reads: its class list (a :class:`~grader.lms.classlist.ClassListFormat`), how its bulk download of
-submissions names files (``match_download``) and the gradebook file its import takes
+submissions names files (``recognises``, ``match_download``) and the gradebook file its import takes
 (``write_import``). What they share is in :mod:`~grader.lms.classlist` (the roster record and
 detection from the header), :mod:`~grader.lms.download` (turning matched files into the
 ``(student id, notebook)`` pairs of :mod:`grader.discover`) and :mod:`~grader.lms.archive`

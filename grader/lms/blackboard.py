@@ -63,7 +63,7 @@ def recognises(entry: Path) -> bool:
 
 
 def match_download(folder: Path, students: Students) -> Matched | None:
-    """Blackboard's layout in ``folder``, or None."""
+    """What ``folder``, recognised as Blackboard's (:func:`grader.lms.download.layout`), holds."""
     entries = sorted(folder.iterdir())
     found = Matched("blackboard")
     key = "Username" if students.has_column("Username") else "id"

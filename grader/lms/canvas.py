@@ -112,7 +112,7 @@ def recognises(entry: Path) -> bool:
 
 
 def match_download(folder: Path, students: Students) -> Matched | None:
-    """Canvas's layout in ``folder`` (flat files named as above), or None."""
+    """What ``folder``, recognised as Canvas's, holds; None for a folder of ``<id>.ipynb``."""
     entries = sorted(folder.iterdir())
     if any(e.name.endswith(NOTEBOOK) and e.stem in students.ids for e in entries):
         return None  # an eulertop folder of <id>.ipynb, not a Canvas download

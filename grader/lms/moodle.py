@@ -65,6 +65,7 @@ def recognises(entry: Path) -> bool:
     """Is ``entry`` named as Moodle's download names a file or folder?"""
     return ENTRY.match(entry.name) is not None
 
+
 _NOT_IN_FILE_NAMES = re.compile(r'[\\/:*?"<>|\x00-\x1f]')
 
 
@@ -100,7 +101,7 @@ class _Names:
 
 
 def match_download(folder: Path, students: Students) -> Matched | None:
-    """Moodle's layout in ``folder``, or None."""
+    """What ``folder``, recognised as Moodle's (:func:`grader.lms.download.layout`), holds."""
     found = Matched("moodle")
     names = _Names(students)
     found.notes.append(

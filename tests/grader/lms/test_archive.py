@@ -116,8 +116,8 @@ def test_an_unsafe_entry_is_refused_alone(tmp_path, unsafe, limits, refused, pat
 
 @pytest.fixture(scope="module")
 def bomb(tmp_path_factory):
-    """The battery's archive: 320 entries of 1 MiB − 1 byte (each under the old 1 MiB
-    exemption), 320 MiB from about 360 KiB, between two honest students."""
+    """The battery's archive: 320 entries of 1 MiB − 1 byte (each under the 1 MiB exemption),
+    320 MiB from about 355 KiB, between two honest students."""
     root = tmp_path_factory.mktemp("bomb")
     return _zip(root / "bomb.zip", [("ann/hw.ipynb", HONEST),
                                     *((f"eve/{i}.ipynb", b"\0" * (MiB - 1)) for i in range(320)),
@@ -127,7 +127,7 @@ def bomb(tmp_path_factory):
 def test_a_bomb_of_small_entries_writes_nothing_of_the_bomb(tmp_path, bomb):
     """Before: 320 MiB written (every entry under the per-entry exemption). Now the whole
     archive's expansion (over 900 times its size) refuses every entry that expands more than
-    200 times, before anything is written."""
+    200 times, before anything is written: only the honest notebooks reach the disk."""
     assert bomb.stat().st_size < 400 * 1024
     got = extract_download(bomb, tmp_path / "download")
     assert _written(got.folder) == 2 * len(HONEST)
