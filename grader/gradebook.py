@@ -146,10 +146,35 @@ def csv_cell(text: str, limit: int = MAX_SHOWN) -> str:
     return _cut(_CONTROL.sub(" ", str(text)).strip(), limit)
 
 
-def gradebook_csv(table: Sequence[Sequence[str]]) -> str:
-    """``table`` as CSV text (RFC 4180 quoting, ``\\r\\n`` line ends as spreadsheets expect)."""
+FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+"""What a spreadsheet reads as the start of a formula (OWASP, "CSV Injection")."""
+
+_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+
+
+def inert(cell: str) -> str:
+    """A cell no spreadsheet runs: one that begins with one of :data:`FORMULA_START` gets a
+    leading ``'`` (OWASP's advice; a spreadsheet shows the rest as text), unless it is a plain
+    number such as ``-0.5``, which stays a number.
+
+    Examples
+    --------
+    >>> inert('=HYPERLINK("http://x.example","hi")'), inert("-0.5"), inert("-x"), inert("a=b")
+    ('\'=HYPERLINK("http://x.example","hi")', '-0.5', "'-x", 'a=b')
+    """
+    if cell.startswith(FORMULA_START) and not _NUMBER.fullmatch(cell):
+        return "'" + cell
+    return cell
+
+
+def gradebook_csv(table: Sequence[Sequence[str]], quote_all: bool = False) -> str:
+    """``table`` as CSV text: the one CSV writer of the project (grades, answers, the report's
+    tables, ``submissions.csv``, every LMS import). RFC 4180 quoting (every field with
+    ``quote_all``), ``\\r\\n`` line ends as spreadsheets expect; every cell :func:`printable`
+    (control characters and lone surrogates as escapes) and :func:`inert` (no formulas)."""
     buffer = io.StringIO(newline="")
-    csv.writer(buffer).writerows([[printable(cell) for cell in row] for row in table])
+    writer = csv.writer(buffer, quoting=csv.QUOTE_ALL if quote_all else csv.QUOTE_MINIMAL)
+    writer.writerows([[inert(printable(cell)) for cell in row] for row in table])
     return buffer.getvalue()
 
 

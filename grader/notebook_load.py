@@ -15,7 +15,12 @@ Decisions
       graded; most likely the wrong file was submitted).
     * Other departures from the nbformat schema (extra metadata written by some editors) are
       tolerated, since nothing but the code cells' sources is kept.
-    * Files over :data:`MAX_NOTEBOOK_BYTES` are refused before being read.
+    * Files over :data:`MAX_NOTEBOOK_BYTES` are refused before being read, and JSON with more
+      values, objects and arrays or nesting than a notebook needs (:data:`MAX_JSON_VALUES`,
+      :data:`MAX_JSON_CONTAINERS`, :data:`MAX_JSON_DEPTH`) before it is parsed
+      (:func:`notebook_json`): parsing builds a Python object per value, and a 19 MiB file of
+      ``{}`` once made the grader 3.2 GB larger (issue 23). Every reader of a submitted
+      notebook in the grader's process goes through :func:`notebook_json`.
 
 Cells are numbered for people: ``cell 7`` is the seventh cell of the notebook counting
 Markdown cells too, as a student scrolling through it would count.
@@ -33,7 +38,18 @@ import nbformat
 MAX_NOTEBOOK_BYTES = 50 * 1024**2
 """Largest submission read (bytes); generated notebooks are a few tens of kB."""
 
+MAX_JSON_VALUES = 500_000
+"""Most values a notebook's JSON may hold, counted as its commas and opening brackets outside
+strings (about one Python object each; a notebook of a hundred cells holds a few thousand)."""
+
+MAX_JSON_CONTAINERS = 50_000
+"""Most objects and arrays (each a dict or list, and another one in nbformat's copy)."""
+
+MAX_JSON_DEPTH = 100
+"""Deepest nesting of objects and arrays (a notebook's own is under 10)."""
+
 RESAVE = "open it in Jupyter and save it again"
+CLEAR = "clear all outputs, then open it in Jupyter and save it again"
 
 
 class SubmissionError(ValueError):
@@ -93,7 +109,7 @@ def read_notebook(path: Path) -> LoadedNotebook:
         unsupported nbformat version, malformed cells, or no code at all.
     """
     path = Path(path)
-    document = _parse_json(_read_text(path))
+    document = notebook_json(_read_bytes(path))
     version = document.get("nbformat") if isinstance(document, dict) else None
     if isinstance(version, bool) or not isinstance(version, int):
         raise SubmissionError("this is JSON, but not a Jupyter notebook (it has no 'nbformat' "
@@ -166,28 +182,91 @@ def executable_notebook(cells: Sequence[CodeCell]) -> nbformat.NotebookNode:
     })
 
 
-def _read_text(path: Path) -> str:
+def notebook_json(data: bytes) -> object:
+    """The JSON document of a notebook file's bytes, parsed only if its size is bounded.
+
+    What parsing would build is counted on the bytes first (:func:`json_shape`): more values,
+    objects and arrays or nesting than the limits (module docstring) is refused before any
+    object is made, so reading any file of at most ``N`` bytes costs ``O(N)`` memory.
+
+    Raises
+    ------
+    SubmissionError
+        Over a limit, not UTF-8, empty, or not JSON; the message is for the student.
+    """
+    problem = json_shape(data)
+    if problem is not None:
+        raise SubmissionError(f"not a notebook the grader reads: its JSON holds {problem}, far "
+                              f"more than a notebook needs; {CLEAR}")
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        raise SubmissionError(f"not a notebook: the file is not UTF-8 text (byte {e.start}); "
+                              f"{RESAVE}") from None
+    del data  # passed as a temporary, the bytes go now: the text is up to four times larger
+    if not text.strip():
+        raise SubmissionError("the file is empty, not a notebook")
+    return _parse_json(text)
+
+
+_NOT_BRACKET = bytes(b for b in range(256) if b not in b"[]{}")
+_CHUNK = 1 << 18  # bytes looked at at once: the pieces of one chunk are all that is held
+
+
+def json_shape(data: bytes) -> str | None:
+    """What in the JSON text ``data`` is over a limit (``"1,400,002 values (at most …)"``), or
+    None when it is within them all.
+
+    The escapes ``\\\\`` and ``\\"`` are removed first (left to right, as a parser reads
+    them; UTF-8 puts no ``"`` or ``\\`` inside a character), so that every ``"`` left opens or
+    closes a string. Then, a chunk at a time, what lies outside strings is counted: ``{`` and
+    ``[`` are the objects and arrays, each comma one more value, and the brackets' running
+    balance is the nesting. Malformed JSON is left for the parser to describe.
+
+    Examples
+    --------
+    >>> json_shape(b'{"cells": [{"source": "[[[,,,"}]}') is None
+    True
+    >>> json_shape(b"[" * 101 + b"]" * 101)
+    'objects and arrays nested 101 deep (at most 100)'
+    """
+    text = data.replace(b"\\\\", b"").replace(b'\\"', b"")
+    containers = commas = depth = deepest = 0
+    inside = False  # a string runs on from the chunk before
+    for start in range(0, len(text), _CHUNK):
+        parts = text[start:start + _CHUNK].split(b'"')
+        outside = b"".join(parts[1::2] if inside else parts[::2])
+        inside ^= len(parts) % 2 == 0
+        containers += outside.count(b"{") + outside.count(b"[")
+        commas += outside.count(b",")
+        if containers > MAX_JSON_CONTAINERS:
+            return f"more than {MAX_JSON_CONTAINERS:,} objects and arrays"
+        if containers + commas > MAX_JSON_VALUES:
+            return f"more than {MAX_JSON_VALUES:,} values"
+        for b in outside.translate(None, _NOT_BRACKET):  # as many as objects and arrays
+            depth += 1 if b in b"[{" else -1
+            if depth < 0:
+                return None  # a bracket closed that was never opened: the parser says so
+            deepest = max(deepest, depth)
+    if deepest > MAX_JSON_DEPTH:
+        return f"objects and arrays nested {deepest} deep (at most {MAX_JSON_DEPTH})"
+    return None
+
+
+def _read_bytes(path: Path) -> bytes:
     try:
         size = path.stat().st_size
         if size > MAX_NOTEBOOK_BYTES:
             raise SubmissionError(f"the file is {size / 1024**2:.0f} MB, more than the "
                                   f"{MAX_NOTEBOOK_BYTES // 1024**2} MB a notebook may be "
                                   "(clear large outputs and save it again)")
-        data = path.read_bytes()
+        return path.read_bytes()
     except FileNotFoundError:
         raise SubmissionError(f"{path}: no such file") from None
     except IsADirectoryError:
         raise SubmissionError(f"{path} is a folder, not a notebook file") from None
     except OSError as e:
         raise SubmissionError(f"{path}: cannot read it ({e.strerror or e})") from None
-    try:
-        text = data.decode("utf-8-sig")
-    except UnicodeDecodeError as e:
-        raise SubmissionError(f"not a notebook: the file is not UTF-8 text (byte {e.start}); "
-                              f"{RESAVE}") from None
-    if not text.strip():
-        raise SubmissionError("the file is empty, not a notebook")
-    return text
 
 
 def _parse_json(text: str) -> object:

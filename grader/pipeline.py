@@ -194,10 +194,13 @@ def claimed_student(path: Path) -> str | None:
     """The student id a notebook's own metadata names, if any — only ever *reported*.
 
     The generator writes ``metadata["eulertop"]["student"]``; ``"student_id"`` is accepted too.
-    Anything unreadable gives None (the execution stage reports what is wrong with the file).
+    Anything unreadable gives None (the execution stage reports what is wrong with the file);
+    it is parsed within the limits of :func:`grader.notebook_load.notebook_json`.
     """
+    from grader.notebook_load import notebook_json
+
     try:
-        meta = json.loads(Path(path).read_bytes())["metadata"]["eulertop"]
+        meta = notebook_json(Path(path).read_bytes())["metadata"]["eulertop"]
         claim = meta.get("student", meta.get("student_id"))
     except Exception:
         return None
@@ -385,6 +388,7 @@ def _plan(a: Assignment, found, out: Path, force: bool, sandboxed: bool = False,
     (:func:`grader.kernel_pool.packages_imported`: what the zygotes preload); one that is not
     is recorded "invalid submission: <why>"."""
     from grader.kernel_pool import packages_imported
+    from grader.notebook_load import json_shape
 
     to_run, to_write, kept, packages = [], [], [], set()
     problems = {p.student_id: p for p in found.problems if p.student_id is not None}
@@ -409,7 +413,8 @@ def _plan(a: Assignment, found, out: Path, force: bool, sandboxed: bool = False,
                 kept.append(sid)
             else:
                 to_run.append((by_id[sid], expected, key_hash, sha))
-                packages |= packages_imported(data)
+                if json_shape(data) is None:  # parsing more costs memory; the run refuses it
+                    packages |= packages_imported(data)
             continue
         fresh = (ungraded_result(sid, "failed", problems[sid].message, expected, key_hash)
                  if sid in problems else

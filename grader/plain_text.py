@@ -6,13 +6,20 @@ overwrite a line, or bidirectional overrides that reorder what is read. Before a
 reaches a terminal, a CSV cell or an HTML page, every control character — C0 and C1 (but tab
 and newline), DEL, and the Unicode bidirectional embeddings, overrides and isolates — is shown
 as its escape (``\\x1b``, ``\\u202e``) instead of acting.
+
+A Python string can also hold what no file can: a *lone surrogate* (``\\ud800``), from an
+answer's JSON escape or a file name's undecodable byte (``b"\\xff"`` becomes ``"\\udcff"``).
+UTF-8 cannot encode one, so writing it stops the writer; :func:`printable` shows surrogates as
+their escapes too, and :func:`storable` shows only them (issue 23).
 """
 
 from __future__ import annotations
 
 import re
 
-_CONTROL = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u061c\u200e\u200f\u202a-\u202e\u2066-\u2069]")
+_CONTROL = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u061c\u200e\u200f\u202a-\u202e\u2066-\u2069"
+                      "\ud800-\udfff]")
+_SURROGATE = re.compile("[\ud800-\udfff]")
 
 
 def _escape(match: re.Match) -> str:
@@ -35,3 +42,15 @@ def printable(text: object, newlines: bool = True) -> str:
     if newlines:
         return _CONTROL.sub(_escape, text)
     return _CONTROL.sub(_escape, text.replace("\t", "\\x09").replace("\n", "\\x0a"))
+
+
+def storable(text: str) -> str:
+    """``text`` with each lone surrogate written as its escape, so that UTF-8 can hold it;
+    every other character kept as it is.
+
+    Examples
+    --------
+    >>> storable("x\\ud800 \\n é")
+    'x\\\\ud800 \\n é'
+    """
+    return _SURROGATE.sub(_escape, text)

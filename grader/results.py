@@ -17,6 +17,13 @@ Atomic files
     run after a crash, sees the old file or the new one, never a mixture. A run killed between
     the two steps leaves a hidden ``.<name>.*.tmp`` file, which :func:`remove_stale_temporaries`
     clears at the start of the next run.
+
+Text no file can hold
+    A Python string can hold a lone surrogate (an answer ``"\\ud800"``, a file name's
+    undecodable byte), which UTF-8 cannot encode. A record keeps each as its escape
+    (:func:`grader.plain_text.storable`) and its message says so (:data:`UNSTORABLE`), so the
+    record is written and the next run does not meet the same string again; and
+    :func:`atomic_write_text` writes anything left of the kind as its escape rather than fail.
 """
 
 from __future__ import annotations
@@ -30,6 +37,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
+from grader.plain_text import storable
 from problems.answers import Verdict
 
 STATUSES = ("graded", "missing", "failed")
@@ -38,6 +46,9 @@ that could not be graded (the message says why) — it earns nothing (fail close
 
 TEMP_SUFFIX = ".tmp"
 _NON_FINITE = {"NaN": math.nan, "Infinity": math.inf, "-Infinity": -math.inf}
+UNSTORABLE = ("note: some text of this record (a submitted value, a message or a file name) "
+              "held characters no file can hold (lone surrogates); each is kept as its escape, "
+              "such as \\ud800")
 
 
 def plain_json(value: Any) -> Any:
@@ -149,6 +160,13 @@ class StudentResult:
         object.__setattr__(self, "points", float(self.points))
         object.__setattr__(self, "max_points", float(self.max_points))
         object.__setattr__(self, "execution", plain_json(self.execution))
+        record = self.to_dict()
+        kept = _storable(record)
+        if kept != record:  # rebuilt from the storable text, saying so (module docstring)
+            kept["message"] = "\n".join(filter(None, (kept["message"], UNSTORABLE)))
+            clean = StudentResult.from_dict(kept)
+            for f in fields(self):
+                object.__setattr__(self, f.name, getattr(clean, f.name))
 
     def question_points(self) -> dict[int, float]:
         """Points awarded per question number (every question of the key, 0 when unawarded)."""
@@ -175,6 +193,17 @@ class StudentResult:
         return cls(**kw)
 
 
+def _storable(value: Any) -> Any:
+    """Plain JSON ``value`` with every string (keys too) :func:`~grader.plain_text.storable`."""
+    if isinstance(value, str):
+        return storable(value)
+    if isinstance(value, list):
+        return [_storable(v) for v in value]
+    if isinstance(value, dict):
+        return {storable(k): _storable(v) for k, v in value.items()}
+    return value
+
+
 def result_json(result: StudentResult) -> str:
     """The text of ``results/<id>.json`` (sorted keys, strict JSON, indented for reading)."""
     return json.dumps(result.to_dict(), sort_keys=True, indent=1, ensure_ascii=False,
@@ -190,11 +219,12 @@ def read_result(path: Path) -> StudentResult | None:
 
 
 def atomic_write_text(path: Path, text: str) -> None:
-    """Replace ``path`` by a file holding ``text``, atomically (module docstring)."""
+    """Replace ``path`` by a file holding ``text`` as UTF-8, atomically; a lone surrogate is
+    written as its escape (module docstring)."""
     path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=TEMP_SUFFIX, dir=path.parent)
     try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
+        with os.fdopen(fd, "w", encoding="utf-8", errors="backslashreplace", newline="") as f:
             f.write(text)
             f.flush()
             os.fsync(f.fileno())

@@ -116,9 +116,6 @@ def write_export(hw: Path, lms: str, out: Path | None = None, graded: Path | Non
     :func:`build_grades`. Raises :class:`ExportError`, ``grader.pipeline.UsageError``,
     ``problems.roster.RosterError`` or ``grader.lms.classlist.ImportError_`` on bad input.
     """
-    import csv
-    import io
-
     from grader.gradebook import answers_rows, gradebook_csv
     from grader.lms.registry import LMS
     from grader.pipeline import ANSWERS
@@ -128,13 +125,8 @@ def write_export(hw: Path, lms: str, out: Path | None = None, graded: Path | Non
     grades, a, results = build_grades(Path(hw), graded, **options)
     table = LMS[lms].write_import(grades)
     out = Path(out) if out is not None else graded / f"{lms}-import.csv"
-    if lms == "blackboard":  # Blackboard wants every field of a .csv quoted
-        buffer = io.StringIO(newline="")
-        csv.writer(buffer, quoting=csv.QUOTE_ALL).writerows(table)
-        text = buffer.getvalue()
-    else:
-        text = gradebook_csv(table)
-    atomic_write_text(out, text)
+    # Blackboard wants every field of a .csv quoted
+    atomic_write_text(out, gradebook_csv(table, quote_all=lms == "blackboard"))
     present = {sid: r for sid, r in results.items() if r is not None}
     answers = graded / ANSWERS
     atomic_write_text(answers, gradebook_csv(answers_rows(a.rows, present)))

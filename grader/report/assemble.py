@@ -14,12 +14,13 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from grader.gradebook import gradebook_csv
 from grader.report.classdata import ClassData, load_class
-from grader.report.code_similarity import SimilarCode, similar_code
+from grader.report.code_similarity import SimilarCode, notebook_code, similar_code
 from grader.report.copying import CopyPair, copy_pairs
 from grader.report.items import ItemStats, item_statistics
 from grader.report.slips import SlipGroup, slip_groups
-from grader.report.students import rows_csv, student_rows
+from grader.report.students import student_rows
 from grader.results import atomic_write_text
 
 HTML = "report.html"
@@ -55,6 +56,9 @@ class ClassReport:
         Nearly identical notebooks (empty when no submissions were given).
     code_checked : bool
         Whether the notebooks were available for the code comparison.
+    code_cut : tuple of str
+        The students whose notebooks hold more code than is compared (only the first
+        :data:`~grader.report.code_similarity.MAX_CODE_CHARS` characters were).
     """
 
     data: ClassData
@@ -65,6 +69,7 @@ class ClassReport:
     pairs: tuple[CopyPair, ...]
     code: tuple[SimilarCode, ...]
     code_checked: bool
+    code_cut: tuple[str, ...] = ()
 
     @property
     def flagged_pairs(self) -> tuple[CopyPair, ...]:
@@ -99,14 +104,17 @@ def build_report(data: ClassData, submissions: Mapping[str, Path] | None = None)
     """
     questions, answers = item_statistics(data)
     code: tuple[SimilarCode, ...] = ()
+    cut: tuple[str, ...] = ()
     if submissions is not None:
         release = data.assignment.folder / "release"
         graded = set(data.graded)
-        mine = {s: Path(p) for s, p in submissions.items() if s in graded}
-        released = {s: release / f"{s}.ipynb" for s in mine if (release / f"{s}.ipynb").is_file()}
+        mine = {s: notebook_code(p) for s, p in submissions.items() if s in graded}
+        released = [notebook_code(release / f"{s}.ipynb") for s in mine
+                    if (release / f"{s}.ipynb").is_file()]
         code = similar_code(mine, released, {s: i for i, s in enumerate(data.ids)})
+        cut = tuple(s for s in data.ids if s in mine and mine[s].cut)
     return ClassReport(data, questions, answers, known_mistakes(data), slip_groups(data),
-                       copy_pairs(data), code, submissions is not None)
+                       copy_pairs(data), code, submissions is not None, cut)
 
 
 def items_csv(report: ClassReport) -> str:
@@ -122,7 +130,7 @@ def items_csv(report: ClassReport) -> str:
                      "" if s.facility is None else f"{s.facility:.4f}",
                      "" if s.discrimination is None else f"{s.discrimination:.4f}",
                      "; ".join(s.flags)])
-    return rows_csv(rows)
+    return gradebook_csv(rows)
 
 
 def companion_paths(page: Path) -> tuple[Path, Path]:
@@ -141,7 +149,7 @@ def write_report(report: ClassReport, page: Path) -> Path:
     page.parent.mkdir(parents=True, exist_ok=True)
     students_path, items_path = companion_paths(page)
     table = student_rows(report.data, report.slips, report.pairs, report.code)
-    students = rows_csv(table)
+    students = gradebook_csv(table)
     atomic_write_text(students_path, students)
     atomic_write_text(items_path, items_csv(report))
     atomic_write_text(page, report_html(report, table, students, students_path.name))

@@ -16,12 +16,16 @@ A pair is reported when the index is at least :data:`MIN_JACCARD` and they share
 worked example, look alike too: this is a reason to look, weaker than a copied answer.
 Cells that :mod:`tokenize` cannot read (unbalanced brackets, IPython magics) are split on
 words and symbols instead.
+
+Bounded per notebook (issue 23): a notebook is read as safely as for grading (a regular file
+of at most the submission size limit, its JSON within :func:`grader.notebook_load.notebook_json`'s
+limits), and only the first :data:`MAX_CODE_CHARS` characters of its code are tokenised; the
+report names the notebooks that were cut (:attr:`NotebookCode.cut`).
 """
 
 from __future__ import annotations
 
 import io
-import json
 import math
 import re
 import tokenize
@@ -30,11 +34,18 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from grader.notebook_load import notebook_json
+from grader.submission_file import read_submission
+
 SHINGLE = 5
 """Tokens per shingle."""
 
 MIN_JACCARD = 0.5
 MIN_SHARED = 20
+
+MAX_CODE_CHARS = 100_000
+"""Characters of a notebook's code compared: the first ones, cut at a line end (a generated
+solution has under ten thousand). Tokenising costs time and memory in proportion."""
 
 _SKIP = {tokenize.NEWLINE, tokenize.NL, tokenize.INDENT, tokenize.DEDENT, tokenize.ENCODING,
          tokenize.ENDMARKER}
@@ -60,19 +71,41 @@ class SimilarCode:
     shared: int
 
 
-def code_cells(path: Path) -> list[str]:
-    """The sources of a notebook's code cells (``[]`` when it cannot be read as a notebook)."""
+@dataclass(frozen=True)
+class NotebookCode:
+    """The code of one notebook, as compared.
+
+    Attributes
+    ----------
+    sources : tuple of str
+        The sources of its code cells, :data:`MAX_CODE_CHARS` characters in all at most
+        (empty when the file cannot be read as a notebook).
+    cut : bool
+        The notebook holds more code than that; only the first was compared.
+    """
+
+    sources: tuple[str, ...]
+    cut: bool = False
+
+
+def notebook_code(path: Path, limit: int = MAX_CODE_CHARS) -> NotebookCode:
+    """The code of the notebook at ``path``: at most ``limit`` characters (module docstring)."""
     try:
-        nb = json.loads(Path(path).read_text(encoding="utf-8"))
-        cells = nb["cells"]
-    except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError):
-        return []
-    sources = []
+        cells = notebook_json(read_submission(Path(path)))["cells"]
+    except (OSError, ValueError, KeyError, TypeError):  # SubmissionError is a ValueError
+        return NotebookCode(())
+    sources, left = [], limit
     for cell in cells if isinstance(cells, list) else []:
         if isinstance(cell, dict) and cell.get("cell_type") == "code":
             src = cell.get("source", "")
-            sources.append("".join(src) if isinstance(src, list) else str(src))
-    return sources
+            src = "".join(map(str, src)) if isinstance(src, list) else str(src)
+            if len(src) > left:
+                kept = src[:left]
+                sources.append(kept[:kept.rfind("\n") + 1] or kept)
+                return NotebookCode(tuple(sources), cut=True)
+            sources.append(src)
+            left -= len(src)
+    return NotebookCode(tuple(sources))
 
 
 def tokens(source: str) -> list[str]:
@@ -116,16 +149,16 @@ def common_limit(notebooks: int) -> int:
     return max(3, math.ceil(0.05 * notebooks))
 
 
-def similar_code(submissions: Mapping[str, Path], released: Mapping[str, Path],
+def similar_code(submissions: Mapping[str, NotebookCode], released: Iterable[NotebookCode],
                  order: Mapping[str, int] | None = None) -> tuple[SimilarCode, ...]:
     """Pairs of submissions whose own code is nearly identical (module docstring).
 
     Parameters
     ----------
     submissions : mapping
-        Student id → submitted notebook.
-    released : mapping
-        Student id → the notebook they were handed (the shingles of all of them are removed).
+        Student id → the code of the submitted notebook (:func:`notebook_code`).
+    released : iterable of NotebookCode
+        The code of the notebooks the students were handed (the shingles of all are removed).
     order : mapping, optional
         Student id → position, for the order of ids within a pair (default: sorted ids).
 
@@ -135,9 +168,9 @@ def similar_code(submissions: Mapping[str, Path], released: Mapping[str, Path],
         Highest Jaccard index first.
     """
     given: set = set()
-    for path in released.values():
-        given |= shingles(code_cells(path))
-    own = {sid: shingles(code_cells(path)) - given for sid, path in submissions.items()}
+    for code in released:
+        given |= shingles(code.sources)
+    own = {sid: shingles(code.sources) - given for sid, code in submissions.items()}
     frequency = Counter(s for sh in own.values() for s in sh)
     limit = common_limit(len(own))
     rare = {sid: {s for s in sh if frequency[s] <= limit} for sid, sh in own.items()}

@@ -2,14 +2,13 @@
 
 One row per roster student: score, points per question, and what the report noticed about
 them — the common slips they made, the classmates their answers match (flagged pairs) and
-those whose code is nearly the same. Rows are sorted by score, highest first (ties by roster
+those whose code is nearly the same. Written as CSV by :func:`grader.gradebook.gradebook_csv`,
+like every table of the project. Rows are sorted by score, highest first (ties by roster
 order), so the table reads well even where the page's sorting script does not run.
 """
 
 from __future__ import annotations
 
-import csv
-import io
 from collections import defaultdict
 from collections.abc import Sequence
 
@@ -61,10 +60,3 @@ def _notes(slips, pairs, code) -> dict[str, dict[str, list[str]]]:
         notes["code"][a].append(b)
         notes["code"][b].append(a)
     return notes
-
-
-def rows_csv(rows: Sequence[Sequence[str]]) -> str:
-    """Rows as CSV text (Unix line ends)."""
-    buffer = io.StringIO()
-    csv.writer(buffer, lineterminator="\n").writerows(rows)
-    return buffer.getvalue()

@@ -68,7 +68,7 @@ def test_the_same_records_give_the_same_page(planted_class, tmp_path):
 def test_the_csv_link_holds_the_student_table(planted_class):
     page = _page(planted_class)
     uri = re.search(r'href="data:text/csv;charset=utf-8;base64,([^"]*)"', page).group(1)
-    written = (planted_class.made.graded / "report.csv").read_text(encoding="utf-8")
+    written = (planted_class.made.graded / "report.csv").read_bytes().decode("utf-8")
     assert base64.b64decode(uri).decode("utf-8") == written
 
 
