@@ -27,6 +27,8 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
                 "PrairieLearn question (a folder)"),
     "bench": ("solver.work_precision", "work-precision charts and the stability battery"),
     "demo": ("eulertop.demo", "the whole pipeline on a built-in sample class, end to end"),
+    "doctor": ("grader.doctor", "what this machine allows the grader: Python, bubblewrap, user "
+               "namespaces, the isolation tier grade would use (starts one kernel)"),
 }
 
 ONE_BLAS_THREAD = ("check", "grade")

@@ -202,15 +202,18 @@ def child_limits(limits: Limits) -> dict[str, int]:
 
 
 def zygote_command(die_with_parent: bool = False,
-                   preload: Sequence[str] | None = None, marker: str | None = None) -> list[str]:
+                   preload: Sequence[str] | None = None, marker: str | None = None,
+                   remove_own_folder: bool = True) -> list[str]:
     """The zygote's argv — the seam issue 5's sandbox wraps (module docstring).
 
     ``preload``: the modules to import before forking (default :data:`grader.zygote.PRELOAD`;
     what ipykernel itself needs to start is always imported). ``marker``: a ``--run=`` argument
     (the run folder's name) that the zygote ignores, so that the zygote and every kernel forked
-    from it (same command line) can be found from outside.
+    from it (same command line) can be found from outside. ``remove_own_folder``: the zygote
+    removes its working folder when it ends (not where that folder is the sandbox's tmpfs).
     """
-    return [sys.executable, str(ZYGOTE_SCRIPT), "--remove-own-folder",
+    return [sys.executable, str(ZYGOTE_SCRIPT),
+            *(["--remove-own-folder"] if remove_own_folder else []),
             *(["--die-with-parent"] if die_with_parent else []),
             *([f"--preload={','.join(preload)}"] if preload is not None else []),
             *([f"--run={marker}"] if marker else [])]
@@ -231,6 +234,11 @@ class Zygote:
     marker : str, optional
         Put on the zygote's command line (:func:`zygote_command`) and in its environment
         (``EULERTOP_RUN``), and so on every kernel's.
+    alone : bool
+        In a sandbox of its own for one kernel (the ``bwrap-per-kernel`` tier): ``bind`` (that
+        kernel's control folder) is bound read-only, and the zygote's working folder, ``HOME``
+        and ``TMPDIR`` are the sandbox's own tmpfs (``folder`` on this machine then only holds
+        its log).
 
     Started from :func:`grader.sandbox.spawn`'s long-lived thread, so that its parent-death
     signal (and ``bwrap --die-with-parent``) fires when the grader ends, not when the thread
@@ -239,15 +247,18 @@ class Zygote:
 
     def __init__(self, folder: Path, preload: Sequence[str] | None = None,
                  sandbox: Sandbox | None = None, bind: Path | None = None,
-                 marker: str | None = None, uid: int | None = None) -> None:
+                 marker: str | None = None, uid: int | None = None,
+                 alone: bool = False) -> None:
         self.folder = Path(folder)
         self.folder.mkdir(mode=0o700, parents=True, exist_ok=True)
-        if uid is not None:  # its working folder is its own
+        if uid is not None and not alone:  # its working folder is its own
             os.chown(self.folder, uid, uid)
-        env = kernel_environment(self.folder, self.folder)
+        home = Path(SCRATCH) if alone else self.folder
+        env = kernel_environment(home, home)
         if marker:
             env["EULERTOP_RUN"] = marker
-        argv = zygote_command(die_with_parent=True, preload=preload, marker=marker)
+        argv = zygote_command(die_with_parent=True, preload=preload, marker=marker,
+                              remove_own_folder=not alone)
         outer = env
         if sandbox is not None:  # with the per-kernel world beside it (grader/sandbox/world.py)
             inside = f"{TOOLS}/{ZYGOTE_SCRIPT.name}"
@@ -255,8 +266,8 @@ class Zygote:
             argv.append("--world")
             files = {str(ZYGOTE_SCRIPT): inside,
                      **{str(f): f"{TOOLS}/{f.name}" for f in (CELL_SERVER, *WORLD_FILES)}}
-            launch = sandbox.command(argv, env, bind or self.folder, self.folder, files=files,
-                                     uid=uid)
+            launch = sandbox.command(argv, env, bind or self.folder, home, files=files,
+                                     uid=uid, writable=not alone)
             argv, options = launch.argv, launch.popen_options()
             outer = {"PATH": os.defpath, **({"EULERTOP_RUN": marker} if marker else {})}
         else:
@@ -347,8 +358,9 @@ class Zygote:
             if not self.dead:
                 self.close(timeout=0.5)  # stopped or stuck: replace it, and its kernels
             raise ZygoteError(f"the kernel zygote did not answer {op!r}")
-        if "error" in reply:
-            raise ZygoteError(f"the kernel zygote could not {op}: {reply['error']}")
+        if "error" in reply:  # what the kernel's own start wrote, if anything, says why
+            raise ZygoteError(f"the kernel zygote could not {op}: {reply['error']}"
+                              f"{self._log_tail()}")
         return reply
 
     def exit_status(self, pid: int) -> int | None:
@@ -372,13 +384,24 @@ class Zygote:
         with contextlib.suppress(OSError, ValueError):
             self.process.stdin.close()
 
+    def kill(self) -> None:
+        """End the zygote and all its kernels at once: SIGKILL to PID 1 of its sandbox's PID
+        namespace (everything in the namespace dies with it) and to the process started here.
+        (Killing that process alone is not enough as root: the sandbox's ``bwrap`` runs as
+        another uid, and a change of uid clears the parent-death signal.)"""
+        init = _host_pid(self.process.pid, 1)
+        for pid in (init, self.process.pid):
+            if pid is not None:
+                with contextlib.suppress(OSError):
+                    os.kill(pid, signal.SIGKILL)
+
     def close(self, timeout: float = 5.0) -> None:
         """End the zygote: end of input makes it kill its kernels and leftovers and exit."""
         self.end_input()
         try:
             self.process.wait(timeout)
         except subprocess.TimeoutExpired:
-            self.process.kill()  # its kernels follow (PR_SET_PDEATHSIG)
+            self.kill()  # its kernels follow (PR_SET_PDEATHSIG)
             self.process.wait()
         with self._changed:
             self.dead = True
@@ -399,6 +422,58 @@ class _Forked:
     limits: Limits
     sandboxed: bool = False  # workdir is inside the sandbox: not a path of this machine
     uid: int | None = None  # the uid of the slot's sandbox (as root)
+    watch: MemoryWatch | None = None  # alone in its sandbox: its zygote is its own
+
+
+class MemoryWatch:
+    """The keeper of a kernel alone in its sandbox (the ``bwrap-per-kernel`` tier), from the
+    grader: every :data:`grader.sandbox.world.WATCH_INTERVAL` it sums the resident memory of the
+    kernel's processes (this machine's ``/proc``; their proportional sizes when the first sum
+    is over), and past ``limit`` bytes ends the whole sandbox and records what they held
+    (``zygote.memory_held``), as the keeper of a kernel's own world does inside
+    (:func:`grader.sandbox.world.keep`). Nothing in the sandbox can reach it."""
+
+    def __init__(self, zygote: Zygote, pid: int, limit: int) -> None:
+        self.zygote, self.pid, self.limit = zygote, pid, limit
+        self.stopped = threading.Event()
+        self.thread = threading.Thread(target=self._run, name="eulertop-memory", daemon=True)
+        self.thread.start()
+
+    def _run(self) -> None:
+        from grader.sandbox.world import WATCH_INTERVAL, resident_bytes
+
+        kernel = None
+        while not self.stopped.wait(WATCH_INTERVAL) and self.zygote.alive:
+            kernel = kernel or _host_pid(self.zygote.process.pid, self.pid)
+            if kernel is None:
+                continue
+            used = resident_bytes(kernel)
+            if used > self.limit:
+                used = resident_bytes(kernel, proportional=True)
+            if used > self.limit:
+                self.zygote.memory_held[self.pid] = used
+                self.zygote.kill()
+                return
+
+    def stop(self) -> None:
+        self.stopped.set()
+        if threading.current_thread() is not self.thread:
+            self.thread.join(5)
+
+
+def _host_pid(launcher: int, inner: int) -> int | None:
+    """The pid on this machine of the process that is ``inner`` in the PID namespace of the
+    sandbox started as ``launcher`` (the last of its ``NSpid``), or None."""
+    from grader.sandbox.world import descendants
+
+    for pid in descendants(launcher):
+        with contextlib.suppress(OSError, ValueError, IndexError):
+            with open(f"/proc/{pid}/status", "rb") as f:
+                line = next(x for x in f if x.startswith(b"NSpid:"))
+            ids = line.split()[1:]
+            if len(ids) > 1 and int(ids[-1]) == inner and pid != launcher:
+                return pid
+    return None
 
 
 class Slot:
@@ -417,6 +492,7 @@ class Slot:
         self.sandbox, self.marker = sandbox, marker
         self.mode = 0o711 if sandbox is not None else 0o700
         self.uid = slot_uid() if sandbox is not None and sandbox.as_root else None
+        self.alone = sandbox is not None and sandbox.per_kernel
         self.folder.mkdir(mode=0o700, parents=True, exist_ok=True)
         os.chmod(self.folder, self.mode)
         self.preload = preload
@@ -425,7 +501,8 @@ class Slot:
         self._prewarming: threading.Thread | None = None
         self.forks = 0
         self.starts = 0
-        self.start_zygote()
+        if not self.alone:  # else a zygote per kernel, in a sandbox of its own (fork)
+            self.start_zygote()
 
     def start_zygote(self) -> None:
         if self.zygote is not None:
@@ -436,6 +513,8 @@ class Slot:
 
     def fork(self, limits: Limits) -> _Forked:
         """Fork a new kernel (restarting a dead zygote first); :class:`ZygoteError`."""
+        if self.alone:
+            return self._fork_alone(limits)
         if not self.zygote.alive:
             self.start_zygote()
         self.zygote.wait_ready()
@@ -477,12 +556,53 @@ class Slot:
         return _Forked(self.zygote, int(reply["pid"]), workdir, control, listener, limits,
                        sandboxed, uid)
 
+    def _fork_alone(self, limits: Limits) -> _Forked:
+        """The ``bwrap-per-kernel`` tier: a new sandbox whose zygote forks one kernel, with that
+        kernel's control folder bound read-only (its socket is bound here first), its folders
+        in the sandbox's tmpfs, as root a uid of its own, and its memory watched from here
+        (:class:`MemoryWatch`)."""
+        control = fresh_folder(self.folder, "c")
+        uid = slot_uid() if self.sandbox.as_root else None
+        scratch = f"{SCRATCH}/k"
+        workdir = Path(scratch) / "work"
+        env = kernel_environment(workdir, control)
+        env.update(IPYTHONDIR=f"{scratch}/ipython", MPLCONFIGDIR=f"{scratch}/matplotlib")
+        listener = zygote = None
+        try:
+            listener = listen(control, uid)
+            if uid is not None:
+                os.chown(control, uid, uid)
+            os.chmod(control, 0o500 if uid is None else 0o700)
+            self.starts += 1
+            zygote = Zygote(self.folder / f"z{self.starts}", self.preload, self.sandbox,
+                            control, self.marker, uid, alone=True)
+            zygote.wait_ready()
+            reply = zygote.request(
+                "fork", workdir=str(workdir), control=str(control),
+                channel=str(control / SOCKET_NAME), env=env, limits=child_limits(limits),
+                scratch=scratch, alone=True)
+        except BaseException:
+            if listener is not None:
+                listener.close()
+            if zygote is not None:
+                zygote.close(timeout=1)
+                shutil.rmtree(zygote.folder, ignore_errors=True)
+            with contextlib.suppress(OSError):
+                os.chmod(control, 0o700)
+            shutil.rmtree(control, ignore_errors=True)
+            raise
+        self.forks += 1
+        pid = int(reply["pid"])
+        return _Forked(zygote, pid, workdir, control, listener, limits, True, uid,
+                       MemoryWatch(zygote, pid, limits.memory_bytes))
+
     def take(self, limits: Limits) -> _Forked:
         """The prewarmed kernel if it is still usable, else a new one."""
         self._settle()
         forked, self.waiting = self.waiting, None
         if forked is not None:
-            usable = (forked.zygote is self.zygote and self.zygote.alive
+            usable = ((forked.zygote is self.zygote or forked.watch is not None)
+                      and forked.zygote.alive
                       and forked.limits == limits and forked.zygote.exit_status(forked.pid) is None
                       and (forked.sandboxed  # the zygote checks it (``deliver``)
                            or not any(forked.workdir.iterdir())))  # nothing planted in it
@@ -540,6 +660,10 @@ def release(forked: _Forked) -> int:
             zygote.request("kill", pid=forked.pid)  # reaped later: -SIGKILL below
     status = zygote.exit_status(forked.pid)
     zygote.forget(forked.pid)
+    if forked.watch is not None:  # alone in its sandbox: the sandbox ends with it
+        forked.watch.stop()
+        zygote.close(timeout=2)
+        shutil.rmtree(zygote.folder, ignore_errors=True)
     forked.listener.close()
     if not forked.sandboxed:  # a sandboxed one's is inside the sandbox (the zygote removed it)
         shutil.rmtree(forked.workdir, ignore_errors=True)

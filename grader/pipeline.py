@@ -510,26 +510,28 @@ def grade_assignment(
     if not archive:  # a zip is looked into once unpacked, below
         require_submissions(submissions, discover(submissions, a.ids,
                                                   merge_rows(a.rows, class_list)), a.ids)
-    warm = execute is None and not cold_kernels
+    own_execute = execute is None
     found_sandbox = None
     if execute is None and cluster is None:
         found_sandbox = _sandbox(sandbox)
     elif execute is None and not sandbox:
         sys.stderr.write(WITHOUT_SANDBOX)  # on the cluster's workers
+    container = getattr(found_sandbox, "tier", None) == "container"
+    warm = execute is None and not cold_kernels and not container
     if execute is None or limits is None:
         from grader.limits import Limits
 
         if execute is None and cluster is None:
             from grader.execute import execute_submission
 
-            execute = partial(execute_submission, sandbox=found_sandbox is not None)
+            execute = (partial(execute_submission, kernel_factory=found_sandbox.kernel_factory())
+                       if container else
+                       partial(execute_submission, sandbox=found_sandbox is not None))
         limits = limits or Limits()
-    try:
-        for sub in (RESULTS, FEEDBACK):
-            (out / sub).mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise UsageError(f"{out}: cannot create the output folder: {e.strerror}") from None
-    with run_lock(out):
+    made = _make_out(out)
+    with _unmade_on(NoKernel, made), run_lock(out), ExitStack() as private:
+        if container:  # kernels run as other users of this machine: nothing of ours for them
+            found_sandbox.private_folders(private, hw, submissions, out)
         remove_stale_temporaries(out, out / RESULTS, out / FEEDBACK)
         refused = None  # archive entries refused one by one: their owners' invalid submissions
         if archive:
@@ -537,29 +539,33 @@ def grade_assignment(
         found = discover(submissions, a.ids, merge_rows(a.rows, class_list), refused)
         if archive:
             require_submissions(submissions, found, a.ids)
-        if found.layout != "folder":
-            atomic_write_text(out / LMS_SUBMISSIONS, gradebook_csv(_lms_table(found, submissions)))
-        else:  # a previous run's LMS table would describe other files
-            (out / LMS_SUBMISSIONS).unlink(missing_ok=True)
         sandboxed = found_sandbox is not None if cluster is None else sandbox and not execute
         to_run, to_write, kept, packages = _plan(a, found, out, force, sandboxed,
                                        getattr(limits, "submission_bytes", DEFAULT_MAX_BYTES))
-        if on_plan is not None:
-            progress = on_plan(len(to_run) + len(to_write)) or progress
         jobs = jobs or os.cpu_count() or 1
         from grader.kernel_pool import preload_for
 
-        if cluster is not None:
+        # the kernels' zygotes start first: they import while this process writes
+        with _kernels(warm and bool(to_run) and cluster is None, min(jobs, len(to_run)),
+                      found_sandbox, preload_for(packages)) as f:
+            run = execute if f is None else partial(execute, kernel_factory=f)
+            if own_execute and to_run and cluster is None:
+                preflight(run, limits)  # before anything of the class is written
+            if found.layout != "folder":
+                atomic_write_text(out / LMS_SUBMISSIONS,
+                                  gradebook_csv(_lms_table(found, submissions)))
+            else:  # a previous run's LMS table would describe other files
+                (out / LMS_SUBMISSIONS).unlink(missing_ok=True)
+            if on_plan is not None:
+                progress = on_plan(len(to_run) + len(to_write)) or progress
             _publish_all(a, out, to_write, reveal, progress)
-            _run_on_cluster(cluster, a, out, to_run, execute, limits, reveal, progress,
-                            sandbox=sandbox, cold=cold_kernels, preload=preload_for(packages))
-        else:  # the kernels' zygotes start first: they import while this process writes
-            with _kernels(warm and bool(to_run), min(jobs, len(to_run)), found_sandbox,
-                          preload_for(packages)) as f:
-                _publish_all(a, out, to_write, reveal, progress)
+            if cluster is not None:
+                _run_on_cluster(cluster, a, out, to_run, execute, limits, reveal, progress,
+                                sandbox=sandbox, cold=cold_kernels,
+                                preload=preload_for(packages))
+            else:
                 if to_run:
                     _prepare_report()
-                run = execute if f is None else partial(execute, kernel_factory=f)
                 _run_all(a, out, to_run, run, limits, jobs, reveal, progress)
         results = {sid: read_result(out / RESULTS / f"{sid}.json") for sid in a.ids}
         graded_now = (tuple(t[0].student_id for t in to_run)
@@ -595,19 +601,82 @@ WITHOUT_SANDBOX = ("eulertop grade: WARNING: grading WITHOUT a sandbox (--no-san
 
 
 def _sandbox(wanted: bool) -> Any:
-    """The run's sandbox (:func:`grader.sandbox.probe`), or None when not ``wanted`` (which
-    warns); :class:`UsageError` when wanted and there is none."""
-    from grader.sandbox import SandboxUnavailable, probe
+    """The run's isolation (:func:`grader.hosted.container.choose_tier`: a
+    :class:`grader.sandbox.Sandbox` of the ``world`` or ``bwrap-per-kernel`` tier, or the
+    ``container`` tier), or None when not ``wanted`` (which warns); :class:`UsageError` with
+    the cause and its fix when wanted and there is none."""
+    from grader.hosted.container import choose_tier
+    from grader.sandbox import SandboxUnavailable
 
     if not wanted:
         sys.stderr.write(WITHOUT_SANDBOX)
         return None
     try:
-        found = probe()
+        found = choose_tier()
     except SandboxUnavailable as err:
         raise UsageError(str(err)) from None
     sys.stderr.write(f"eulertop grade: isolation: {found.describe()}\n")
     return found
+
+
+class NoKernel(UsageError):
+    """The preflight could not run a kernel here (:func:`preflight`)."""
+
+
+@contextmanager
+def _unmade_on(error: type[BaseException], made: Sequence[Path]) -> Iterator[None]:
+    """Remove the folders ``made`` (only if empty) when the block raises ``error``."""
+    try:
+        yield
+    except error:
+        for p in reversed(made):
+            with suppress(OSError):
+                p.rmdir()
+        raise
+
+
+def _make_out(out: Path) -> list[Path]:
+    """Make the output folder's ``results/`` and ``feedback/``; the folders made now (taken
+    back when no kernel can start, :func:`_unmade_on`); :class:`UsageError` when they cannot
+    be."""
+    made = [p for p in (out, out / RESULTS, out / FEEDBACK) if not p.exists()]
+    try:
+        for sub in (RESULTS, FEEDBACK):
+            (out / sub).mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise UsageError(f"{out}: cannot create the output folder: {e.strerror}") from None
+    return made
+
+
+PREFLIGHT_CELL = "eulertop_preflight = 6 * 7"
+
+
+def preflight(run: Execute, limits: Any) -> None:
+    """Start one kernel exactly as the students' kernels start (``run``, the run's own
+    execution) and run a trivial cell in it, before anything of the class is written: where
+    that fails (twice), no kernel can start here — :class:`NoKernel` with what went wrong,
+    instead of a failed record per student."""
+    from nbformat.v4 import new_code_cell, new_notebook
+
+    from grader.sandbox import fresh_folder, run_folder
+
+    with run_folder() as base:
+        folder = fresh_folder(base, "f")
+        try:
+            path = folder / "preflight.ipynb"
+            path.write_text(json.dumps(new_notebook(cells=[new_code_cell(PREFLIGHT_CELL)])),
+                            encoding="utf-8")
+            for _ in range(2):
+                execution = run(path, ["eulertop_preflight"], limits)
+                if execution.status == "ok" and \
+                        execution.answers.get("eulertop_preflight") == 42:
+                    return
+        finally:
+            shutil.rmtree(folder, ignore_errors=True)
+    raise NoKernel(
+        "no kernel could start here, so no student was graded and nothing was written: a "
+        f"trivial notebook, run as the students' will be, ended with '{execution.status}': "
+        f"{execution.message}. Run 'eulertop doctor' for what this machine allows")
 
 
 @contextmanager

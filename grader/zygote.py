@@ -37,6 +37,14 @@ folder). It sends the zygote a descriptor of its working folder over a socket pa
 submission then arrives by ``deliver``, written through that descriptor (the grader cannot see
 that tmpfs). The keeper reports on the same socket when it killed the kernel for its memory; the
 exit event then says so (``"memory": bytes``).
+
+In the ``bwrap-per-kernel`` tier (:mod:`grader.sandbox`: user namespaces do not nest), the zygote
+is started in a fresh sandbox for one kernel and its fork request has ``"alone": true`` and
+``"scratch"`` instead of ``"world"``: the zygote makes the kernel's folders in the sandbox's own
+tmpfs and keeps a descriptor of its working folder for ``deliver``; the kernel makes no
+namespaces (the sandbox is its own), stays dumpable (the grader outside watches its memory) and,
+once connected, drops its capabilities and installs the seccomp filter, SysV IPC included
+(:func:`world.seal_alone`).
     events: {"event": "exit", "pid": P, "status": S[, "memory": B]}  # S as Popen.returncode
             {"event": "stray", "pid": Q}                    # a leftover process was killed
 
@@ -189,14 +197,17 @@ class Zygote:
 
     def fork(self, request: dict) -> int:
         in_world = request.get("world") is not None
-        if in_world and world is None:
+        alone = bool(request.get("alone"))
+        if (in_world or alone) and world is None:
             raise RuntimeError("no per-kernel world here (grader/sandbox/world.py not bound)")
         link = child_link = None
         if in_world:
             link, child_link = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+        workdir = self._make_scratch(request["scratch"]) if alone else None
         pid = os.fork()
         if pid == 0:
             code = 1
+            signal.set_wakeup_fd(-1)  # the server's: a signal here must not write into it
             try:
                 if link is not None:
                     link.close()
@@ -213,11 +224,22 @@ class Zygote:
         if child_link is not None:
             child_link.close()
             self.links[pid] = link
+        if workdir is not None:
+            self.workdirs[pid] = workdir
         self.kernels.add(pid)
-        if not in_world:  # a world's folders are in its own tmpfs, gone with it
+        if not in_world and not alone:  # a sandbox's own folders are in its tmpfs, gone with it
             self.folders += [request["workdir"], request["control"]]
         self.own[pid] = request
         return pid
+
+    @staticmethod
+    def _make_scratch(scratch: str) -> int:
+        """A lone kernel's folders in the sandbox's tmpfs (its working folder, IPython's and
+        matplotlib's); a descriptor of the (empty) working folder."""
+        for folder in (scratch, *(os.path.join(scratch, sub)
+                                  for sub in ("work", "ipython", "matplotlib"))):
+            os.makedirs(folder, 0o700, exist_ok=True)
+        return os.open(os.path.join(scratch, "work"), os.O_RDONLY | os.O_DIRECTORY)
 
     def _workdir_fd(self, pid: int) -> int:
         """The descriptor of a kernel's working folder in its own world (sent once by the
@@ -244,7 +266,7 @@ class Zygote:
 
         pid = int(request["pid"])
         own = self.own.get(pid)
-        if own is None or own.get("world") is None:
+        if own is None or (own.get("world") is None and not own.get("alone")):
             raise ValueError("no such sandboxed kernel")
         name = str(request["name"])
         if os.path.basename(name) != name or name in ("", ".", ".."):
@@ -406,6 +428,7 @@ def _become_kernel(request: dict, zygote_pid: int, link: socket.socket | None = 
     them once the kernel is initialised (:func:`world.seal`)."""
     scratch = request.get("scratch")
     in_world = request.get("world") is not None
+    alone = bool(request.get("alone"))
     if in_world:
         world.build(request, link)
         link.close()
@@ -414,10 +437,11 @@ def _become_kernel(request: dict, zygote_pid: int, link: socket.socket | None = 
         prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
         if os.getppid() != zygote_pid:  # the zygote died before the line above
             os._exit(1)
-    prctl(PR_SET_DUMPABLE, 1 if in_world else 0)
-    # In its own world a kernel stays dumpable: its keeper must read its processes' memory
-    # (smaps_rollup). Nothing untrusted can name it — other kernels are in other PID
-    # namespaces — and its own processes cannot ptrace anything (seccomp).
+    prctl(PR_SET_DUMPABLE, 1 if in_world or alone else 0)
+    # In its own world (or alone in its sandbox) a kernel stays dumpable: its keeper (or the
+    # grader) must read its processes' memory (smaps_rollup). Nothing untrusted can name it —
+    # other kernels are in other PID namespaces — and its own processes cannot ptrace
+    # anything (seccomp).
     signal.set_wakeup_fd(-1)
     for signum in (signal.SIGCHLD, signal.SIGTERM, *IGNORED):
         signal.signal(signum, signal.SIG_DFL)
@@ -437,6 +461,8 @@ def _become_kernel(request: dict, zygote_pid: int, link: socket.socket | None = 
     _set_limit(resource.RLIMIT_FSIZE, int(limits["fsize"]))
     if in_world:  # counted in its own user namespace: its own processes only
         _set_limit(resource.RLIMIT_NPROC, int(limits["nproc"]))
+    elif alone:  # counted in the sandbox's user namespace: the zygote's threads and its own
+        _set_limit(resource.RLIMIT_NPROC, _tasks_of_user(os.getuid()) + int(limits["nproc"]))
     else:  # RLIMIT_NPROC counts every thread of the real user: what exists plus a margin
         base = limits.get("nproc_base")  # given where this /proc does not see every process
         base = _tasks_of_user(os.getuid()) if base is None else int(base)
@@ -451,8 +477,8 @@ def _become_kernel(request: dict, zygote_pid: int, link: socket.socket | None = 
         sys.modules["numpy"].random.seed()
     channel = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     channel.connect(request["channel"])  # the grader's socket in the control folder
-    if in_world:  # connected: nothing of the world can be changed from here on
-        sealed = world.seal(request)
+    if in_world or alone:  # connected: nothing of the world can be changed from here on
+        sealed = world.seal(request) if in_world else world.seal_alone()
         print(f"eulertop: kernel sealed ({json.dumps(sealed)})", file=sys.stderr, flush=True)
     cell_server.serve(shell, channel)
 

@@ -11,9 +11,14 @@ What it does (:class:`ContainerKernel`, a :class:`grader.execute.LocalKernel`)
       (``Limits.memory_bytes``), no core files, processes (:data:`MAX_PROCESSES`, counted per
       user), size of any file it writes (:data:`MAX_FILE_BYTES`), open files, CPU seconds. Its
       output is capped by :func:`grader.execute.execute_submission` as everywhere.
+    * The seccomp filter of the sandboxed kernels (:mod:`grader.sandbox.seccomp`, SysV IPC
+      refused too), installed by the kernel on itself before ipykernel starts.
+    * While it runs, the resident memory of all its user's processes together is watched
+      (:class:`UserMemoryWatch`); past ``Limits.memory_bytes`` they are all killed.
     * When the kernel stops, its process group is killed (as everywhere) and so is every
-      process of its user started since it started (:func:`kill_new_processes`: a process
-      that left the group with ``setsid`` does not outlive the run).
+      process of its user, again and again until none is left (:func:`kill_all_of`: a process
+      that left the group with ``setsid``, or a chain of short-lived ones, does not outlive
+      the run).
     * :func:`protect` makes the answer key and the grader's own files (the platform's source
       folder, its data) readable by the grader's user only, before any kernel starts.
 
@@ -26,17 +31,25 @@ What it does not do
 Where the grader is not root there is no other user to run the kernel as: the kernel runs as
 the grader's own user and **can read the key**; :func:`kernel_user` returns None and
 :data:`UNPROTECTED` says so in every result.
+
+The third isolation tier of ``eulertop grade`` (issue 22; :func:`local_tier`): as root where no
+user namespace can be made (a Docker container with its default seccomp profile), the same
+kernels, each as a uid of its own never used before (:func:`grader.sandbox.slot_uid`, or a free
+uid of a rootless container's range), so that no two students' kernels share a user; the
+instructor's folders (assignment, submissions, output) are made private to root for the run
+(:func:`private_folders`).
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import pwd
-import signal
 import stat
 import subprocess
 import sys
-from collections.abc import Iterable
+import threading
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -63,16 +76,23 @@ UNPROTECTED = ("WARNING: nothing protected the answer key from the submitted cod
                "its code could read every file the grader can read, the key included.")
 
 # The kernel command: sets its limits in its own code (not a preexec_fn: unsafe in a threaded
-# process), then runs ipykernel. No braces: jupyter_client substitutes {names} in the command.
+# process), installs the seccomp filter of the sandboxed kernels (grader/sandbox/seccomp.py, by
+# its path: nothing else of the grader is imported), then runs ipykernel. No braces:
+# jupyter_client substitutes {names} in the command.
 LAUNCHER = (
-    "import resource as r, runpy, sys; "
-    "a = [int(x) for x in sys.argv[1:6]]; del sys.argv[1:6]; "
+    "import importlib.util as u, resource as r, runpy, sys; "
+    "a = [int(x) for x in sys.argv[1:6]]; p = sys.argv[6]; del sys.argv[1:7]; "
     "K = (r.RLIMIT_AS, r.RLIMIT_NPROC, r.RLIMIT_FSIZE, r.RLIMIT_NOFILE, r.RLIMIT_CPU); "
     "s = lambda k, v, h: r.setrlimit(k, (v, v) if h == r.RLIM_INFINITY else (min(v, h),) * 2); "
     "[s(k, v, r.getrlimit(k)[1]) for k, v in zip(K, a) if v > 0]; "
     "r.setrlimit(r.RLIMIT_CORE, (0, 0)); "
+    "f = u.spec_from_file_location('eulertop_seccomp', p); m = u.module_from_spec(f); "
+    "f.loader.exec_module(m); m.install(ipc=True); del f, m, p, a; "
     "runpy.run_module('ipykernel_launcher', run_name='__main__', alter_sys=True)"
 )
+SECCOMP = Path(__file__).resolve().parent.parent / "sandbox" / "seccomp.py"
+"""The filter the kernel installs on itself (:mod:`grader.sandbox.seccomp`, SysV IPC refused
+too: with no IPC namespace of its own, a segment would outlive the kernel machine-wide)."""
 
 
 @dataclass(frozen=True)
@@ -148,7 +168,8 @@ def describe(user: KernelUser | None) -> str:
         return ("container mode, as the grader's own user (not root): rlimits only; "
                 + UNPROTECTED)
     return (f"container mode (no bubblewrap here): the notebook ran as {user.describe()} with "
-            "resource limits, in a private folder; the key was readable by the grader only")
+            "resource limits and the memory of all its processes together watched, in a "
+            "private folder; the key was readable by the grader only")
 
 
 def protect(paths: Iterable[Path]) -> None:
@@ -172,8 +193,8 @@ def kernel_command(limits: Limits, own_user: bool = True) -> list[str]:
     cpu = int(limits.total_timeout) + 30  # the grader kills it first; this is a backstop
     numbers = (limits.memory_bytes, MAX_PROCESSES if own_user else 0, MAX_FILE_BYTES,
                MAX_OPEN_FILES, cpu)
-    return [sys.executable, "-c", LAUNCHER, *map(str, numbers), "-f", "{connection_file}",
-            "--HistoryManager.hist_file=:memory:"]
+    return [sys.executable, "-c", LAUNCHER, *map(str, numbers), str(SECCOMP),
+            "-f", "{connection_file}", "--HistoryManager.hist_file=:memory:"]
 
 
 def _manager_class(user: KernelUser | None) -> type:
@@ -214,30 +235,118 @@ def processes_of(uid: int) -> set[tuple[int, str]]:
     return found
 
 
-def kill_new_processes(uid: int, before: set[tuple[int, str]]) -> int:
-    """SIGKILL every process of ``uid`` that is not in ``before`` (what a kernel left behind:
-    a process that left the kernel's process group with ``setsid``); how many."""
-    killed = 0
-    for pid, _ in processes_of(uid) - before:
-        try:
-            os.kill(pid, signal.SIGKILL)
-            killed += 1
-        except OSError:
-            pass
-    return killed
+# As the kernel's user: kill(-1) reaches exactly the processes that user may signal (its own),
+# never the caller; ESRCH once there is none. Repeated, since a process may fork meanwhile.
+_KILLER = ("import os, signal\n"
+           "for _ in range(10000):\n"
+           "    try:\n"
+           "        os.kill(-1, signal.SIGKILL)\n"
+           "    except ProcessLookupError:\n"
+           "        break\n")
+
+
+def kill_all_of(user: KernelUser) -> None:
+    """SIGKILL every process of ``user``, again and again until none is left: ``kill(-1)``
+    from a helper process of that user (as root only; the helper is not one of its targets).
+    What the kernel left behind — a process that left its group with ``setsid``, a chain of
+    short-lived ones, a fork bomb — cannot slip between a snapshot and a kill."""
+    with contextlib.suppress(OSError, subprocess.SubprocessError):
+        subprocess.run([sys.executable, "-I", "-S", "-c", _KILLER], user=user.uid,
+                       group=user.gid, extra_groups=[], cwd="/", env={"PATH": os.defpath},
+                       stdin=subprocess.DEVNULL, capture_output=True, timeout=60)
+
+
+WRITABLE = ("/tmp", "/var/tmp", "/dev/shm")
+"""The world-writable folders a kernel of its own uid could leave files in."""
+
+
+def remove_files_of(uid: int, places: Iterable[str] = WRITABLE) -> int:
+    """Remove everything ``uid`` owns in the world-writable folders ``places`` (and in the
+    world-writable folders of others below them), links not followed; how many entries. Run
+    once the kernel's processes are gone (:func:`kill_all_of`): nothing it planted is left for
+    a later kernel or the machine."""
+    import shutil
+
+    removed = 0
+    todo = [p for p in places if os.path.isdir(p)]
+    while todo:
+        folder = todo.pop()
+        with contextlib.suppress(OSError), os.scandir(folder) as entries:
+            for entry in entries:
+                with contextlib.suppress(OSError):
+                    info = entry.stat(follow_symlinks=False)
+                    if info.st_uid == uid:
+                        if stat.S_ISDIR(info.st_mode):
+                            shutil.rmtree(entry.path, ignore_errors=True)
+                        else:
+                            os.unlink(entry.path)
+                        removed += 1
+                    elif stat.S_ISDIR(info.st_mode) and info.st_mode & stat.S_IWOTH:
+                        todo.append(entry.path)
+    return removed
+
+
+def resident_of(uid: int, proportional: bool = False) -> int:
+    """Resident memory of all processes of ``uid`` together, bytes: the sum of their
+    ``VmRSS``, or with ``proportional`` of their ``Pss`` (pages shared among them counted
+    once), as the keeper of a sandboxed kernel counts (:func:`grader.sandbox.world.keep`)."""
+    total = 0
+    for pid, _ in processes_of(uid):
+        name, field = ("smaps_rollup", b"Pss:") if proportional else ("status", b"VmRSS:")
+        with contextlib.suppress(OSError, ValueError, StopIteration):
+            with open(f"/proc/{pid}/{name}", "rb") as f:
+                total += int(next(x for x in f if x.startswith(field)).split()[1]) * 1024
+    return total
+
+
+class UserMemoryWatch:
+    """Watches the memory of all processes of a kernel's user together (a thread; every
+    :data:`WATCH_INTERVAL`); past ``limit`` bytes kills them all (:func:`kill_all_of`) and
+    keeps what they held in :attr:`held`."""
+
+    def __init__(self, user: KernelUser, limit: int) -> None:
+        self.user, self.limit = user, limit
+        self.held: int | None = None
+        self.stopped = threading.Event()
+        self.thread = threading.Thread(target=self._run, name="eulertop-memory", daemon=True)
+        self.thread.start()
+
+    def _run(self) -> None:
+        while not self.stopped.wait(WATCH_INTERVAL):
+            used = resident_of(self.user.uid)
+            if used > self.limit:
+                used = resident_of(self.user.uid, proportional=True)
+            if used > self.limit:
+                self.held = used
+                kill_all_of(self.user)
+                return
+
+    def stop(self) -> None:
+        self.stopped.set()
+        self.thread.join(5)
+
+
+WATCH_INTERVAL = 0.1
+"""Seconds between two looks at the memory of a container-mode kernel's processes."""
 
 
 class ContainerKernel(LocalKernel):
     """A :class:`LocalKernel` run as :attr:`user` (None: as the grader) with the limits of
-    :data:`LAUNCHER`; ``sandboxed`` is False and ``isolation`` says what confined it."""
-
-    sandboxed = False
+    :data:`LAUNCHER`; ``isolation`` says what confined it, and ``sandboxed`` whether that kept
+    the key out of its reach (another user: yes; the grader's own: no)."""
 
     def __init__(self, workdir: Path, control: Path, limits: Limits,
-                 user: KernelUser | None = None) -> None:
+                 user: KernelUser | None = None, note: str | None = None) -> None:
         super().__init__(workdir, control, limits)
         self.user = user
-        self.isolation = describe(user)
+        self.sandboxed = user is not None
+        self.isolation = note or describe(user)
+        self.watch: UserMemoryWatch | None = None
+
+    @property
+    def memory_held(self) -> int | None:
+        """Bytes its processes held together when they were killed for that, or None."""
+        return None if self.watch is None else self.watch.held
 
     def kernel_argv(self) -> list[str]:
         return kernel_command(self.limits, own_user=self.user is not None)
@@ -252,15 +361,18 @@ class ContainerKernel(LocalKernel):
 
     async def start(self) -> Any:
         if self.user is not None:
-            self._before = processes_of(self.user.uid)
             _hand_over(self.workdir, self.user)
             _hand_over(self.control, self.user)
+            self.watch = UserMemoryWatch(self.user, self.limits.memory_bytes)
         return await super().start()
 
     async def stop(self) -> None:
         await super().stop()
-        if self.user is not None and hasattr(self, "_before"):
-            kill_new_processes(self.user.uid, self._before)
+        if self.user is not None:
+            if self.watch is not None:
+                self.watch.stop()
+            kill_all_of(self.user)
+            remove_files_of(self.user.uid)
 
 
 def kernel_factory(user: KernelUser | None) -> Any:
@@ -271,3 +383,120 @@ def kernel_factory(user: KernelUser | None) -> Any:
         return ContainerKernel(workdir, control, limits, user)
 
     return factory
+
+
+# --------------------------------------------------------------------------------------------
+# The container mode as the third tier of ``eulertop grade`` (issue 22)
+
+
+def _free_uids() -> tuple[int, int] | None:
+    """A range ``(first, count)`` of uids that exist here and that no real user has, for
+    kernels of their own: the sandbox's reserved range where it is mapped, else the part above
+    10000 of the largest range a rootless container maps (at least 1000 uids); None if none."""
+    from grader.sandbox import UID_BASE, UID_SPAN, host
+
+    if host.uids_mapped(UID_BASE, UID_SPAN):
+        return UID_BASE, UID_SPAN
+    spans = [(max(lo, 10000), lo + n - max(lo, 10000)) for lo, n in host.mapped_uids()]
+    spans = [(lo, n) for lo, n in spans if n >= 1000]
+    return max(spans, key=lambda s: s[1]) if spans else None
+
+
+def fresh_user(uids: tuple[int, int]) -> KernelUser:
+    """A uid of ``uids`` (first, count) that no account of this machine has, as a
+    :class:`KernelUser` whose group is its own number."""
+    import secrets
+
+    first, count = uids
+    for _ in range(100):
+        uid = first + secrets.randbelow(count)
+        try:
+            pwd.getpwuid(uid)
+        except KeyError:
+            return KernelUser(uid, uid, f"uid {uid}")
+    raise KernelUserError(f"no free uid in {first}…{first + count - 1}")
+
+
+@dataclass(frozen=True)
+class ContainerTier:
+    """The ``container`` tier of ``eulertop grade``: where no user namespace can be made and
+    the grader is root, each kernel a :class:`ContainerKernel` as a fresh uid of ``uids``;
+    ``why`` says why bubblewrap could not be used."""
+
+    uids: tuple[int, int]
+    why: str
+    tier: str = "container"
+
+    def describe(self) -> str:
+        """One line for the run's header and every record."""
+        return (f"container: no bubblewrap here ({self.why}); each kernel runs as a uid of its "
+                "own never used before, with resource limits (memory of all its processes "
+                "together watched, processes, CPU time, file size, open files), in a private "
+                "folder, and everything of its uid killed when it ends; the assignment, "
+                "submissions and output folders private to root during the run; no namespaces: "
+                "it sees this machine's world-readable files, its process list and its network")
+
+    def kernel_factory(self) -> Any:
+        """``(workdir, control, limits) -> ContainerKernel``, each as a fresh uid."""
+        note = self.describe()
+
+        def factory(workdir: Path, control: Path, limits: Limits) -> ContainerKernel:
+            return ContainerKernel(workdir, control, limits, fresh_user(self.uids), note)
+
+        return factory
+
+    def private_folders(self, stack: contextlib.ExitStack, *folders: Path) -> None:
+        """Make ``folders`` private to their owner while ``stack`` lasts
+        (:func:`private_folders`), saying so on stderr."""
+        changed = stack.enter_context(private_folders(folders))
+        if changed:
+            names = ", ".join(str(p) for p in changed)
+            sys.stderr.write(f"eulertop grade: container mode: {names} private to "
+                             f"{pwd.getpwuid(os.geteuid()).pw_name} during the run (their "
+                             "modes are given back at its end)\n")
+
+
+@contextlib.contextmanager
+def private_folders(folders: Iterable[Path]) -> Iterator[list[Path]]:
+    """Take group and other users' permissions off each of ``folders`` (those that exist, not
+    links) for the duration of the block, then give their modes back; the folders changed.
+    Nothing below them is touched: a folder no other user may enter hides all it holds."""
+    changed: list[tuple[Path, int]] = []
+    try:
+        for folder in dict.fromkeys(Path(f) for f in folders):
+            with contextlib.suppress(OSError):
+                info = folder.lstat()
+                if stat.S_ISDIR(info.st_mode) and stat.S_IMODE(info.st_mode) & 0o077:
+                    os.chmod(folder, stat.S_IMODE(info.st_mode) & 0o700)
+                    changed.append((folder, stat.S_IMODE(info.st_mode)))
+        yield [folder for folder, _ in changed]
+    finally:
+        for folder, mode in changed:
+            with contextlib.suppress(OSError):
+                os.chmod(folder, mode)
+
+
+def choose_tier() -> Any:
+    """The isolation ``eulertop grade`` uses here: :func:`grader.sandbox.probe`'s sandbox
+    (``world`` or ``bwrap-per-kernel``); else, as root where no user namespace can be made,
+    the :class:`ContainerTier`; else :class:`grader.sandbox.SandboxUnavailable` with the
+    cause and fix (the container mode's own obstacle added where it was tried)."""
+    from grader.sandbox import SandboxUnavailable, host, probe
+
+    try:
+        return probe()
+    except SandboxUnavailable as err:
+        refusal = err
+    if os.geteuid() != 0:
+        raise refusal
+    if refusal.diagnosis.kind == "missing" and host.userns_possible()[0]:
+        raise refusal  # a machine where bubblewrap would work: install it
+    uids = _free_uids()
+    why = ("this root has no other uid to give a kernel (its user namespace maps too few)"
+           if uids is None else check_interpreter(fresh_user(uids)))
+    if why is None:
+        return ContainerTier(uids, refusal.diagnosis.cause)
+    diagnosis = refusal.diagnosis
+    raise SandboxUnavailable(host.Diagnosis(
+        diagnosis.kind, f"{diagnosis.cause}; and the container mode cannot run here either: "
+        f"{why}", diagnosis.fix))

@@ -33,8 +33,19 @@ and the attacks that test it):
    process of the grader or of another student is visible or reachable from it, and nothing
    it makes outlives it.
 
-Where no sandbox can be had (:func:`probe` says why): ``eulertop grade`` refuses with
-:data:`INSTALL_HINT` unless ``--no-sandbox`` is given.
+Tiers (issue 22), chosen by :func:`probe` and named in every record (:meth:`Sandbox.describe`)
+    ``world`` — the two layers above. ``bwrap-per-kernel`` — where user namespaces do not nest
+    inside bubblewrap (Ubuntu ≥ 25.04's bwrap profile leaves them without capabilities; some
+    containers): layer 2 cannot be made, so layer 1 is made *per kernel* instead: one fresh
+    ``bwrap`` for each kernel's zygote (:attr:`Sandbox.per_kernel`), with only that kernel's
+    control folder in it, read-only, its own ``/tmp`` and ``/dev/shm`` tmpfs, and the same
+    seccomp filter; the memory of its processes together is watched from the grader
+    (:mod:`grader.kernel_pool`). The third tier, the container mode (as root where no user
+    namespace can be made: another uid and rlimits), is :mod:`grader.hosted.container`'s.
+
+Where no sandbox can be had, :func:`probe` raises :class:`SandboxUnavailable` with the cause and
+its fix (:mod:`grader.sandbox.host`): ``eulertop grade`` refuses with them unless
+``--no-sandbox`` is given.
 
 Run folders (:func:`run_folder`)
     Every temporary folder of a grading process lives in one *run folder*,
@@ -59,15 +70,17 @@ import sys
 import tempfile
 import threading
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+
+from grader.sandbox import host
 
 __all__ = [
     "ETC",
-    "INSTALL_HINT",
     "RUN_FOLDER",
     "SCRATCH",
     "SCRATCH_BYTES",
+    "TIERS",
     "Launch",
     "Sandbox",
     "SandboxUnavailable",
@@ -81,11 +94,8 @@ __all__ = [
     "spawn",
 ]
 
-INSTALL_HINT = ("install bubblewrap (Debian/Ubuntu: 'sudo apt-get install bubblewrap'; "
-                "Fedora: 'sudo dnf install bubblewrap'; Arch: 'sudo pacman -S bubblewrap') on "
-                "Linux, or pass --no-sandbox to run student code without one (it can then read "
-                "the answer key and anything else your user can)")
-"""How to get a sandbox: the end of every refusal."""
+TIERS = ("world", "bwrap-per-kernel", "container")
+"""The isolation tiers, strongest first (module docstring)."""
 
 TOOLS = "/eulertop"
 """Where the grader's own files a sandbox needs (the zygote script) appear inside it: not at
@@ -104,14 +114,24 @@ ETC = ("/etc/ld.so.cache", "/etc/ld.so.conf", "/etc/ld.so.conf.d", "/etc/localti
 
 UID_BASE, UID_SPAN = 0x60000000, 0x10000000
 """As root, each slot's sandbox runs as a uid/gid of its own drawn from
-``[UID_BASE, UID_SPAN + UID_BASE)``: far above any real user (and below the 32-bit ``-1``)."""
+``[UID_BASE, UID_SPAN + UID_BASE)``: far above any real user (and below the 32-bit ``-1``).
+Root of a user namespace that does not map this range (``unshare -r``, a rootless container)
+has no such uids to give: its sandboxes run as its own uid, as an ordinary user's do."""
+
+SHM_BYTES = 64 * 1024**2
+"""Size of ``/dev/shm`` (a tmpfs of its own) in the ``bwrap-per-kernel`` tier, bytes."""
 
 RUN_FOLDER = re.compile(r"eulertop-(\d+)-([0-9a-f]{8})")
 """Name of a run folder: ``eulertop-<grader pid>-<8 hex digits>``."""
 
 
 class SandboxUnavailable(RuntimeError):
-    """No sandbox can be had here; the message says why and how to get one."""
+    """No sandbox can be had here; the message says why and how to get one
+    (:attr:`diagnosis`: the cause and the fix apart)."""
+
+    def __init__(self, diagnosis: host.Diagnosis) -> None:
+        super().__init__(diagnosis.message())
+        self.diagnosis = diagnosis
 
 
 def slot_uid() -> int:
@@ -141,38 +161,61 @@ class Sandbox:
     bwrap : str
         Path of the ``bwrap`` executable.
     as_root : bool
-        The grader runs as root: every sandbox runs as a uid of its own (:func:`slot_uid`),
-        never as root; otherwise as the grader's user. Either way in a user namespace.
+        Every sandbox runs as a uid of its own (:func:`slot_uid`), never as the grader's: the
+        grader is root with those uids to give. Otherwise as the grader's user. Either way in a
+        user namespace.
     scratch_bytes : int
         Size of each kernel's own tmpfs (``/tmp`` and ``/dev/shm`` together), bytes.
+    per_kernel : bool
+        The ``bwrap-per-kernel`` tier: one sandbox per kernel, whose zygote forks that one
+        kernel and no world of its own (user namespaces do not nest here); else ``world``.
     """
 
     bwrap: str
     as_root: bool
     scratch_bytes: int = SCRATCH_BYTES
+    per_kernel: bool = False
+    why_per_kernel: str = field(default="", compare=False)
+    """Why a kernel cannot make a world of its own here (what :func:`probe` saw)."""
+
+    @property
+    def tier(self) -> str:
+        """``world`` or ``bwrap-per-kernel`` (:data:`TIERS`)."""
+        return TIERS[1] if self.per_kernel else TIERS[0]
 
     def describe(self) -> str:
-        """One line for the run's header and every record: what confines each kernel."""
+        """One line for the run's header and every record: the tier, and what confines each
+        kernel."""
         from grader.sandbox import seccomp
 
         try:
             seccomp.program()
-            filtered = f"seccomp ({len(seccomp.refused())} calls refused)"
+            filtered = f"seccomp ({len(seccomp.refused(self.per_kernel))} calls refused)"
         except ValueError as err:
             filtered = f"no seccomp filter ({err})"
-        who = "a uid of its own per slot, never root" if self.as_root else "your uid"
-        return (f"bubblewrap, then per kernel: own user, PID, mount, network, IPC and UTS "
-                f"namespaces, {filtered}, no capabilities, no_new_privs, "
+        who = (f"a uid of its own per {'kernel' if self.per_kernel else 'slot'}, never root"
+               if self.as_root else "your uid")
+        limits = ("limits: memory of all its processes together (watched), processes per "
+                  "kernel, CPU time, file size (rlimits); no cgroups")
+        if self.per_kernel:
+            return (f"{self.tier}: a fresh bubblewrap sandbox per kernel (where a kernel "
+                    "cannot make a world of its own inside one): own user, PID, mount, network, "
+                    f"IPC and UTS namespaces, {filtered}, no capabilities, no_new_privs, "
+                    f"{self.scratch_bytes // 1024**2} MiB tmpfs for /tmp and "
+                    f"{SHM_BYTES // 1024**2} MiB for /dev/shm, read-only elsewhere; as {who}; "
+                    f"{limits}")
+        return (f"{self.tier}: bubblewrap, then per kernel: own user, PID, mount, network, IPC "
+                f"and UTS namespaces, {filtered}, no capabilities, no_new_privs, "
                 f"{self.scratch_bytes // 1024**2} MiB tmpfs for /tmp and /dev/shm, read-only "
-                f"elsewhere; as {who}; limits: memory of all its processes together (watched), "
-                "processes per kernel, CPU time, file size (rlimits); no cgroups")
+                f"elsewhere; as {who}; {limits}")
 
     def command(self, argv: Sequence[str], env: Mapping[str, str], folder: Path,
-                cwd: Path, files: Mapping[str, str] | None = None,
-                uid: int | None = None) -> Launch:
-        """Run ``argv`` with environment ``env`` (only), the folder ``folder`` read-write,
-        ``cwd`` as working folder, and ``files`` (host path → path in the sandbox) bound
-        read-only under :data:`TOOLS`; as root, as ``uid`` (default: a fresh one)."""
+                cwd: Path | str, files: Mapping[str, str] | None = None,
+                uid: int | None = None, writable: bool = True) -> Launch:
+        """Run ``argv`` with environment ``env`` (only), the folder ``folder`` bound (read-write,
+        or read-only when not ``writable``), ``cwd`` as working folder, and ``files`` (host path
+        → path in the sandbox) bound read-only under :data:`TOOLS`; as root, as ``uid``
+        (default: a fresh one)."""
         if self.as_root and uid is None:
             uid = slot_uid()
         args = [self.bwrap, "--unshare-user", "--unshare-ipc", "--unshare-pid",
@@ -218,8 +261,11 @@ class Sandbox:
             args += [*ancestors(inside, "0755"), "--ro-bind", source, inside]
             sources.append(source)
         args += ["--proc", "/proc", "--dev", "/dev"]
+        if self.per_kernel:  # no world of its own to put /dev/shm in its /tmp: a tmpfs of its own
+            args += ["--perms", "1777", "--size", str(SHM_BYTES), "--tmpfs", "/dev/shm"]
         folder = str(Path(folder).resolve())
-        args += [*ancestors(folder, "0711"), "--bind", folder, folder]
+        args += [*ancestors(folder, "0711"), "--bind" if writable else "--ro-bind", folder,
+                 folder]
         args += ["--chdir", str(Path(cwd).resolve()), "--", *argv]
         if uid is not None:
             args = [*_as_user(uid, [*sources, folder]), *args]
@@ -287,49 +333,92 @@ def _python_paths() -> list[str]:
     return sorted(out)
 
 
-def _unavailable(why: str) -> SandboxUnavailable:
-    return SandboxUnavailable(f"no sandbox for student code: {why}; {INSTALL_HINT}")
+NO_NESTING = 3
+"""Exit status of :func:`probe`'s check when a kernel cannot make namespaces of its own inside
+bubblewrap (the ``bwrap-per-kernel`` tier then)."""
+
+_PROBE = """
+import ctypes, os, socket, sys
+try:
+    socket.create_connection(('127.0.0.1', 9), timeout=1)
+except OSError:
+    pass
+else:
+    raise SystemExit('network reachable')
+assert os.getpid() < 10, 'no PID namespace'
+if __NESTING__:  # what each kernel does inside it (grader/sandbox/world.py), in small
+    libc = ctypes.CDLL(None, use_errno=True)
+    uid, gid = os.getuid(), os.getgid()
+    def refused(what, err):
+        sys.stderr.write('kernels cannot make namespaces of their own inside it: '
+                         + what + ': ' + os.strerror(err) + '\\n')
+        os._exit(__NO_NESTING__)
+    if libc.unshare(0x10000000 | 0x00020000 | 0x20000000 | 0x40000000 | 0x08000000) != 0:
+        refused('unshare', ctypes.get_errno())
+    for name, text in (('setgroups', 'deny'), ('uid_map', f'{uid} {uid} 1'),
+                       ('gid_map', f'{gid} {gid} 1')):
+        try:
+            with open('/proc/self/' + name, 'w') as f:
+                f.write(text)
+        except OSError as e:
+            refused(name, e.errno)
+    pid = os.fork()  # PID 1 of the new PID namespace: its own /proc, as a kernel's world has
+    if pid == 0:
+        if libc.mount(b'tmpfs', b'/tmp', b'tmpfs', 0, None) != 0:
+            refused('mount /tmp', ctypes.get_errno())
+        if libc.mount(b'proc', b'/proc', b'proc', 0, None) != 0:
+            refused('mount /proc', ctypes.get_errno())
+        os._exit(0)
+    os._exit(os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1]))
+"""
 
 
-@functools.cache
-def probe() -> Sandbox:
-    """The sandbox of this machine, checked by starting one; :class:`SandboxUnavailable`
-    saying why not (not Linux, no ``bwrap``, or ``bwrap`` cannot create its namespaces —
-    e.g. unprivileged user namespaces disabled, or a container without the rights)."""
-    if not sys.platform.startswith("linux"):
-        raise _unavailable(f"bubblewrap needs Linux (this is {sys.platform})")
-    bwrap = shutil.which("bwrap")
-    if bwrap is None:
-        raise _unavailable("the bubblewrap program 'bwrap' is not installed")
-    sandbox = Sandbox(bwrap, as_root=os.geteuid() == 0)
+def _try(sandbox: Sandbox, nesting: bool) -> subprocess.CompletedProcess:
+    """Start a small program in ``sandbox`` that checks it (no network, a PID namespace, and
+    with ``nesting`` the namespaces a kernel makes inside); what it ended with."""
     folder = Path(tempfile.mkdtemp(prefix="eulertop-probe-"))
+    code = _PROBE.replace("__NESTING__", str(nesting)).replace("__NO_NESTING__", str(NO_NESTING))
     try:
-        code = ("import os, socket\n"
-                "try:\n    socket.create_connection(('127.0.0.1', 9), timeout=1)\n"
-                "except OSError:\n    pass\nelse:\n    raise SystemExit('network reachable')\n"
-                "assert os.getpid() < 10, 'no PID namespace'\n"
-                # each kernel makes namespaces of its own inside (grader/sandbox/world.py);
-                # some systems let bwrap make them but not what runs inside it
-                "import ctypes\n"
-                "libc = ctypes.CDLL(None, use_errno=True)\n"
-                "if libc.unshare(0x10000000 | 0x00020000 | 0x20000000 | 0x40000000) != 0:\n"
-                "    raise SystemExit('kernels cannot make namespaces of their own inside it: '"
-                " + os.strerror(ctypes.get_errno()))\n")
         launch = sandbox.command([sys.executable, "-I", "-c", code], {"PATH": "/usr/bin"},
                                  folder, folder)
         if launch.uid is not None:
             os.chown(folder, launch.uid, launch.uid)
         try:
-            done = subprocess.run(launch.argv, capture_output=True, timeout=30, text=True,
+            return subprocess.run(launch.argv, capture_output=True, timeout=30, text=True,
                                   stdin=subprocess.DEVNULL, **launch.popen_options())
         except (OSError, subprocess.TimeoutExpired) as err:
-            raise _unavailable(f"bwrap could not be run ({err})") from None
-        if done.returncode != 0:
-            last = (done.stderr.strip().splitlines() or ["no message"])[-1]
-            raise _unavailable(f"bwrap failed to start a sandbox ({last})")
+            return subprocess.CompletedProcess(launch.argv, 1, "", f"bwrap: {err}")
     finally:
         shutil.rmtree(folder, ignore_errors=True)
-    return sandbox
+
+
+@functools.cache
+def probe() -> Sandbox:
+    """The sandbox of this machine, checked by starting one: the ``world`` tier where a kernel
+    can make namespaces of its own inside bubblewrap, else ``bwrap-per-kernel``;
+    :class:`SandboxUnavailable` with the cause and fix (:func:`grader.sandbox.host.explain`)
+    where bubblewrap cannot start at all — not Linux, no ``bwrap``, user namespaces refused
+    (AppArmor, a sysctl, a container's seccomp profile)."""
+    if not sys.platform.startswith("linux"):
+        raise SandboxUnavailable(host.Diagnosis(
+            "platform", f"bubblewrap needs Linux (this is {sys.platform})",
+            "Fix: grade in the container image (README, 'Grading on macOS, Windows or in a "
+            f"container'), {host.NO_SANDBOX}."))
+    bwrap = shutil.which("bwrap")
+    if bwrap is None:
+        raise SandboxUnavailable(host.missing_bwrap())
+    as_root = os.geteuid() == 0 and host.uids_mapped(UID_BASE, UID_SPAN)
+    done = _try(Sandbox(bwrap, as_root), nesting=True)
+    if done.returncode == 0:
+        return Sandbox(bwrap, as_root)
+    if done.returncode == NO_NESTING:
+        why = done.stderr.strip().splitlines()[-1] if done.stderr.strip() else ""
+        per_kernel = Sandbox(bwrap, as_root, per_kernel=True, why_per_kernel=why)
+        again = _try(per_kernel, nesting=False)
+        if again.returncode == 0:
+            return per_kernel
+        done = again
+    raise SandboxUnavailable(host.explain(done.stderr))
 
 
 def available() -> Sandbox | None:

@@ -17,6 +17,9 @@ Why each is refused
     notebook has no use for. ``memfd_create``, ``memfd_secret``: memory that no process
     limit counts. Module loading, ``kexec``, ``reboot``, ``swapon``/``swapoff``, clocks,
     ``acct``, ``quotactl``, ``syslog``, ``open_by_handle_at``: administration.
+    With ``ipc`` (the ``bwrap-per-kernel`` tier, whose kernels cannot set the limits of their own
+    IPC namespace, :mod:`grader.sandbox`): ``shmget`` and ``msgget`` too — SysV memory that no
+    process limit counts and that outlives its maker until the sandbox ends.
 """
 
 from __future__ import annotations
@@ -59,6 +62,8 @@ _AARCH64 = (0xC00000B7, {
     "move_pages": 239,
 }, 220, 435, None)
 ARCHES = {"x86_64": _X86_64, "aarch64": _AARCH64}
+IPC_CALLS = {"x86_64": {"shmget": 29, "msgget": 68}, "aarch64": {"shmget": 194, "msgget": 186}}
+"""Refused as well with ``ipc`` (module docstring)."""
 
 NAMESPACE_FLAGS = 0x7E020080  # CLONE_NEWNS|NEWCGROUP|NEWUTS|NEWIPC|NEWUSER|NEWPID|NEWNET|NEWTIME
 
@@ -74,19 +79,27 @@ def _insn(code: int, jt: int, jf: int, k: int) -> bytes:
     return struct.pack("HBBI", code, jt, jf, k & 0xFFFFFFFF)
 
 
-def refused() -> tuple[str, ...]:
-    """Names of the system calls the filter refuses on this machine (empty: no filter here)."""
-    arch = ARCHES.get(platform.machine())
-    return () if arch is None else (*sorted(arch[1]), "clone(namespace flags)", "clone3")
+def _calls(machine: str, ipc: bool) -> dict[str, int]:
+    return {**ARCHES[machine][1], **(IPC_CALLS[machine] if ipc else {})}
 
 
-def program(machine: str | None = None) -> bytes:
+def refused(ipc: bool = False) -> tuple[str, ...]:
+    """Names of the system calls the filter refuses on this machine (empty: no filter here);
+    ``ipc``: the SysV calls too (module docstring)."""
+    machine = platform.machine()
+    if machine not in ARCHES:
+        return ()
+    return (*sorted(_calls(machine, ipc)), "clone(namespace flags)", "clone3")
+
+
+def program(machine: str | None = None, ipc: bool = False) -> bytes:
     """The filter as raw ``struct sock_filter`` instructions for ``machine`` (default: this
     one); ValueError for an architecture without a table."""
     machine = machine or platform.machine()
     if machine not in ARCHES:
         raise ValueError(f"no seccomp table for {machine}")
-    audit, calls, clone, clone3, x32 = ARCHES[machine]
+    audit, _, clone, clone3, x32 = ARCHES[machine]
+    calls = _calls(machine, ipc)
     def errno_of(e):
         return (SECCOMP_RET_ERRNO | e)
     out = [_insn(_LD_W_ABS, 0, 0, 4),                    # A = arch
@@ -110,14 +123,14 @@ class _Fprog(ctypes.Structure):
     _fields_ = [("len", ctypes.c_ushort), ("filter", ctypes.c_void_p)]
 
 
-def install() -> str:
+def install(ipc: bool = False) -> str:
     """``no_new_privs``, then the filter on every thread of this process; what was done
     ("on: N calls refused", or why there is none on this architecture)."""
     libc = ctypes.CDLL(None, use_errno=True)
     if libc.prctl(PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0) != 0:
         raise OSError(ctypes.get_errno(), "prctl(PR_SET_NO_NEW_PRIVS)")
     try:
-        code = program()
+        code = program(ipc=ipc)
     except ValueError as err:
         return f"off ({err})"
     buffer = ctypes.create_string_buffer(code, len(code))
@@ -129,4 +142,4 @@ def install() -> str:
     if result != 0:
         err = ctypes.get_errno()
         raise OSError(err, f"seccomp: {os.strerror(err)} (thread {result})")
-    return f"on: {len(refused())} calls refused"
+    return f"on: {len(refused(ipc))} calls refused"
