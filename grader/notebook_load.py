@@ -21,6 +21,9 @@ Decisions
       (:func:`notebook_json`): parsing builds a Python object per value, and a 19 MiB file of
       ``{}`` once made the grader 3.2 GB larger (issue 23). Every reader of a submitted
       notebook in the grader's process goes through :func:`notebook_json`.
+    * A notebook whose code cells hold more than :data:`MAX_CODE_CHARS` characters is refused:
+      the grader holds and sends the code several times over while it runs (a 16 MiB cell of
+      comments cost it 146 MiB), and no answer needs that much.
 
 Cells are numbered for people: ``cell 7`` is the seventh cell of the notebook counting
 Markdown cells too, as a student scrolling through it would count.
@@ -29,6 +32,7 @@ Markdown cells too, as a student scrolling through it would count.
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -47,6 +51,15 @@ MAX_JSON_CONTAINERS = 50_000
 
 MAX_JSON_DEPTH = 100
 """Deepest nesting of objects and arrays (a notebook's own is under 10)."""
+
+MAX_TEXT_BYTES = 40 * 1024**2
+"""Most memory a notebook's text may take as Python characters: Python keeps 1, 2 or 4 bytes a
+character, by the widest character of a text, so one emoji makes a 19 MiB file 76 MiB of text
+(and its parsed strings as much again)."""
+
+MAX_CODE_CHARS = 1_000_000
+"""Most characters of code (all code cells together) a notebook may have run; a generated
+solution has a few thousand."""
 
 RESAVE = "open it in Jupyter and save it again"
 CLEAR = "clear all outputs, then open it in Jupyter and save it again"
@@ -106,7 +119,7 @@ def read_notebook(path: Path) -> LoadedNotebook:
     ------
     SubmissionError
         Missing or unreadable file, too large, not UTF-8, not JSON, not a notebook, an
-        unsupported nbformat version, malformed cells, or no code at all.
+        unsupported nbformat version, malformed cells, no code at all or too much of it.
     """
     path = Path(path)
     document = notebook_json(_read_bytes(path))
@@ -126,6 +139,11 @@ def read_notebook(path: Path) -> LoadedNotebook:
     if not cells:
         raise SubmissionError("the notebook has no code: no code cell holds anything (an empty "
                               "notebook, or the wrong file?)")
+    size = sum(len(c.source) for c in cells)
+    if size > MAX_CODE_CHARS:
+        raise SubmissionError(f"the notebook's code cells hold {size:,} characters, more than "
+                              f"the {MAX_CODE_CHARS:,} the grader runs (remove data pasted into "
+                              f"code cells); {RESAVE}")
     return LoadedNotebook(nb, cells, notes)
 
 
@@ -210,6 +228,9 @@ def notebook_json(data: bytes) -> object:
 
 
 _NOT_BRACKET = bytes(b for b in range(256) if b not in b"[]{}")
+_CONTINUATION = bytes(range(0x80, 0xC0))  # the second to fourth bytes of a UTF-8 character
+_WIDTHS = ((4, re.compile(rb"[\xf0-\xf4]|\\u[dD][89abAB]")),  # past U+FFFF, raw or escaped
+           (2, re.compile(rb"[\xc4-\xef]|\\u(?!00)")))  # past U+00FF
 _CHUNK = 1 << 18  # bytes looked at at once: the pieces of one chunk are all that is held
 
 
@@ -221,7 +242,10 @@ def json_shape(data: bytes) -> str | None:
     them; UTF-8 puts no ``"`` or ``\\`` inside a character), so that every ``"`` left opens or
     closes a string. Then, a chunk at a time, what lies outside strings is counted: ``{`` and
     ``[`` are the objects and arrays, each comma one more value, and the brackets' running
-    balance is the nesting. Malformed JSON is left for the parser to describe.
+    balance is the nesting. Before that, the memory its text takes as Python characters
+    (:data:`MAX_TEXT_BYTES`): its characters (the bytes that do not continue one) times the
+    width of the widest, raw or as a ``\\u`` escape. Malformed JSON is left for the parser to
+    describe.
 
     Examples
     --------
@@ -230,6 +254,13 @@ def json_shape(data: bytes) -> str | None:
     >>> json_shape(b"[" * 101 + b"]" * 101)
     'objects and arrays nested 101 deep (at most 100)'
     """
+    width = next((w for w, wide in _WIDTHS if wide.search(data)), 1)
+    text_bytes = len(data.translate(None, _CONTINUATION)) * width
+    if text_bytes > MAX_TEXT_BYTES:
+        why = {4: "; a character past U+FFFF, such as an emoji, makes each one 4 bytes",
+               2: "; 2 bytes a character"}.get(width, "")
+        return (f"text of {text_bytes / 1024**2:.0f} MiB once decoded (at most "
+                f"{MAX_TEXT_BYTES // 1024**2} MiB{why})")
     text = data.replace(b"\\\\", b"").replace(b'\\"', b"")
     containers = commas = depth = deepest = 0
     inside = False  # a string runs on from the chunk before

@@ -378,6 +378,12 @@ def _unchanged(old: StudentResult | None, sha: str | None, key_hash: str,
     return fresh is None or (old.status, old.message) == (fresh.status, fresh.message)
 
 
+PRELOAD_SCAN_BYTES = 2 * 1024**2
+"""Largest submission whose imports :func:`_plan` looks for: that parses the whole notebook, at
+up to twelve times its size (text outside the BMP); a larger one runs with what the others'
+imports preload (issue 23)."""
+
+
 def _plan(a: Assignment, found, out: Path, force: bool, sandboxed: bool = False,
           max_bytes: int = DEFAULT_MAX_BYTES):
     """Split the roster: (submissions to execute with their hashes, records to write, kept,
@@ -413,7 +419,7 @@ def _plan(a: Assignment, found, out: Path, force: bool, sandboxed: bool = False,
                 kept.append(sid)
             else:
                 to_run.append((by_id[sid], expected, key_hash, sha))
-                if json_shape(data) is None:  # parsing more costs memory; the run refuses it
+                if len(data) <= PRELOAD_SCAN_BYTES and json_shape(data) is None:
                     packages |= packages_imported(data)
             continue
         fresh = (ungraded_result(sid, "failed", problems[sid].message, expected, key_hash)

@@ -58,7 +58,7 @@ class ClassReport:
         Whether the notebooks were available for the code comparison.
     code_cut : tuple of str
         The students whose notebooks hold more code than is compared (only the first
-        :data:`~grader.report.code_similarity.MAX_CODE_CHARS` characters were).
+        :data:`~grader.report.code_similarity.MAX_COMPARED_CHARS` characters were).
     """
 
     data: ClassData

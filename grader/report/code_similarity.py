@@ -19,7 +19,7 @@ words and symbols instead.
 
 Bounded per notebook (issue 23): a notebook is read as safely as for grading (a regular file
 of at most the submission size limit, its JSON within :func:`grader.notebook_load.notebook_json`'s
-limits), and only the first :data:`MAX_CODE_CHARS` characters of its code are tokenised; the
+limits), and only the first :data:`MAX_COMPARED_CHARS` characters of its code are tokenised; the
 report names the notebooks that were cut (:attr:`NotebookCode.cut`).
 """
 
@@ -43,7 +43,7 @@ SHINGLE = 5
 MIN_JACCARD = 0.5
 MIN_SHARED = 20
 
-MAX_CODE_CHARS = 100_000
+MAX_COMPARED_CHARS = 100_000
 """Characters of a notebook's code compared: the first ones, cut at a line end (a generated
 solution has under ten thousand). Tokenising costs time and memory in proportion."""
 
@@ -78,7 +78,7 @@ class NotebookCode:
     Attributes
     ----------
     sources : tuple of str
-        The sources of its code cells, :data:`MAX_CODE_CHARS` characters in all at most
+        The sources of its code cells, :data:`MAX_COMPARED_CHARS` characters in all at most
         (empty when the file cannot be read as a notebook).
     cut : bool
         The notebook holds more code than that; only the first was compared.
@@ -88,7 +88,7 @@ class NotebookCode:
     cut: bool = False
 
 
-def notebook_code(path: Path, limit: int = MAX_CODE_CHARS) -> NotebookCode:
+def notebook_code(path: Path, limit: int = MAX_COMPARED_CHARS) -> NotebookCode:
     """The code of the notebook at ``path``: at most ``limit`` characters (module docstring)."""
     try:
         cells = notebook_json(read_submission(Path(path)))["cells"]

@@ -29,7 +29,7 @@ import numpy as np
 from grader.report import figures
 from grader.report.assemble import ClassReport
 from grader.report.classdata import NUMERIC_KINDS, numeric
-from grader.report.code_similarity import MAX_CODE_CHARS, MIN_JACCARD
+from grader.report.code_similarity import MAX_COMPARED_CHARS, MIN_JACCARD
 from grader.report.copying import ALPHA
 from grader.report.items import CATEGORIES, ItemStats
 
@@ -309,7 +309,7 @@ def copying_section(report: ClassReport) -> str:
     else:
         cbody = f"<p>No two notebooks share {MIN_JACCARD:.0%} or more of their own code.</p>"
     if report.code_cut:
-        cbody += (f'<p class="note">Only the first {MAX_CODE_CHARS:,} characters of code were '
+        cbody += (f'<p class="note">Only the first {MAX_COMPARED_CHARS:,} characters of code were '
                   f"compared for {', '.join(e(s) for s in report.code_cut)}: their notebooks "
                   "hold more.</p>")
     return ('<h2 id="copying">Copied answers</h2>' + intro + body +

@@ -13,6 +13,8 @@ import csv
 import json
 import math
 import os
+import re
+import shutil
 import subprocess
 import sys
 from dataclasses import replace
@@ -26,9 +28,12 @@ from grader import notebook_load
 from grader.lms.export import write_export
 from grader.notebook_load import SubmissionError, json_shape, read_notebook
 from grader.pipeline import grade_assignment, load_assignment
-from grader.report.code_similarity import MAX_CODE_CHARS
+from grader.report.code_similarity import MAX_COMPARED_CHARS
 from grader.results import UNSTORABLE, AnswerResult, StudentResult, read_result, write_result
 from problems.answers import Verdict
+from problems.generate import generate_assignment
+from problems.roster import Roster
+from problems.templates import FAMILIES
 from tests.grader.lms.conftest import generate, grade
 from tests.grader.lms.exports import (
     MULLER,
@@ -280,21 +285,49 @@ def _notebook_text(metadata: str = "{}", cells: str | None = None) -> str:
     return f'{{"nbformat": 4, "nbformat_minor": 5, "metadata": {metadata}, "cells": {cells}}}'
 
 
+def _comment_lines(n: int) -> str:
+    return "".join(f"# remark {i}\n" for i in range(n))
+
+
+def _output(text: str, escaped: bool = False) -> str:
+    """A notebook whose one code cell has ``text`` as its output (``escaped``: every character
+    past ASCII as a ``\\u`` escape)."""
+    return _notebook_text(cells=json.dumps([{
+        "cell_type": "code", "metadata": {}, "execution_count": 1, "source": "x = 1",
+        "outputs": [{"output_type": "stream", "name": "stdout", "text": text}]}],
+        ensure_ascii=escaped))
+
+
 MIB = 1024**2
-HOSTILE = {  # name: (notebook text, what the grader must say); each under the 20 MiB limit
+HOSTILE = {  # name: (notebook text, what read_notebook says: a pattern); each under 20 MiB
     "1.4 million {} in the metadata (4 MiB)":
         (lambda: _notebook_text('{"x": [' + ",".join(["{}"] * 1_400_000) + "]}"),
-         "objects and arrays"),
+         "its JSON holds more than 50,000 objects and arrays"),
     "19 MiB of {}":
         (lambda: _notebook_text('{"x": [' + ",".join(["{}"] * 6_500_000) + "]}"),
-         "objects and arrays"),
+         "its JSON holds more than 50,000 objects and arrays"),
     "19 MiB of numbers":
-        (lambda: _notebook_text('{"x": [' + ",".join(["1000"] * 3_900_000) + "]}"), "values"),
+        (lambda: _notebook_text('{"x": [' + ",".join(["1000"] * 3_900_000) + "]}"),
+         "its JSON holds more than 500,000 values"),
     "19 MiB of short strings":
-        (lambda: _notebook_text('{"x": [' + ",".join(['"ab"'] * 3_300_000) + "]}"), "values"),
+        (lambda: _notebook_text('{"x": [' + ",".join(['"ab"'] * 3_300_000) + "]}"),
+         "its JSON holds more than 500,000 values"),
     "arrays nested 900 deep":
-        (lambda: _notebook_text('{"x": ' + "[" * 900 + "]" * 900 + "}"), "nested 902 deep"),
+        (lambda: _notebook_text('{"x": ' + "[" * 900 + "]" * 900 + "}"),
+         "its JSON holds objects and arrays nested 902 deep"),
+    "a code cell of a million comment lines (16 MiB)":
+        (lambda: _notebook_text(cells=json.dumps([{
+            "cell_type": "code", "metadata": {}, "outputs": [], "execution_count": None,
+            "source": "x = 1\n" + _comment_lines(1_000_000)}])),
+         r"the notebook's code cells hold [\d,]{10} characters, more than the 1,000,000 "),
+    "a 19 MiB output with an emoji (76 MiB as Python characters)":
+        (lambda: _output("a" * (19 * MIB) + "\U0001F600"),
+         r"its JSON holds text of 76 MiB once decoded \(at most 40 MiB; a character past "),
+    "the same, the emoji escaped": (lambda: _output("a" * (19 * MIB) + "\U0001F600", True),
+                                    r"its JSON holds text of 76 MiB once decoded"),
 }
+
+
 def _most() -> str:
     """As many objects, and distinct strings, as the limits let through."""
     objects = notebook_load.MAX_JSON_CONTAINERS - 10
@@ -304,10 +337,9 @@ def _most() -> str:
 
 LEGAL = {  # within every limit, and as large as a submission may be
     "as many objects and distinct strings as the limits let through": _most,
-    "one 19 MiB code cell with a character outside the BMP":
-        lambda: _notebook_text(cells=json.dumps([{
-            "cell_type": "code", "metadata": {}, "outputs": [], "execution_count": None,
-            "source": "x = 1  # " + "a" * (19 * MIB) + "\U0001F600"}], ensure_ascii=False)),
+    "a 19 MiB output": lambda: _output("a" * (19 * MIB)),
+    "as much text with an emoji as the limit lets through":
+        lambda: _output("a" * (notebook_load.MAX_TEXT_BYTES // 4 - 1000) + "\U0001F600"),
 }
 
 # The peak resident size of the process running it (MiB), counted from reset_peak(): a process
@@ -372,11 +404,12 @@ def test_a_hostile_notebook_is_refused_before_it_is_parsed(tmp_path, clean_noteb
     path.write_text(build(), encoding="utf-8")
     assert path.stat().st_size < 20 * MIB
     got = _measure(path, clean_notebook)
-    # before issue 23: +693 MiB (4 MiB of {}), +3218 MiB (19 MiB of {}), a RecursionError
+    # before issue 23: +693 MiB (4 MiB of {}), +3218 MiB (19 MiB of {}), +267 MiB (strings),
+    # a RecursionError (nested)
     assert got["over_clean_mib"] < BUDGET_MIB / 4, got
-    with pytest.raises(SubmissionError, match=f"its JSON holds .*{said}"):
+    with pytest.raises(SubmissionError, match=said):
         read_notebook(path)
-    assert got["said"]["check"].startswith(f"{path}: not a notebook the grader reads")
+    assert got["said"]["check"] == f"{path}: {got['said']['read_notebook']}"
     assert got["said"]["claimed_student"] == got["said"]["notebook_code"] == "read"
 
 
@@ -388,6 +421,70 @@ def test_the_largest_legal_notebook_stays_within_the_budget(tmp_path, clean_note
     got = _measure(path, clean_notebook)
     assert got["over_clean_mib"] < BUDGET_MIB, got
     assert got["said"]["read_notebook"] == "read"
+
+
+# Grades the class of argv[2] (the sandbox, real kernels, two at once), counting from after the
+# imports: prints the grader's peak memory over that start (MiB) and every record's status.
+_RUN = _PEAK + """
+from grader.pipeline import grade_assignment
+import grader.execute, grader.kernel_pool, grader.report.page  # imported before the count
+
+reset_peak()
+start = peak()
+report = grade_assignment(Path(sys.argv[1]), Path(sys.argv[2]), Path(sys.argv[3]), jobs=2)
+print(json.dumps({"over_start_mib": peak() - start,
+                  "records": {r.student_id: [r.status, r.message] for r in report.results}}))
+"""
+
+
+RUNS = {"every hostile notebook at once": {f"m{i}": hostile for i, hostile in
+                                           enumerate(HOSTILE.values())},
+        **{f"the legal one: {name}": {"l": (build, None)} for name, build in LEGAL.items()}}
+"""Runs: student id -> (their notebook, what its record says: a pattern, or None if legal)."""
+
+
+def _grade_run(hw: Path, subs: Path, out: Path) -> dict:
+    run = subprocess.run([sys.executable, "-c", _RUN, str(hw), str(subs), str(out)], cwd=ROOT,
+                         capture_output=True, text=True, timeout=600,
+                         env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert run.returncode == 0, run.stderr
+    return json.loads(run.stdout)
+
+
+@pytest.fixture(scope="module")
+def clean_run(tmp_path_factory) -> tuple[Path, dict]:
+    """An assignment for alice, bob and every student of :data:`RUNS`; its clean run (alice's
+    and bob's solutions only)."""
+    root = tmp_path_factory.mktemp("run")
+    ids = {"alice", "bob", *(sid for students in RUNS.values() for sid in students)}
+    hw = root / "HW"
+    generate_assignment(Roster(("id",), tuple({"id": s} for s in sorted(ids))), hw, FAMILIES,
+                        problems=["inertia_tensor"], seed=4)
+    subs = root / "clean"
+    subs.mkdir()
+    for sid in ("alice", "bob"):
+        shutil.copy(hw / "solutions" / f"{sid}.ipynb", subs / f"{sid}.ipynb")
+    return hw, _grade_run(hw, subs, root / "clean-out")
+
+
+@pytest.mark.parametrize("name", list(RUNS))
+def test_a_whole_run_costs_the_grader_little_more_than_a_clean_one(tmp_path, clean_run, name):
+    """The whole run, as the battery measures it: the grader's peak over a clean run's."""
+    hw, clean = clean_run
+    subs = tmp_path / "subs"
+    shutil.copytree(hw.parent / "clean", subs)
+    for sid, (build, _) in RUNS[name].items():
+        (subs / f"{sid}.ipynb").write_text(build(), encoding="utf-8")
+    got = _grade_run(hw, subs, tmp_path / "out")
+    records = got["records"]
+    assert records["alice"] == clean["records"]["alice"] and records["alice"][0] == "graded"
+    assert records["bob"] == clean["records"]["bob"]
+    for sid, (_, said) in RUNS[name].items():
+        if said is not None:
+            assert records[sid][0] == "failed" and re.search(said, records[sid][1]), records[sid]
+    # before issue 23: the 19 MiB of {} alone made the grader 3.2 GB larger
+    over = got["over_start_mib"] - clean["over_start_mib"]
+    assert over < BUDGET_MIB, (over, got)
 
 
 NASTY_STRINGS = ['[{"a": 1}, ', '\\"[[', "\\\\", '\\\\"', "{,,,}", "é\U0001F600\u2028", "\\u005b"]
@@ -424,10 +521,6 @@ def test_strings_never_count_and_every_bracket_and_comma_outside_them_does(monke
 
 # ------------------------------------------------------------------------------------------
 # item 7: the class report's code comparison is bounded per notebook
-
-def _comment_lines(n: int) -> str:
-    return "".join(f"# remark {i}\n" for i in range(n))
-
 
 _COMPARE = _PEAK + """
 from grader.report.code_similarity import notebook_code, similar_code
@@ -471,12 +564,12 @@ def test_the_report_names_the_notebooks_whose_code_was_cut(tmp_path):
         if sid == "S1002":
             nb["cells"].append({"cell_type": "code", "id": "long", "metadata": {}, "outputs": [],
                                 "execution_count": None,
-                                "source": _comment_lines(MAX_CODE_CHARS // 10)})
+                                "source": _comment_lines(MAX_COMPARED_CHARS // 10)})
         (subs / f"{sid}.ipynb").write_text(json.dumps(nb))
     report = grade_assignment(hw, subs, limits="LIMITS", execute=FakeExecute(), jobs=2)
     assert {r.student_id for r in report.results if r.status == "graded"} == \
         {"S1001", "S1002", "S1003"}
     page = (hw / "graded" / "report.html").read_text(encoding="utf-8")
-    assert (f"Only the first {MAX_CODE_CHARS:,} characters of code were compared for S1002: "
+    assert (f"Only the first {MAX_COMPARED_CHARS:,} characters of code were compared for S1002: "
             "their notebooks hold more.") in page
 
