@@ -26,9 +26,7 @@ The class
 from __future__ import annotations
 
 import copy
-import csv
 import hashlib
-import io
 import math
 import re
 from collections.abc import Mapping
@@ -159,12 +157,11 @@ class Intended:
 
 
 def roster_csv(students: tuple[Student, ...] = CLASS) -> str:
-    """The class list as the CSV ``eulertop generate --roster`` reads (id, name, email)."""
-    buffer = io.StringIO(newline="")
-    writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(["id", "name", "email"])
-    writer.writerows([s.id, s.name, s.email] for s in students)
-    return buffer.getvalue()
+    """The class list as the CSV ``eulertop generate --roster`` reads (id, name, email), written
+    like every CSV of the project (:func:`grader.gradebook.gradebook_csv`)."""
+    from grader.gradebook import gradebook_csv
+
+    return gradebook_csv([["id", "name", "email"], *([s.id, s.name, s.email] for s in students)])
 
 
 def describe(student: Student) -> str:
