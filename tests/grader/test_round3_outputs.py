@@ -223,7 +223,8 @@ def test_a_run_with_a_surrogate_answer_and_a_non_utf8_file_name_writes_everythin
     # the terminal of capsys is strict UTF-8, like a UTF-8 locale's
     status, out, err = _grade_command(hw, subs, _SurrogateAnswer("S1001"), capsys)
     graded = hw / "graded"
-    for name in ("grades.csv", "answers.csv", "submissions.csv", "report.html", "report.csv"):
+    for name in ("grades.csv", "answers.csv", "submissions.csv", "report.html", "report.csv",
+                 "feedback/S1001.html"):
         (graded / name).read_bytes().decode("utf-8")  # written, and strict UTF-8
     records = {sid: read_result(graded / "results" / f"{sid}.json") for sid in a.ids}
     assert None not in records.values()  # every student has a record
