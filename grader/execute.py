@@ -311,7 +311,10 @@ class LocalKernel:
         # ZeroMQ's default is to try again 100 ms later, which a fresh kernel would wait out
         self._context.setsockopt(zmq.RECONNECT_IVL, RECONNECT_INTERVAL_MS)
         self.kc = self.km.client(context=self._context)
-        self.kc.start_channels()
+        # no heartbeat: the grader watches the kernel's process itself, and the heartbeat's
+        # thread cannot be stopped once its kernel is gone (its REQ socket's send waits for a
+        # peer forever: stop_channels() then never returned, and the run hung)
+        self.kc.start_channels(hb=False)
         self._watch_iopub(zmq)
         await self._ready(self.limits.total_timeout)
         return self.kc
@@ -834,6 +837,11 @@ def _summary(run: _Run, status: str, kernel: Any, errors: Sequence[str]) -> str:
 
 def _death(kernel: Any, limits: Limits) -> str:
     code = kernel.exit_status() if kernel is not None else None
+    wrote = getattr(kernel, "disk_held", None)
+    if wrote:
+        return (f"it was stopped when it had written {wrote / 1024**2:.0f} MiB to this "
+                "machine's shared folders (/tmp, /var/tmp, /dev/shm and its working folder; "
+                f"the limit is {kernel.disk_limit / 1024**2:.0f} MiB in all)")
     held = getattr(kernel, "memory_held", None)
     if held:
         return (f"it was stopped when its processes together held {_gib(held)}, over the "

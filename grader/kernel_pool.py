@@ -152,8 +152,10 @@ def packages_imported(notebook: bytes) -> set[str]:
     """Which of :data:`PRELOADABLE`'s packages a notebook's code cells import (``import`` and
     ``from`` lines; the assignment's own Markdown names numpy and sympy, so only code counts).
     A notebook that cannot be read gives none (the run itself will say what is wrong)."""
-    try:
-        cells = json.loads(notebook).get("cells", [])
+    from grader.notebook_load import notebook_json
+
+    try:  # parsed within the limits every reader of a submission keeps
+        cells = notebook_json(notebook).get("cells", [])
         code = "\n".join(
             "".join(c["source"]) if isinstance(c["source"], list) else c["source"]
             for c in cells if isinstance(c, dict) and c.get("cell_type") == "code")

@@ -14,7 +14,8 @@ What it does (:class:`ContainerKernel`, a :class:`grader.execute.LocalKernel`)
     * The seccomp filter of the sandboxed kernels (:mod:`grader.sandbox.seccomp`, SysV IPC
       refused too), installed by the kernel on itself before ipykernel starts.
     * While it runs, the resident memory of all its user's processes together is watched
-      (:class:`UserMemoryWatch`); past ``Limits.memory_bytes`` they are all killed.
+      (:class:`UserMemoryWatch`); past ``Limits.memory_bytes`` they are all killed; so they are
+      when it has written more than :data:`DISK_BYTES` to the machine's shared folders.
     * When the kernel stops, its process group is killed (as everywhere) and so is every
       process of its user, again and again until none is left (:func:`kill_all_of`: a process
       that left the group with ``setsid``, or a chain of short-lived ones, does not outlive
@@ -299,14 +300,64 @@ def resident_of(uid: int, proportional: bool = False) -> int:
     return total
 
 
-class UserMemoryWatch:
-    """Watches the memory of all processes of a kernel's user together (a thread; every
-    :data:`WATCH_INTERVAL`); past ``limit`` bytes kills them all (:func:`kill_all_of`) and
-    keeps what they held in :attr:`held`."""
+def bytes_of(uid: int, places: Iterable[str | Path]) -> int:
+    """Bytes on disk (or in a tmpfs) of what ``uid`` owns in ``places`` — their files, and
+    everything in its folders there — and of the files its processes hold open (deleted ones
+    included); each file counted once."""
+    seen: set[tuple[int, int]] = set()
+    total = 0
 
-    def __init__(self, user: KernelUser, limit: int) -> None:
+    def count(info: os.stat_result) -> None:
+        nonlocal total
+        if stat.S_ISREG(info.st_mode) and (info.st_dev, info.st_ino) not in seen:
+            seen.add((info.st_dev, info.st_ino))
+            total += info.st_blocks * 512
+
+    todo = [(str(p), False) for p in places if os.path.isdir(p)]
+    while todo:
+        folder, owned = todo.pop()
+        with contextlib.suppress(OSError), os.scandir(folder) as entries:
+            for entry in entries:
+                with contextlib.suppress(OSError):
+                    info = entry.stat(follow_symlinks=False)
+                    mine = owned or info.st_uid == uid
+                    if mine:
+                        count(info)
+                    if stat.S_ISDIR(info.st_mode) and (mine or info.st_mode & stat.S_IWOTH):
+                        todo.append((entry.path, mine))
+    for pid, _ in processes_of(uid):
+        with contextlib.suppress(OSError):
+            for fd in os.listdir(f"/proc/{pid}/fd"):
+                with contextlib.suppress(OSError):
+                    count(os.stat(f"/proc/{pid}/fd/{fd}"))
+    return total
+
+
+def _free_bytes(places: Iterable[str | Path]) -> int:
+    """Free bytes of the file systems of ``places`` (each counted once)."""
+    free: dict[int, int] = {}
+    for place in places:
+        with contextlib.suppress(OSError):
+            info = os.statvfs(place)
+            free[os.stat(place).st_dev] = info.f_bavail * info.f_frsize
+    return sum(free.values())
+
+
+class UserMemoryWatch:
+    """Watches a kernel's user (a thread; every :data:`WATCH_INTERVAL`): the memory of all its
+    processes together and, when the free space of the folders it may write to has fallen by
+    more than ``disk`` bytes since it started, what it wrote there (:func:`bytes_of`); past
+    ``limit`` or ``disk`` bytes, kills all its processes (:func:`kill_all_of`) and keeps what
+    they held in :attr:`held` (memory) or :attr:`wrote` (disk)."""
+
+    def __init__(self, user: KernelUser, limit: int, workdir: Path | None = None,
+                 disk: int | None = None) -> None:
         self.user, self.limit = user, limit
+        self.places = [*WRITABLE, *([str(workdir)] if workdir is not None else [])]
+        self.disk = DISK_BYTES if disk is None else disk
+        self.free = _free_bytes(self.places)
         self.held: int | None = None
+        self.wrote: int | None = None
         self.stopped = threading.Event()
         self.thread = threading.Thread(target=self._run, name="eulertop-memory", daemon=True)
         self.thread.start()
@@ -320,6 +371,12 @@ class UserMemoryWatch:
                 self.held = used
                 kill_all_of(self.user)
                 return
+            if self.free - _free_bytes(self.places) > self.disk:  # someone wrote: who?
+                written = bytes_of(self.user.uid, self.places)
+                if written > self.disk:
+                    self.wrote = written
+                    kill_all_of(self.user)
+                    return
 
     def stop(self) -> None:
         self.stopped.set()
@@ -328,6 +385,11 @@ class UserMemoryWatch:
 
 WATCH_INTERVAL = 0.1
 """Seconds between two looks at the memory of a container-mode kernel's processes."""
+
+DISK_BYTES = 256 * 1024**2
+"""What a container-mode kernel may write to this machine's shared folders (``/tmp``,
+``/var/tmp``, ``/dev/shm``, its working folder) in all, bytes: as much as a sandboxed kernel's
+own tmpfs holds (:data:`grader.sandbox.SCRATCH_BYTES`)."""
 
 
 class ContainerKernel(LocalKernel):
@@ -348,6 +410,14 @@ class ContainerKernel(LocalKernel):
         """Bytes its processes held together when they were killed for that, or None."""
         return None if self.watch is None else self.watch.held
 
+    disk_limit = DISK_BYTES
+
+    @property
+    def disk_held(self) -> int | None:
+        """Bytes it had written to the machine's shared folders when it was killed for that,
+        or None."""
+        return None if self.watch is None else self.watch.wrote
+
     def kernel_argv(self) -> list[str]:
         return kernel_command(self.limits, own_user=self.user is not None)
 
@@ -363,7 +433,7 @@ class ContainerKernel(LocalKernel):
         if self.user is not None:
             _hand_over(self.workdir, self.user)
             _hand_over(self.control, self.user)
-            self.watch = UserMemoryWatch(self.user, self.limits.memory_bytes)
+            self.watch = UserMemoryWatch(self.user, self.limits.memory_bytes, self.workdir)
         return await super().start()
 
     async def stop(self) -> None:

@@ -8,9 +8,11 @@ fixtures): a kernel start costs about a second.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import tempfile
+import textwrap
 from pathlib import Path
 
 import pytest
@@ -92,6 +94,33 @@ def test_a_loop_that_ignores_interrupts_hits_the_deadline_and_is_killed(
     assert 5.0 <= result.duration < 5.0 + OUT_OF_TIME_GRACE + 3.0  # the interrupt's grace
     assert _kernels_of_this_process() == []
     assert list(private_tmp.iterdir()) == []
+
+
+def test_a_cold_kernel_that_floods_its_channels_does_not_hang_the_grader(tmp_path, private_tmp):
+    """A cold ipykernel (the container mode's, ``--cold-kernels``') that sends messages over
+    the grader's cap on its shell and IOPub channels, then a stream just under it (round 2's
+    battery attack a06): the grader drops those connections, and jupyter_client's heartbeat
+    thread — whose next ping then waits forever for a peer — made closing the channels hang
+    after the time limit (seen in the container tier's battery, round 3). The run ends."""
+    import threading
+
+    from nbformat.v4 import new_code_cell, new_notebook
+
+    from tests.grader.test_isolation import ATTACKS
+
+    path = tmp_path / "floods.ipynb"
+    cell = textwrap.dedent(ATTACKS["a06-huge-messages"])
+    path.write_text(json.dumps(new_notebook(cells=[new_code_cell("x = 1"),
+                                                    new_code_cell(cell)])))
+    limits = Limits(cell_timeout=10.0, total_timeout=10.0)
+    got = {}
+    run = threading.Thread(daemon=True, target=lambda: got.update(
+        result=execute_submission(path, ["x"], limits, sandbox=False)))
+    run.start()
+    run.join(10.0 + OUT_OF_TIME_GRACE + 60)
+    assert not run.is_alive(), "the grader hung after the kernel's time limit"
+    assert got["result"].status in ("timeout", "kernel_died", "ok"), got["result"].message
+    assert _kernels_of_this_process() == []
 
 
 def test_a_kernel_that_exits_is_reported_with_its_exit_status(write_golden, generated_assignment,

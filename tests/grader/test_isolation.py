@@ -2,6 +2,15 @@
 and on the grader — each run through ``eulertop grade`` as root *and* as an ordinary user, each
 judged by its harm as measured from outside.
 
+The battery runs in every isolation tier it applies to (issue 22): ``world`` (as root and as an
+ordinary user), ``bwrap-per-kernel`` (both; a ``bwrap`` with ``--disable-userns`` on ``PATH``,
+where nothing inside bubblewrap can make a user namespace), and ``container`` (as root: a
+``bwrap`` that fails as under Docker's seccomp profile, in a container's file system layout).
+The container mode has no namespaces: its kernels see this machine's process list (a01 finds
+other processes, attaches to none), and a student's memory is counted per uid, not per PID
+namespace. A kernel alone in its bubblewrap sees that sandbox's PID 1 and its own zygote
+besides itself (a01: attaches to neither).
+
 One class per mode: three honest students (their solutions notebooks; graded before, between
 and after the attackers) and one attacker per attack, each attack in its own submission (so in
 its own kernel, as in a real class). The same honest students are also graded alone (the clean
@@ -24,7 +33,6 @@ import contextlib
 import hashlib
 import json
 import os
-import pwd
 import shutil
 import stat
 import subprocess
@@ -40,13 +48,13 @@ import pytest
 from nbformat.v4 import new_code_cell
 
 from grader.results import StudentResult, read_result
-from grader.sandbox import _as_user, _python_paths, available
+from grader.sandbox import UID_BASE, _as_user, _python_paths, available
 from problems.generate import generate_assignment
 from problems.roster import Roster
 from problems.templates import FAMILIES
+from tests.grader.tiers_support import fake_bwrap, ordinary_user
 
 ROOT = Path(__file__).resolve().parents[2]
-USER = "eulertop-attacker"
 HONEST = ("a00-honest", "a05b-honest", "z9-honest")  # graded before, between, after attacks
 MEMORY = 2 * 1024**3  # the grader's default memory limit per submission
 BIG_NOTEBOOK = 75 * 1024**2
@@ -60,16 +68,6 @@ def _needs_root_and_bwrap():
     if available() is None:
         pytest.fail("bubblewrap is not installed: `apt-get install bubblewrap` (README); the "
                     "battery must run, never skip", pytrace=False)
-
-
-def ordinary_user() -> int:
-    """The uid of :data:`USER`, made with ``useradd`` if it does not exist yet."""
-    try:
-        return pwd.getpwnam(USER).pw_uid
-    except KeyError:
-        subprocess.run(["useradd", "--no-create-home", "--shell", "/usr/sbin/nologin", USER],
-                       check=True, capture_output=True)
-        return pwd.getpwnam(USER).pw_uid
 
 
 # --------------------------------------------------------------------------------------------
@@ -341,11 +339,14 @@ def _status(pid: str) -> dict[str, str]:
 
 
 class Watch:
-    """Samples /proc while a run goes: the grader's VmHWM, and per PID namespace of student
-    kernels (the deepest namespaces: one per kernel) the summed Pss (shared pages divided
-    among their sharers: what the processes hold)."""
+    """Samples /proc while a run goes: the grader's VmHWM, and per student the summed Pss of
+    their processes (shared pages divided among their sharers: what the processes hold) —
+    students told apart by PID namespace (the deepest: one per kernel; in the
+    ``bwrap-per-kernel`` tier the sandbox's, one per kernel too) or, in the container mode, by
+    uid (one per kernel)."""
 
-    def __init__(self, token: str) -> None:
+    def __init__(self, token: str, tier: str = "world") -> None:
+        self.tier = tier
         self.token = token.encode()
         self.grader_peak = 0
         self.student_peak = 0
@@ -365,9 +366,15 @@ class Watch:
                     self.grader_peak = max(self.grader_peak, hwm)
                     continue
                 depth = len(status["NSpid"].split())
-                if depth < 3:
+                uid = int(status["Uid"].split()[0])
+                if self.tier == "container":
+                    if uid < UID_BASE:
+                        continue
+                    ns = f"uid {uid}"
+                elif depth < (2 if self.tier == "bwrap-per-kernel" else 3):
                     continue
-                ns = os.readlink(f"/proc/{pid}/ns/pid")
+                else:
+                    ns = os.readlink(f"/proc/{pid}/ns/pid")
                 rollup = Path(f"/proc/{pid}/smaps_rollup").read_text().splitlines()
                 pss = next(int(line.split()[1]) for line in rollup if line.startswith("Pss:"))
                 groups[ns] = groups.get(ns, 0) + pss * 1024
@@ -411,20 +418,39 @@ def run_folders(pids) -> set[str]:
     return {p.name for pid in pids for p in Path(tempfile.gettempdir()).glob(f"eulertop-{pid}-*")}
 
 
-def grade(uid: int | None, hw: Path, subs: Path, out: Path, token: str, timeout: float = 600):
-    """``eulertop grade HW SUBS --out OUT --jobs 2`` in a subprocess, as root or as ``uid``;
-    (return code, stdout, stderr, Watch)."""
+def grade(uid: int | None, hw: Path, subs: Path, out: Path, token: str, timeout: float = 600,
+          tier: str = "world"):
+    """``eulertop grade HW SUBS --out OUT --jobs 2`` in a subprocess, as root or as ``uid``, on
+    a machine that allows ``tier`` (emulated: :func:`tier_machine`); (return code, stdout,
+    stderr, Watch)."""
     code = f"import sys; from eulertop.cli import main; sys.exit(main())  # {token}"
     argv = [sys.executable, "-c", code, "grade", str(hw), str(subs), "--out", str(out),
             "--jobs", "2", "--timeout", "40"]
-    env = {"PATH": os.environ.get("PATH", os.defpath), "LANG": "C.UTF-8", "HOME": str(out.parent),
-           "TMPDIR": "/tmp"}
+    bin_first, prefix = tier_machine(tier, out.parent)
+    path = os.environ.get("PATH", os.defpath)
+    env = {"PATH": f"{bin_first}:{path}" if bin_first else path, "LANG": "C.UTF-8",
+           "HOME": str(out.parent), "TMPDIR": "/tmp"}
     if uid is not None:  # the project and its Python, reachable as a laptop user's are
         argv = [*_as_user(uid, [*_python_paths(), str(ROOT), str(out.parent)]), *argv]
-    with Watch(token) as watch:
-        done = subprocess.run(argv, capture_output=True, timeout=timeout, env=env, cwd=out.parent)
+    with Watch(token, tier) as watch:
+        done = subprocess.run([*prefix, *argv], capture_output=True, timeout=timeout, env=env,
+                              cwd=out.parent)
     return done.returncode, done.stdout.decode(errors="replace"), \
         done.stderr.decode(errors="replace"), watch
+
+
+def tier_machine(tier: str, base: Path) -> tuple[Path | None, list[str]]:
+    """What makes this machine one of ``tier`` (:mod:`tests.grader.tiers_support`): a folder
+    to put first on ``PATH`` (its ``bwrap``) and a launcher prefix (the container's layout)."""
+    if tier == "world":
+        return None, []
+    if tier == "bwrap-per-kernel":
+        return fake_bwrap(base, "no-nesting"), []
+    from tests.grader.hosted.conftest import container_layout
+
+    layout = container_layout()
+    assert layout is not None, "bubblewrap could not lay out a container's file system"
+    return fake_bwrap(base, "docker"), layout
 
 
 def _stable(r: StudentResult) -> StudentResult:
@@ -432,15 +458,24 @@ def _stable(r: StudentResult) -> StudentResult:
     return replace(r, graded_at="", execution=execution, submission_sha256=None)
 
 
-@pytest.fixture(scope="module", params=["root", "ordinary user"])
+MODES = {"root": ("root", "world"), "ordinary user": ("ordinary user", "world"),
+         "root, bwrap-per-kernel": ("root", "bwrap-per-kernel"),
+         "ordinary user, bwrap-per-kernel": ("ordinary user", "bwrap-per-kernel"),
+         "root, container": ("root", "container")}
+"""Who grades, and in which tier (the container mode needs root: another uid to run as)."""
+
+
+@pytest.fixture(scope="module", params=list(MODES))
 def battle(request):
     """One mode's attack run and clean run, with everything measured around them."""
     _needs_root_and_bwrap()
-    uid = None if request.param == "root" else ordinary_user()
+    who, tier = MODES[request.param]
+    uid = None if who == "root" else ordinary_user()
     owner = 0 if uid is None else uid
     base = Path(tempfile.mkdtemp(prefix="eulertop-isolation-"))
     os.chmod(base, 0o755)
-    token = f"eulertop-isolation-{os.getpid()}-{request.param.replace(' ', '-')}"
+    token = (f"eulertop-isolation-{os.getpid()}-"
+             f"{request.param.replace(' ', '-').replace(',', '')}")
     try:
         files = build_class(base, owner, token)
         before = {name: tree_digest(files[name]) for name in ("hw", "subs", "clean")}
@@ -451,9 +486,10 @@ def battle(request):
         for out in (clean_out, attack_out):
             out.mkdir()
             os.chown(out, owner, owner)
-        clean = grade(uid, files["hw"], files["clean"], clean_out, token + "-clean")
+        clean = grade(uid, files["hw"], files["clean"], clean_out, token + "-clean", tier=tier)
         t0 = time.monotonic()
-        attacked = grade(uid, files["hw"], files["subs"], attack_out, token + "-attack")
+        attacked = grade(uid, files["hw"], files["subs"], attack_out, token + "-attack",
+                         tier=tier)
         seconds = time.monotonic() - t0
         time.sleep(0.5)
         left = {"processes": processes_with(token.encode()),
@@ -477,7 +513,8 @@ def battle(request):
                                 for sid, r in sorted(records(attack_out).items())},
                 }) + "\n")
         yield {
-            "mode": request.param, "files": files, "before": before, "canary": canary,
+            "mode": request.param, "tier": tier, "files": files, "before": before,
+            "canary": canary,
             "clean": clean, "attacked": attacked, "seconds": seconds,
             "clean_out": clean_out, "attack_out": attack_out,
             "left": left,
@@ -497,6 +534,7 @@ def records(out: Path) -> dict[str, StudentResult]:
 def test_the_attacked_run_ends_and_grades_everyone(battle):
     code, _, err, _ = battle["attacked"]
     assert code in (0, 1), err[-3000:]
+    assert f"eulertop grade: isolation: {battle['tier']}:" in err  # the tier meant
     assert battle["seconds"] < 300
     got = records(battle["attack_out"])
     assert set(got) >= set(HONEST) | set(ATTACKS)
@@ -512,7 +550,15 @@ def test_honest_students_are_graded_exactly_as_in_a_clean_run(battle):
 
 def test_attackers_get_their_own_grade_and_no_more(battle):
     got = records(battle["attack_out"])
-    for name in ("a01-ptrace", "a09-escape-the-namespaces"):  # cells that assert the failure
+    cells = ("a01-ptrace", "a09-escape-the-namespaces")  # cells that assert the failure
+    errors = got["a01-ptrace"].execution["cell_errors"]
+    if battle["tier"] == "container":  # no PID namespace: a01 sees others, attaches to none
+        assert len(errors) == 1 and "AssertionError: ([], [" in errors[0], errors
+        cells = cells[1:]
+    elif battle["tier"] == "bwrap-per-kernel":  # it sees its own sandbox: init, zygote, itself
+        assert len(errors) == 1 and errors[0].endswith("AssertionError: ([], [1, 2, 3])"), errors
+        cells = cells[1:]
+    for name in cells:
         assert got[name].status == "graded", got[name].message
         assert got[name].execution["cell_errors"] == [], got[name].execution
     assert "stopped when its processes together held" in got["a08-memory-by-forking"].message

@@ -144,6 +144,60 @@ def test_no_process_of_the_notebook_outlives_it(hosted_hw, notebooks, public_tmp
     assert processes_of(kernel_uid) == set()
 
 
+HOPPER = (
+    "import subprocess, sys\n"
+    "code = ('import os\\n'\n"
+    "        'while True:\\n'  # never the same process for long: it forks, its parent leaves\n"
+    "        '    if os.fork():\\n'\n"
+    "        '        os._exit(0)\\n'\n"
+    "        '    os.setsid()\\n')\n"
+    "subprocess.Popen([sys.executable, '-c', code], start_new_session=True)\n"
+)
+
+
+AFTER_THE_ENTRYPOINT = (
+    "import sys, time\n"
+    "from grader.hosted import gradescope\n"
+    "from grader.hosted.container import processes_of\n"
+    "status = gradescope.main([])\n"
+    "seen = set()\n"
+    "for _ in range(20):  # a second after it returned: long enough for a chain to show\n"
+    "    seen |= processes_of(int(sys.argv[1]))\n"
+    "    time.sleep(0.05)\n"
+    "print('left', len(seen), 'status', status)\n"
+)
+
+
+def test_a_chain_of_short_lived_processes_does_not_outlive_the_entrypoint(
+        hosted_hw, notebooks, public_tmp, kernel_uid):
+    """Issue 23: a snapshot of the kernel user's processes, then a kill of each, misses a
+    process that has forked and left by then: round 2's kill let such a chain outlive the
+    entrypoint. Here the entrypoint runs as in a container — a PID namespace whose PID 1
+    reaps every orphan, as a container's init does, so the chain never stalls — and what is
+    left of the kernel's user is looked at in that container, after the entrypoint returned.
+    Killed until none is left (kill(-1) as that user), nothing is."""
+    import shutil
+    import subprocess
+    import sys
+
+    from tests.grader.hosted.conftest import REPO, container_layout
+
+    nb = json.loads(notebooks.right("alice"))
+    nb["cells"].append(code_cell(HOPPER))
+    root = layout(public_tmp, hosted_hw, json.dumps(nb).encode(), ALICE)
+    prefix = container_layout() or [shutil.which("bwrap"), "--dev-bind", "/", "/", "--"]
+    prefix = [prefix[0], "--unshare-pid", *prefix[1:-1], "--proc", "/proc", "--"]
+    env = {**os.environ, gradescope.ROOT_VARIABLE: str(root)}
+    done = subprocess.run([*prefix, sys.executable, "-c", AFTER_THE_ENTRYPOINT,
+                           str(kernel_uid)], cwd=REPO, env=env, capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    results = check_gradescope(root / "results" / "results.json")
+    assert results["score"] == hosted_hw.max_points("alice")  # the cell ran
+    left = next(line for line in done.stdout.splitlines() if line.startswith("left "))
+    assert left.split()[:2] == ["left", "0"], done.stdout
+
+
 def test_a_python_other_users_cannot_run_is_named(public_tmp, kernel_uid, monkeypatch):
     import sys
 
