@@ -2,7 +2,7 @@
 
     python benchmarks/bench_fuzz.py N [--seed S] [--jobs J] [--out docs]
 
-Same as ``eulertop bench --fuzz N --seed S --jobs J --out DIR``; see ``solver/fuzz.py``.
+Same as ``eulertop bench --fuzz N --seed S --jobs J --out DIR``; see ``solver/bench/fuzz.py``.
 """
 
 from __future__ import annotations

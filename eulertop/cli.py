@@ -25,7 +25,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
                "copied answers"),
     "package": ("grader.hosted.package", "build the autograder for Gradescope (a zip) or a "
                 "PrairieLearn question (a folder)"),
-    "bench": ("solver.work_precision", "work-precision charts and the stability battery"),
+    "bench": ("solver.bench.cli", "work-precision charts and the stability battery"),
     "demo": ("eulertop.demo", "the whole pipeline on a built-in sample class, end to end"),
     "doctor": ("grader.doctor", "what this machine allows the grader: Python, bubblewrap, user "
                "namespaces, the isolation tier grade would use (starts one kernel)"),

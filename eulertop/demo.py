@@ -10,7 +10,7 @@
 3. **Grade** with the real grader (:func:`grader.pipeline.grade_assignment`: warm kernels,
    limits, its progress display).
 4. **Charts**: ``eulertop bench --quick --out DIR/bench`` in a separate process (skipped, with
-   a note, when :mod:`solver.work_precision` cannot be imported).
+   a note, when :mod:`solver.bench` cannot be imported).
 
 It then prints one row per student (id, name, what the demo made, points, what the grader said
 in words), the counts, where everything is, and a check that every answer was judged as
@@ -170,8 +170,8 @@ def grade(out: Path, timeout: float, jobs: int | None):
 
 def bench(out: Path) -> tuple[bool, str]:
     """Step 4: ``eulertop bench --quick`` in its own process; (ok, a note for the report)."""
-    if importlib.util.find_spec("solver.work_precision") is None:
-        return True, "charts skipped: solver.work_precision is not installed"
+    if importlib.util.find_spec("solver.bench.cli") is None:
+        return True, "charts skipped: solver.bench is not installed"
     if importlib.util.find_spec("matplotlib") is None:
         return True, "charts skipped: matplotlib is not installed"
     command = [sys.executable, "-m", "eulertop", "bench", "--quick", "--out", str(out / BENCH)]

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from solver.bench_summary import (
+from solver.bench.summary import (
     BEGIN,
     END,
     BlockError,
@@ -20,7 +20,7 @@ from solver.bench_summary import (
     replace_block,
     summary_markdown,
 )
-from solver.work_precision import BenchConfig
+from solver.bench.work_precision import BenchConfig
 
 ROOT = Path(__file__).resolve().parents[2]
 BENCH = ROOT / "docs" / "bench"
@@ -95,8 +95,8 @@ def _sweep(method, floor, tightest=1e-14):
 def test_a_method_that_never_reaches_an_accuracy_is_said_to_stall_there():
     """From the data alone: DOP853 with a floor of 2e-12 gets '—' at 1e-12 and 'stalls at 2e-12';
     a method reaching 1e-12 gets a cost; none is extrapolated."""
-    from solver.bench_summary import _equal_accuracy
-    from solver.work_precision import FREE_SCENE
+    from solver.bench.summary import _equal_accuracy
+    from solver.bench.work_precision import FREE_SCENE
 
     rows = [*_sweep("DOP853", 2e-12), *_sweep("LSODA", 1e-13),
             {"method": "R10", "control": None, "error": 3e-14, "seconds": 3e-4, "repeats": 3,

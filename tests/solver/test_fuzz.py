@@ -12,9 +12,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import solver.mp_reference as mp_reference
+import solver.bench.mp_reference as mp_reference
 from eulertop.cli import main
-from solver.fuzz import REGIONS, draw_cases, judge_cases, reference_row, solve_api, solve_cli
+from solver.bench.fuzz import REGIONS, draw_cases, judge_cases, reference_row, solve_api, solve_cli
 
 
 def _judge(regions, states, seed):

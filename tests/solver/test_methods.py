@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 
 from solver.asymmetric_top import asymmetric_top_period
+from solver.bench.work_precision import FREE_SCENE, HEAVY_SCENE, free_reference, heavy_reference
 from solver.heavy_top import nutation_period
 from solver.methods import METHODS, Trajectory, solve
 from solver.parameters import ParameterError
 from solver.scenes import FreeBody, HeavyBody
-from solver.work_precision import FREE_SCENE, HEAVY_SCENE, free_reference, heavy_reference
 
 SYMMETRIC = FreeBody(1.0, 1.0, 1.6, (0.3, -0.2, 2.0))
 FREE_PERIOD = float(asymmetric_top_period(1.0, 2.0, 3.0, FREE_SCENE.omega0))

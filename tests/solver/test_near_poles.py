@@ -1,4 +1,5 @@
-"""Issue 12's four defects, each against the independent mpmath reference (solver.mp_reference).
+"""Issue 12's four defects, each against the independent mpmath reference
+(solver.bench.mp_reference).
 
 1. a hanging, barely spinning top near the lower pole: β1 was NaN (a signed gap), the batch died;
 2. the planar pendulum (p_α = p_γ = 0): poles are exact roots; over the top there is no turning
@@ -21,8 +22,8 @@ import numpy as np
 import pytest
 
 from eulertop.cli import main
+from solver.bench.mp_reference import reference
 from solver.heavy_top import solve_heavy_top, solve_heavy_top_many
-from solver.mp_reference import reference
 
 HANGING = (1.0, 0.5, 1.0, 3.1415, 2.0, 0.01, 1.9999999914153124)
 PENDULUM_SWING = (2e-4, 1e-4, 0.02, 2.0, 0.0, 0.0, 0.0)

@@ -27,6 +27,7 @@ import pytest
 from scipy.integrate import IntegrationWarning, quad
 
 from solver.asymmetric_top import asymmetric_top_period
+from solver.bench.stability import flip_time_rows
 from solver.heavy_top import (
     constants_of_motion,
     cos_beta,
@@ -36,7 +37,6 @@ from solver.heavy_top import (
 )
 from solver.methods import solve
 from solver.scenes import FreeBody, HeavyBody
-from solver.stability_battery import flip_time_rows
 from solver.torque_free import invariants
 
 I1, I3, MGL = 1.0, 0.6, 1.0

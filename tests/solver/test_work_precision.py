@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from eulertop.cli import main
-from solver.work_precision import rank_at_accuracy
+from solver.bench.work_precision import rank_at_accuracy
 
 README_BEFORE = "# Notes\n\nprose 1.5 s\n\n<!-- eulertop bench: begin -->\nstale 9.9 s\n"
 README_AFTER = "<!-- eulertop bench: end -->\n\n## Next\n"
@@ -71,7 +71,7 @@ def test_import_is_light():
     """Importing the bench module must not import matplotlib (the CLI stays fast)."""
     import subprocess
 
-    code = "import sys, solver.work_precision; print('matplotlib' in sys.modules)"
+    code = "import sys, solver.bench.work_precision; print('matplotlib' in sys.modules)"
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, cwd=str(np.__file__ and __file__.rsplit("/tests/", 1)[0]))
     assert res.stdout.strip() == "False"
@@ -91,7 +91,7 @@ def test_scenes_table_covers_states_and_horizons(bench_dir):
     """Generic, near the vertical, near the separatrix and fast states, each at every horizon:
     the exact model stays at rounding, DOP853 (rtol 1e-13) loses accuracy near the separatrix
     as the horizon grows (the phenomenon, not a margin)."""
-    from solver.work_precision import scene_states
+    from solver.bench.work_precision import scene_states
 
     rows = _rows(bench_dir / "scenes.csv")
     assert {r["scene"] for r in rows} == set(scene_states())
@@ -106,7 +106,7 @@ def test_scenes_table_covers_states_and_horizons(bench_dir):
 def test_readme_block_is_written_from_the_run_files(bench_dir):
     """--readme replaces only the block, with the text the run's files render to (chart links
     relative to the README), and summary.md opens with the same text."""
-    from solver.bench_summary import load_results, readme_block
+    from solver.bench.summary import load_results, readme_block
 
     readme = (bench_dir.parents[1] / "README.md").read_text()
     results, run = load_results(bench_dir)

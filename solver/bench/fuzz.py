@@ -5,7 +5,7 @@
 :data:`REGIONS`, solves them through the public API (:func:`solver.heavy_top.solve_heavy_top_many`,
 one vectorised call) and through the batch CLI (:func:`solver.cli.solve_lines`, JSON in and
 out), and compares ``β1, β2`` (absolute, rad), the nutation period and ``⟨α̇⟩`` (relative) and
-the motion label with :func:`solver.mp_reference.reference` at :data:`DPS` digits.
+the motion label with :func:`solver.bench.mp_reference.reference` at :data:`DPS` digits.
 
 Acceptance (per case and quantity)
 ----------------------------------
@@ -45,7 +45,7 @@ from pathlib import Path
 import numpy as np
 from numpy.random import Generator
 
-from solver.mp_reference import reference
+from solver.bench.mp_reference import reference
 
 __all__ = ["FLOOR", "REGIONS", "FuzzReport", "K", "draw_cases", "judge_cases", "run_fuzz"]
 
@@ -408,9 +408,10 @@ def fuzz_markdown(report: FuzzReport, n: int, seed: int, jobs: int, wall: float,
     done = n if done is None else done
     status = "complete" if done == n else f"INTERRUPTED after {done} of {n} cases"
     lines = ["# Fuzzing the heavy-top solver", "",
-             "Written by `eulertop bench --fuzz N --seed S` (`solver/fuzz.py`; the method, the "
+             "Written by `eulertop bench --fuzz N --seed S` (`solver/bench/fuzz.py`; the method, "
+             "the "
              "regions and the acceptance rule are in its docstring). References: "
-             "`solver/mp_reference.py` — mpmath from `physics.md` alone (expanded cubic, "
+             "`solver/bench/mp_reference.py` — mpmath from `physics.md` alone (expanded cubic, "
              "Legendre K and Π), Legendre integrals evaluated with Arb (python-flint) when "
              f"installed; {DPS}+ digits, raised where poles or cancellation need it. "
              f"Acceptance: error ≤ max({FLOOR:g}, {K:g} × condition), the condition measured by "

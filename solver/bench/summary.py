@@ -22,9 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from solver.methods import METHODS
-from solver.scenes import FreeBody, HeavyBody
-from solver.work_precision import (
+from solver.bench.work_precision import (
     ERROR_NAMES,
     FREE_SCENE,
     HEAVY_SCENE,
@@ -35,6 +33,8 @@ from solver.work_precision import (
     rank_at_accuracy,
     stall_points,
 )
+from solver.methods import METHODS
+from solver.scenes import FreeBody, HeavyBody
 
 __all__ = [
     "BEGIN",
@@ -375,7 +375,7 @@ def _stability(results: dict) -> list[str]:
     rows = results["stability"]
     lines = ["### Stability battery", "",
              "Where a naive method fails and the project's does not, measured by "
-             "`solver/stability_battery.py` against mpmath (40 digits) or a closed form; "
+             "`solver/bench/stability.py` against mpmath (40 digits) or a closed form; "
              "`tests/solver/test_stability.py` asserts the same phenomena.", "",
              "| where | method | measured |", "|---|---|---|"]
     for case in dict.fromkeys(r["case"] for r in rows):
@@ -431,7 +431,7 @@ def readme_block(results: dict[str, list[dict]], run: dict, image_dir: str) -> s
     config = _config(run)
     lines = [BEGIN,
              "<!-- Written by `eulertop bench --readme`: edit the code in "
-             "solver/bench_summary.py, not this text (tests/solver/test_bench_summary.py "
+             "solver/bench/summary.py, not this text (tests/solver/test_bench_summary.py "
              "re-renders it from docs/bench and fails on a difference). -->", ""]
     lines += _header(run, config)
     lines += _model_table(results, config)

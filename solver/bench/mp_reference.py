@@ -2,7 +2,7 @@
 
 Written from ``physics.md`` alone: it imports nothing from ``solver`` and shares none of its
 numerics (no offset cubic, no pole frames, no Carlson forms). It is what the fuzz suite
-(:mod:`solver.fuzz`) and the accuracy tests measure the solver against.
+(:mod:`solver.bench.fuzz`) and the accuracy tests measure the solver against.
 
 For a state given as binary floats (exact inputs), at ``dps`` decimal digits:
 

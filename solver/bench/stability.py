@@ -17,6 +17,7 @@ import mpmath as mp
 import numpy as np
 
 from solver.asymmetric_top import asymmetric_top_period, flip_time
+from solver.bench.work_precision import heavy_reference, mp_cubic_roots
 from solver.heavy_top import (
     constants_of_motion,
     cubic_roots,
@@ -27,7 +28,6 @@ from solver.heavy_top import (
 from solver.methods import solve
 from solver.scenes import FreeBody, HeavyBody
 from solver.torque_free import invariants
-from solver.work_precision import heavy_reference, mp_cubic_roots
 
 __all__ = [
     "double_root_rows",
