@@ -6,7 +6,7 @@ every fifth student, 1e-1 on one answer — wrong). Then, on the same notebooks,
 
 * ``eulertop grade --jobs J --force`` as a fresh process (start-up included): notebooks per
   minute, from the median of ``--runs`` runs, with warm kernels (the default: forked from a
-  zygote, :mod:`grader.kernel_pool`) and with ``--cold-kernels``; CPU seconds per notebook
+  zygote, :mod:`grader.kernels.pool`) and with ``--cold-kernels``; CPU seconds per notebook
   (user + system of the grader and every process it started, from ``RUSAGE_CHILDREN``);
 * the same with ``--jobs 1``, and every notebook executed bare, one after the other, with
   ``nbclient.NotebookClient`` in one process: the per-notebook overhead of eulertop over bare

@@ -1,9 +1,10 @@
 """Where a graded notebook's time goes on the kernel's side (issue 17): a kernel forked from a
-warm zygote (IPython's shell behind the cell server, :mod:`grader.cell_server`), from the fork
+warm zygote (IPython's shell behind the cell server,
+:mod:`grader.kernels.cell_server`), from the fork
 request to its first answer, and three small cells; a cold Jupyter kernel (ipykernel, as
 ``--cold-kernels`` runs it) beside it.
 
-For ``--kernels`` (12) kernels, one after another, of a one-slot :class:`grader.kernel_pool.
+For ``--kernels`` (12) kernels, one after another, of a one-slot :class:`grader.kernels.pool.
 KernelPool` without prewarming (so each start is timed whole):
 
 * **start**: ``PooledKernel.start`` — fork, the kernel's own world when sandboxed, the kernel
@@ -27,7 +28,7 @@ import os
 import statistics
 import time
 
-from grader.kernel_pool import KernelPool
+from grader.kernels.pool import KernelPool
 from grader.limits import Limits
 from grader.sandbox import fresh_folder, probe, run_folder
 

@@ -54,7 +54,7 @@ PROBLEMS = ["inertia_tensor", "euler_rotation"]
 IMPORT_CELL = ("import numpy as np\nimport scipy.integrate\nimport sympy as sp\n"
                "import matplotlib.pyplot as plt")
 """With ``--imports``: a first code cell in every submission, importing every package the
-zygotes can preload (``grader.kernel_pool.PRELOADABLE``), so that they all are."""
+zygotes can preload (``grader.kernels.preload.PRELOADABLE``), so that they all are."""
 
 
 def work_cell(seconds: float) -> str:

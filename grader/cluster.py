@@ -200,7 +200,7 @@ class WorkerKernels(_PluginBase):
     """A Dask worker plugin: the worker's run folder and warm kernels, for its whole life.
 
     Made lazily at the first task (a worker with no sandbox fails that task, not its start),
-    closed when the worker closes (``teardown``). One :class:`grader.kernel_pool.KernelPool`
+    closed when the worker closes (``teardown``). One :class:`grader.kernels.pool.KernelPool`
     slot per worker thread, in this machine's sandbox unless ``sandbox`` is False.
     """
 
@@ -234,7 +234,7 @@ class WorkerKernels(_PluginBase):
                 self._ready = (fresh_folder(run, "w"), fresh_folder(run, "s"), None)
             staging, copies, factory = self._ready
             if warm and factory is None and not self.cold:
-                from grader.kernel_pool import KernelPool
+                from grader.kernels.pool import KernelPool
 
                 pool = self._stack.enter_context(
                     KernelPool(self._slots, sandbox=self._found, preload=self.preload))
@@ -364,7 +364,7 @@ def grade_on_cluster(
     stop : threading.Event, optional
         Set to stop submitting (Ctrl-C is handled by the caller).
     preload : sequence of str, optional
-        What the workers' zygotes import (:func:`grader.kernel_pool.preload_for`: what the
+        What the workers' zygotes import (:func:`grader.kernels.preload.preload_for`: what the
         class's notebooks import); default: the zygote's own default.
 
     Raises

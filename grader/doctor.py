@@ -3,7 +3,7 @@
 For an instructor setting eulertop up, and for anyone reading a report of a run that refused:
 where Python and eulertop are installed, bubblewrap and its version, whether user namespaces can
 be made and whether they nest inside bubblewrap, Ubuntu's AppArmor restriction, seccomp, the
-isolation tier ``eulertop grade`` would use (:func:`grader.hosted.container.choose_tier`) —
+isolation tier ``eulertop grade`` would use (:func:`grader.kernels.isolation.choose_tier`) —
 checked by starting one kernel exactly as a student's starts (:func:`grader.pipeline.preflight`)
 — and what ``eulertop check`` would use. The fix is printed next to anything missing.
 
@@ -105,7 +105,7 @@ def _host_lines() -> Iterator[tuple[str, str, bool]]:
 
 
 def _tier_lines() -> Iterator[tuple[str, str, bool]]:
-    from grader.hosted.container import choose_tier
+    from grader.kernels.isolation import choose_tier
     from grader.sandbox import SandboxUnavailable, available
 
     try:
@@ -148,7 +148,7 @@ def _start_one_kernel(tier: object) -> tuple[bool, str]:
         if getattr(tier, "tier", None) == "container":
             factory = tier.kernel_factory()
         else:
-            from grader.kernel_pool import KernelPool
+            from grader.kernels.pool import KernelPool
 
             stack.enter_context(run_folder())
             factory = stack.enter_context(KernelPool(1, prewarm=False, sandbox=tier)).kernel

@@ -16,7 +16,7 @@ What one run does
        address-space limit, one BLAS/OpenMP thread, and stdin/stdout closed.
     4. Every code cell runs in order (``allow_errors``: a cell that raises does not stop the
        rest) — through nbclient for a Jupyter kernel (:class:`LocalKernel`), through its cell
-       server for a kernel forked from a zygote (:mod:`grader.cell_channel`). A cell that runs
+       server for a kernel forked from a zygote (:mod:`grader.kernels.channel`). A cell that runs
        longer than the cell time limit is interrupted (``KeyboardInterrupt``) and the next one
        runs.
     5. The answers are read by one more request the student never saw (:mod:`grader.extract`).
@@ -27,7 +27,8 @@ What one run does
        removed.
 
 Output
-    Output is never graded. A forked kernel only counts it (:mod:`grader.cell_server`); from a
+    Output is never graded. A forked kernel only counts it
+    (:mod:`grader.kernels.cell_server`); from a
     Jupyter kernel, :class:`_CappedClient` keeps at most ``Limits.output_bytes``
     characters of it per notebook and drops the rest on arrival; display updates and widget
     (comm) messages, which nbclient would otherwise accumulate, are ignored. A single message
@@ -48,7 +49,7 @@ Statuses (``Execution.status``)
 Swapping the kernel (issue 5's sandbox, warm kernels)
     The kernel's launch, interrupt and kill live in one class, :class:`LocalKernel`;
     :func:`execute_submission` takes ``kernel_factory``, any callable ``(workdir, control,
-    limits) -> KernelProcess``. The warm pool (:mod:`grader.kernel_pool`, the grader's default)
+    limits) -> KernelProcess``. The warm pool (:mod:`grader.kernels.pool`, the grader's default)
     hands out kernels forked from a pre-imported zygote, with launch, interrupt and kill going
     through it (:class:`LocalKernel` subclass, sharing :meth:`LocalKernel._connect`). Without a
     factory, a submission runs in a one-slot sandboxed pool of its own (:mod:`grader.sandbox`)
@@ -62,47 +63,33 @@ import asyncio
 import contextlib
 import functools
 import logging
-import os
 import re
 import shutil
 import signal
-import site
-import subprocess
-import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any
 
 from grader.extract import EXTRACTION_FAILED, extraction_request, parse_answers
+from grader.kernels.base import STOP_TIMEOUT, KernelFactory, KernelProcess
+from grader.kernels.local import LocalKernel
 from grader.limits import Limits
 from grader.notebook_load import CodeCell, SubmissionError, executable_notebook, read_notebook
 
 __all__ = [
     "STATUSES",
     "Execution",
-    "KernelProcess",
     "Limits",
-    "LocalKernel",
     "SubmissionError",
     "execute_submission",
-    "kernel_command",
-    "kernel_environment",
 ]
 
 log = logging.getLogger(__name__)
 
 STATUSES = ("ok", "invalid_notebook", "timeout", "kernel_died", "error")
 
-MAX_MESSAGE = 4 * 1024**2
-"""Largest single message (bytes) the grader accepts from a kernel, on any channel."""
-
-RECEIVE_QUEUE = 64
-"""Messages a channel's socket queues before it stops reading (``RCVHWM``)."""
-
-RECONNECT_INTERVAL_MS = 5
-"""Milliseconds between the grader's attempts to connect to a kernel not yet listening."""
 
 EXTRACTION_TIMEOUT = 10.0
 """Seconds the answer extraction may take (within what is left of the whole-notebook limit)."""
@@ -111,20 +98,6 @@ OUT_OF_TIME_GRACE = 5.0
 """Seconds, past the whole-notebook limit, for interrupting the cell that ran out of time and
 reading the answers set before it (a cell that ignores the interrupt is killed then)."""
 
-STOP_TIMEOUT = 5.0
-"""Seconds allowed for the kernel to be reaped after SIGKILL."""
-
-# The kernel command: the grader's interpreter sets its own resource limits, then runs
-# ipykernel's launcher in-process. Done in the child's own code rather than a Popen preexec_fn,
-# which is unsafe in a threaded grader (`--jobs` runs kernels from a thread pool). No braces:
-# jupyter_client substitutes {names} in the command.
-_LAUNCHER = (
-    "import resource as r, runpy, sys; "
-    "m = int(sys.argv.pop(1)); h = r.getrlimit(r.RLIMIT_AS)[1]; "
-    "m = m if h == r.RLIM_INFINITY else min(m, h); "
-    "r.setrlimit(r.RLIMIT_AS, (m, m)); r.setrlimit(r.RLIMIT_CORE, (0, 0)); "
-    "runpy.run_module('ipykernel_launcher', run_name='__main__', alter_sys=True)"
-)
 
 _CELL_FILE = re.compile(r"\((?:\d+\.py|<ipython-input-\d+-[0-9a-f]+>), line (\d+)\)")
 """A cell's file name in an error message: ipykernel's, or IPython's (a forked kernel's)."""
@@ -179,250 +152,6 @@ class Execution:
     isolation: str = ""
 
 
-class KernelProcess(Protocol):
-    """A kernel for one run: what :func:`execute_submission` needs from a kernel launcher."""
-
-    async def start(self) -> Any:
-        """Start the kernel; return a started, ready ``AsyncKernelClient``."""
-
-    async def interrupt(self) -> None:
-        """Send the kernel a keyboard interrupt (SIGINT)."""
-
-    async def stop(self) -> None:
-        """Kill the kernel and everything it started; release sockets. Never raises."""
-
-    def exit_status(self) -> int | None:
-        """The kernel process's exit status once it has ended (negative: killed by a signal)."""
-
-
-KernelFactory = Callable[[Path, Path, Limits], KernelProcess]
-
-
-def kernel_environment(workdir: Path, control: Path) -> dict[str, str]:
-    """The kernel's whole environment: built from scratch, nothing of the grader's own.
-
-    ``HOME`` and ``TMPDIR`` are the private working folder; IPython's and matplotlib's
-    configuration folders are in the control folder (empty: no startup files run); Jupyter
-    configuration is ignored; one BLAS/OpenMP thread (``--jobs`` runs kernels side by side);
-    a fixed hash seed for reproducible runs.
-    """
-    env = {
-        "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.defpath}",
-        "HOME": str(workdir),
-        "TMPDIR": str(workdir),
-        "LANG": "C.UTF-8",
-        "LC_ALL": "C.UTF-8",
-        "PYTHONHASHSEED": "0",
-        "PYTHONDONTWRITEBYTECODE": "1",
-        "IPYTHONDIR": str(control / "ipython"),
-        "MPLCONFIGDIR": str(control / "matplotlib"),
-        "MPLBACKEND": "Agg",
-        "JUPYTER_NO_CONFIG": "1",
-        "OPENBLAS_NUM_THREADS": "1",
-        "OMP_NUM_THREADS": "1",
-        "MKL_NUM_THREADS": "1",
-        "NUMEXPR_NUM_THREADS": "1",
-        "MALLOC_ARENA_MAX": "2",  # fewer malloc arenas: less address space per thread
-    }
-    if site.ENABLE_USER_SITE and site.getusersitepackages() in sys.path:
-        # HOME moved: keep packages installed with `pip install --user` importable
-        env["PYTHONUSERBASE"] = site.getuserbase()
-    return env
-
-
-def kernel_command(limits: Limits) -> list[str]:
-    """The kernel's argv (``{connection_file}`` filled in by jupyter_client)."""
-    return [sys.executable, "-c", _LAUNCHER, str(limits.memory_bytes), "-f", "{connection_file}",
-            "--HistoryManager.hist_file=:memory:"]
-
-
-class LocalKernel:
-    """A fresh ipykernel on this machine, in its own process group: the one place a kernel is
-    launched, interrupted and killed (:class:`KernelProcess`).
-
-    Parameters
-    ----------
-    workdir : Path
-        The kernel's working folder (holds only the submission).
-    control : Path
-        A private folder for the connection file, the IPC sockets and the kernel's stderr.
-    limits : Limits
-        ``memory_bytes`` becomes the kernel's ``RLIMIT_AS``.
-    """
-
-    def __init__(self, workdir: Path, control: Path, limits: Limits) -> None:
-        self.workdir, self.control, self.limits = Path(workdir), Path(control), limits
-        self.km: Any = None
-        self.kc: Any = None
-        self.process: subprocess.Popen | None = None
-        self._context: Any = None
-        self._monitor: Any = None
-        self.iopub_lost = False
-        self.on_iopub_lost: Callable[[], None] | None = None
-
-    def kernel_argv(self) -> list[str]:
-        """The kernel's command (``{connection_file}`` substituted by jupyter_client)."""
-        return kernel_command(self.limits)
-
-    def launch_options(self) -> dict[str, Any]:
-        """Further keyword arguments of the kernel's ``Popen`` (e.g. ``user``)."""
-        return {}
-
-    def manager_class(self) -> type:
-        """The jupyter_client kernel manager that launches it."""
-        from jupyter_client import AsyncKernelManager
-
-        return AsyncKernelManager
-
-    async def start(self) -> Any:
-        self.km = self.manager_class()(
-            kernel_name="eulertop-grader",
-            kernel_spec_manager=_kernel_spec_manager_class()(self.kernel_argv()),
-            transport="ipc", ip=str(self.control / "kernel"),
-            connection_file=str(self.control / "kernel.json"), autorestart=False,
-        )
-        with open(self.control / "kernel-stderr.txt", "wb") as stderr:
-            await self.km.start_kernel(
-                env=kernel_environment(self.workdir, self.control), cwd=str(self.workdir),
-                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=stderr,
-                **self.launch_options(),
-            )
-        self.process = self.km.provisioner.process
-        return await self._connect()
-
-    async def _connect(self) -> Any:
-        """Open the kernel manager's client's channels and wait until the kernel answers.
-
-        Every channel refuses messages over :data:`MAX_MESSAGE` (issue 11). Ready means a
-        ``kernel_info`` reply on the shell channel *and* a message on IOPub (so the
-        subscription is live and no output is lost); jupyter_client's ``wait_for_ready`` also
-        waits for 0.2 s of IOPub silence after that, a delay on every kernel start that the
-        grader does not need (messages are matched to their request by ``msg_id``).
-        """
-        import zmq
-        import zmq.asyncio
-
-        self._context = zmq.asyncio.Context()
-        # every channel's socket refuses a message over MAX_MESSAGE before reading it (the
-        # connection is dropped), and queues few: one kernel cannot fill the grader's memory
-        self._context.setsockopt(zmq.MAXMSGSIZE, MAX_MESSAGE)
-        self._context.setsockopt(zmq.RCVHWM, RECEIVE_QUEUE)
-        # a kernel handed out before it has bound its sockets refuses the first connection;
-        # ZeroMQ's default is to try again 100 ms later, which a fresh kernel would wait out
-        self._context.setsockopt(zmq.RECONNECT_IVL, RECONNECT_INTERVAL_MS)
-        self.kc = self.km.client(context=self._context)
-        # no heartbeat: the grader watches the kernel's process itself, and the heartbeat's
-        # thread cannot be stopped once its kernel is gone (its REQ socket's send waits for a
-        # peer forever: stop_channels() then never returned, and the run hung)
-        self.kc.start_channels(hb=False)
-        self._watch_iopub(zmq)
-        await self._ready(self.limits.total_timeout)
-        return self.kc
-
-    async def _ready(self, timeout: float) -> None:
-        from queue import Empty
-
-        deadline = time.monotonic() + timeout
-        while True:
-            msg_id = self.kc.kernel_info()
-            while True:  # this request's reply, or give up on it after a while
-                try:
-                    reply = await self.kc.get_shell_msg(timeout=0.5)
-                except Empty:
-                    reply = None
-                    break
-                if reply.get("parent_header", {}).get("msg_id") == msg_id:
-                    break
-            if reply is not None:
-                try:
-                    await self.kc.get_iopub_msg(timeout=0.25)
-                    return
-                except Empty:
-                    pass  # IOPub not subscribed yet: ask again
-            if self.exit_status() is not None:
-                raise RuntimeError("the kernel died before it answered")
-            if time.monotonic() > deadline:
-                raise RuntimeError(f"the kernel did not answer in {timeout:g} s")
-
-    def _watch_iopub(self, zmq: Any) -> None:
-        """Note when IOPub is severed (a message over MAX_MESSAGE was refused)."""
-        from zmq.utils.monitor import parse_monitor_message
-
-        self._monitor = self.kc.iopub_channel.socket.get_monitor_socket(zmq.EVENT_DISCONNECTED)
-
-        async def watch() -> None:
-            with contextlib.suppress(Exception):
-                parse_monitor_message(await self._monitor.recv_multipart())
-                self.iopub_lost = True
-                if self.on_iopub_lost is not None:
-                    self.on_iopub_lost()
-
-        self._watcher = asyncio.ensure_future(watch())
-
-    async def interrupt(self) -> None:
-        with contextlib.suppress(Exception):
-            await self.km.interrupt_kernel()
-
-    def exit_status(self) -> int | None:
-        return None if self.process is None else self.process.poll()
-
-    async def stop(self) -> None:
-        self.kill_group()
-        self._disconnect()
-        with contextlib.suppress(Exception):
-            if self.km is not None and self.km.has_kernel:
-                await asyncio.wait_for(self.km.shutdown_kernel(now=True), STOP_TIMEOUT)
-        with contextlib.suppress(Exception):
-            if self.km is not None:
-                await self.km.cleanup_resources()
-        self.reap()
-        with contextlib.suppress(Exception):
-            if self._context is not None:
-                self._context.destroy(linger=0)
-
-    def _disconnect(self) -> None:
-        """Stop watching IOPub and close the client's channels (the context stays)."""
-        with contextlib.suppress(Exception):
-            if getattr(self, "_watcher", None) is not None:
-                self._watcher.cancel()
-            if self._monitor is not None:
-                self.kc.iopub_channel.socket.disable_monitor()
-                self._monitor.close(linger=0)
-        with contextlib.suppress(Exception):
-            if self.kc is not None:
-                self.kc.stop_channels()
-
-    def kill_group(self) -> None:
-        """SIGKILL the kernel's process group (the kernel and what it started), if unreaped."""
-        if self.process is not None and self.process.returncode is None:
-            with contextlib.suppress(OSError):
-                os.killpg(self.process.pid, signal.SIGKILL)  # its own session: pgid == pid
-
-    def reap(self) -> None:
-        """Wait for the killed kernel so that no zombie is left."""
-        if self.process is not None:
-            with contextlib.suppress(Exception):
-                self.process.wait(timeout=STOP_TIMEOUT)
-
-
-@functools.cache
-def _kernel_spec_manager_class() -> type:
-    from jupyter_client.kernelspec import KernelSpec, KernelSpecManager
-
-    class GraderKernelSpecs(KernelSpecManager):
-        """Answers every kernel name with the grader's own Python kernel, run by ``argv``."""
-
-        def __init__(self, argv: list[str], **kw: Any) -> None:
-            super().__init__(**kw)
-            self._spec = KernelSpec(argv=argv, display_name="eulertop grader (Python 3)",
-                                    language="python", env={}, metadata={})
-
-        def get_kernel_spec(self, kernel_name: str) -> Any:
-            return self._spec
-
-    return GraderKernelSpecs
-
-
 # --------------------------------------------------------------------------------------------
 # One run
 
@@ -468,7 +197,7 @@ def execute_submission(
         Time, memory and output limits.
     kernel_factory : callable, optional
         ``(workdir, control, limits) -> KernelProcess``. Default: a kernel of its own in the
-        sandbox (:mod:`grader.sandbox`; a one-slot :class:`grader.kernel_pool.KernelPool`,
+        sandbox (:mod:`grader.sandbox`; a one-slot :class:`grader.kernels.pool.KernelPool`,
         nothing preloaded, closed at the end), or a :class:`LocalKernel` as ``sandbox`` says.
     sandbox : bool or None
         With the default factory only. None: sandboxed where a sandbox can be had, else not;
@@ -517,7 +246,7 @@ def _default_factory(sandbox: bool | None, stack: contextlib.ExitStack) -> Kerne
     found = sandboxes.probe() if sandbox else sandboxes.available()
     if found is None:
         return LocalKernel
-    from grader.kernel_pool import KernelPool
+    from grader.kernels.pool import KernelPool
 
     pool = stack.enter_context(KernelPool(1, prewarm=False, preload=(), sandbox=found))
     return pool.kernel
@@ -589,9 +318,9 @@ def _done(run: _Run) -> str:
 async def _cell_session(run: _Run, kernel: KernelProcess, channel: Any,
                         variables: tuple[str, ...]) -> str:
     """The cells, then the extraction, through a forked kernel's cell server
-    (:mod:`grader.cell_channel`): what :func:`_run_cell` and :func:`_extract` do through
+    (:mod:`grader.kernels.channel`): what :func:`_run_cell` and :func:`_extract` do through
     nbclient and a Jupyter client, with the same time limits and records."""
-    from grader.cell_channel import ChannelClosed
+    from grader.kernels.channel import ChannelClosed
 
     run.phase = "running"
     try:

@@ -16,7 +16,7 @@ them together and owns the run's bookkeeping:
 
 Kernels: unless ``execute`` is given, each submission runs in a *warm* kernel — forked, one
 fresh process per submission, from a per-slot zygote that has imported ipykernel, numpy, scipy
-and sympy once (:mod:`grader.kernel_pool`); ``cold_kernels`` (``--cold-kernels``) starts each
+and sympy once (:mod:`grader.kernels.pool`); ``cold_kernels`` (``--cold-kernels``) starts each
 kernel from scratch instead, as it is done automatically where ``fork`` is not available.
 
 Sandbox (issue 5): with the default execution, every zygote and kernel runs in a bubblewrap
@@ -391,9 +391,9 @@ def _plan(a: Assignment, found, out: Path, force: bool, sandboxed: bool = False,
 
     Each submission is read once here, safely (:func:`grader.submission_file.read_submission`:
     a regular file under ``max_bytes``), to hash it and to see what its code imports
-    (:func:`grader.kernel_pool.packages_imported`: what the zygotes preload); one that is not
+    (:func:`grader.kernels.preload.packages_imported`: what the zygotes preload); one that is not
     is recorded "invalid submission: <why>"."""
-    from grader.kernel_pool import packages_imported
+    from grader.kernels.preload import packages_imported
     from grader.notebook_load import json_shape
 
     to_run, to_write, kept, packages = [], [], [], set()
@@ -477,7 +477,7 @@ def grade_assignment(
     execute : callable, optional
         ``execute(path, variables, limits) -> Execution``; default
         :func:`grader.execute.execute_submission` with warm kernels
-        (:class:`grader.kernel_pool.KernelPool`, one slot per job).
+        (:class:`grader.kernels.pool.KernelPool`, one slot per job).
     progress : callable, optional
         Called with each record as it is written (from worker threads).
     on_plan : callable, optional
@@ -549,7 +549,7 @@ def grade_assignment(
         to_run, to_write, kept, packages = _plan(a, found, out, force, sandboxed,
                                        getattr(limits, "submission_bytes", DEFAULT_MAX_BYTES))
         jobs = jobs or os.cpu_count() or 1
-        from grader.kernel_pool import preload_for
+        from grader.kernels.preload import preload_for
 
         # the kernels' zygotes start first: they import while this process writes
         with _kernels(warm and bool(to_run) and cluster is None, min(jobs, len(to_run)),
@@ -607,11 +607,11 @@ WITHOUT_SANDBOX = ("eulertop grade: WARNING: grading WITHOUT a sandbox (--no-san
 
 
 def _sandbox(wanted: bool) -> Any:
-    """The run's isolation (:func:`grader.hosted.container.choose_tier`: a
+    """The run's isolation (:func:`grader.kernels.isolation.choose_tier`: a
     :class:`grader.sandbox.Sandbox` of the ``world`` or ``bwrap-per-kernel`` tier, or the
     ``container`` tier), or None when not ``wanted`` (which warns); :class:`UsageError` with
     the cause and its fix when wanted and there is none."""
-    from grader.hosted.container import choose_tier
+    from grader.kernels.isolation import choose_tier
     from grader.sandbox import SandboxUnavailable
 
     if not wanted:
@@ -689,11 +689,11 @@ def preflight(run: Execute, limits: Any) -> None:
 def _kernels(warm: bool, slots: int, sandbox: Any = None,
              preload: Sequence[str] | None = None) -> Iterator[Callable | None]:
     """The kernel factory of the run: a warm pool's (closed at the end), or None (default);
-    its zygotes import ``preload`` (:func:`grader.kernel_pool.preload_for`)."""
+    its zygotes import ``preload`` (:func:`grader.kernels.preload.preload_for`)."""
     if not warm:
         yield None
         return
-    from grader.kernel_pool import KernelPool
+    from grader.kernels.pool import KernelPool
     from grader.sandbox import run_folder
 
     with run_folder(), KernelPool(slots, sandbox=sandbox, preload=preload) as pool:

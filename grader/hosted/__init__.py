@@ -4,7 +4,7 @@
 Each platform has one module for its paths, metadata and results format
 (:mod:`grader.hosted.gradescope`, :mod:`grader.hosted.prairielearn`); both grade through
 :func:`grader.hosted.grading.grade_notebook`, which picks how the kernel is confined
-(:mod:`grader.hosted.container` where bubblewrap cannot start). ``eulertop package``
+(:mod:`grader.kernels.container` where bubblewrap cannot start). ``eulertop package``
 (:mod:`grader.hosted.package`) builds what each platform takes. ``docs/hosted.md`` describes the
 formats and the documents they follow.
 """

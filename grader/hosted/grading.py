@@ -3,7 +3,7 @@ finding the submitted notebook, and grading it through :func:`grader.pipeline.gr
 
 Isolation modes (``--sandbox``)
     ``auto`` (default): bubblewrap where it can start (:func:`grader.sandbox.available`), else
-    the container mode (:mod:`grader.hosted.container`). ``bwrap``: bubblewrap or nothing.
+    the container mode (:mod:`grader.kernels.container`). ``bwrap``: bubblewrap or nothing.
     ``container``: always the container mode. The mode used is stated in every result.
 """
 
@@ -65,7 +65,7 @@ def open_package(package: Path, assignment: str, root: Path,
     """The package's settings, its assignment (``package/assignment``) and limits — after the
     package and ``private`` were made the grader's own and ``root/results`` the grader's folder
     (the notebook, run as another user, can read neither the key nor write results)."""
-    from grader.hosted.container import protect
+    from grader.kernels.container import protect
 
     config = read_config(package)
     protect([package, *private])
@@ -91,7 +91,7 @@ def choose_isolation(mode: str = "auto", user: str | None = None) -> Isolation:
     """The isolation of ``mode`` (:data:`MODES`); :class:`HostedError` saying why there is none."""
     from grader import sandbox
     from grader.execute import execute_submission
-    from grader.hosted import container
+    from grader.kernels import container
 
     if mode not in MODES:
         raise HostedError(f"sandbox mode {mode!r}: expected one of {', '.join(MODES)}")

@@ -5,7 +5,7 @@ key and next to other students' kernels. Two layers (``docs/security.md`` has th
 and the attacks that test it):
 
 1. **Per slot, bubblewrap** (:meth:`Sandbox.command`) around the slot's zygote
-   (:mod:`grader.kernel_pool`, :mod:`grader.zygote`), always in a user namespace:
+   (:mod:`grader.kernels.pool`, :mod:`grader.kernels.zygote`), always in a user namespace:
 
    * read-only: ``/usr`` (and ``/bin``, ``/lib*``, ``/sbin`` as on the host), the running
      interpreter's prefixes and site-packages, the zygote with :mod:`world` and
@@ -40,8 +40,8 @@ Tiers (issue 22), chosen by :func:`probe` and named in every record (:meth:`Sand
     ``bwrap`` for each kernel's zygote (:attr:`Sandbox.per_kernel`), with only that kernel's
     control folder in it, read-only, its own ``/tmp`` and ``/dev/shm`` tmpfs, and the same
     seccomp filter; the memory of its processes together is watched from the grader
-    (:mod:`grader.kernel_pool`). The third tier, the container mode (as root where no user
-    namespace can be made: another uid and rlimits), is :mod:`grader.hosted.container`'s.
+    (:mod:`grader.kernels.pool`). The third tier, the container mode (as root where no user
+    namespace can be made: another uid and rlimits), is :mod:`grader.kernels.container`'s.
 
 Where no sandbox can be had, :func:`probe` raises :class:`SandboxUnavailable` with the cause and
 its fix (:mod:`grader.sandbox.host`): ``eulertop grade`` refuses with them unless

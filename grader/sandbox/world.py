@@ -1,6 +1,7 @@
 """One student, one disposable world: the namespaces a forked kernel makes for itself (issue 11).
 
-Run inside a slot's zygote (:mod:`grader.zygote`), in the child it forks for a kernel. This file
+Run inside a slot's zygote (:mod:`grader.kernels.zygote`), in the child it forks for a kernel.
+This file
 is bound alone into the sandbox next to the zygote and imports nothing but the standard
 library (and :mod:`seccomp` beside it).
 

@@ -1,4 +1,5 @@
-"""A forked kernel's cell server (grader/cell_server.py, grader/cell_channel.py) against a
+"""A forked kernel's cell server (grader/kernels/cell_server.py, grader/kernels/channel.py)
+against a
 Jupyter kernel.
 
 Reference: ipykernel itself. Every notebook here runs twice, in a cold
@@ -19,8 +20,9 @@ import nbformat
 import pytest
 from nbformat.v4 import new_code_cell, new_notebook
 
-from grader.execute import LocalKernel, execute_submission
-from grader.kernel_pool import KernelPool, fork_available
+from grader.execute import execute_submission
+from grader.kernels.local import LocalKernel
+from grader.kernels.pool import KernelPool, fork_available
 from grader.limits import Limits
 from grader.sandbox import fresh_folder, run_folder
 

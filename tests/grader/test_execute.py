@@ -17,7 +17,8 @@ from pathlib import Path
 
 import pytest
 
-from grader.execute import OUT_OF_TIME_GRACE, execute_submission, kernel_environment
+from grader.execute import OUT_OF_TIME_GRACE, execute_submission
+from grader.kernels.base import kernel_environment
 from grader.limits import Limits
 from tests.grader.golden import CANARY, FAULTS, odd_values
 

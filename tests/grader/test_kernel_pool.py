@@ -1,4 +1,4 @@
-"""Warm kernels forked from a zygote (grader/kernel_pool.py, grader/zygote.py).
+"""Warm kernels forked from a zygote (grader/kernels/pool.py, grader/kernels/zygote.py).
 
 References: the operating system's own account of each kernel — its pid, session, resource
 limits, ``prctl`` flags, environment, descriptors and working folder, read *inside* the kernel
@@ -25,9 +25,11 @@ import nbformat
 import pytest
 from nbformat.v4 import new_code_cell, new_notebook
 
-from grader import kernel_pool
-from grader.execute import LocalKernel, execute_submission, kernel_environment
-from grader.kernel_pool import FILE_BYTES, KernelPool, PooledKernel, fork_available
+from grader.execute import execute_submission
+from grader.kernels import pool as kernel_pool
+from grader.kernels.base import kernel_environment
+from grader.kernels.local import LocalKernel
+from grader.kernels.pool import FILE_BYTES, KernelPool, PooledKernel, fork_available
 from grader.limits import Limits
 from tests.grader.golden import CANARY
 
@@ -249,7 +251,7 @@ def test_zygotes_and_kernels_die_with_the_grader(tmp_path):
     script = textwrap.dedent(f"""\
         import json, sys, time
         sys.path.insert(0, {str(ROOT)!r})
-        from grader.kernel_pool import KernelPool
+        from grader.kernels.pool import KernelPool
         from grader.limits import Limits
         pool = KernelPool(2, preload=())
         forked = pool.slots[1].fork(Limits())

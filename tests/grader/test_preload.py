@@ -1,5 +1,5 @@
 """What the zygotes preload for a class: what its notebooks' code imports
-(grader/kernel_pool.py ``packages_imported``, ``preload_for``; grader/pipeline.py).
+(grader/kernels/pool.py ``packages_imported``, ``preload_for``; grader/pipeline.py).
 
 References: notebooks written here with known import lines, and ``sys.modules`` read inside a
 forked kernel (by the submission, before it imports anything itself).
@@ -18,7 +18,8 @@ from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook
 
 from grader import pipeline
 from grader.execute import execute_submission
-from grader.kernel_pool import KernelPool, packages_imported, preload_for
+from grader.kernels.pool import KernelPool
+from grader.kernels.preload import packages_imported, preload_for
 from grader.limits import Limits
 from tests.grader.test_pipeline import FakeExecute, _notebook
 
@@ -110,7 +111,7 @@ def assignment(tmp_path_factory) -> Path:
 
 def test_a_notebook_that_plots_runs_the_same_with_matplotlib_preloaded(tmp_path):
     """Same backend (the kernels' ``Agg``), same figures, same record as a Jupyter kernel."""
-    from grader.execute import LocalKernel
+    from grader.kernels.local import LocalKernel
 
     cells = ["import matplotlib.pyplot as plt\nfig, ax = plt.subplots()\nax.plot([1, 2, 3])\n"
              "plt.show()\nbackend = plt.get_backend()", "plt.figure()\nn = len(plt.get_fignums())"]

@@ -428,7 +428,7 @@ def test_the_largest_legal_notebook_stays_within_the_budget(tmp_path, clean_note
 # imports: prints the grader's peak memory over that start (MiB) and every record's status.
 _RUN = _PEAK + """
 from grader.pipeline import grade_assignment
-import grader.execute, grader.kernel_pool, grader.report.page  # imported before the count
+import grader.execute, grader.kernels.pool, grader.report.page  # imported before the count
 
 reset_peak()
 start = peak()

@@ -32,7 +32,7 @@ from nbformat.v4 import new_code_cell, new_notebook
 
 from eulertop.cli import main
 from grader.execute import OUT_OF_TIME_GRACE, execute_submission
-from grader.kernel_pool import FILE_BYTES, PROCESSES, KernelPool
+from grader.kernels.pool import FILE_BYTES, PROCESSES, KernelPool
 from grader.limits import Limits
 from grader.results import read_result
 from grader.sandbox import SCRATCH_BYTES, available

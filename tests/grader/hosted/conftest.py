@@ -99,7 +99,7 @@ def container_layout() -> list[str] | None:
 def kernel_uid(monkeypatch) -> int:
     """A uid of the tests' own for kernels (``$EULERTOP_KERNEL_USER``): no process of another
     user of this machine (``nobody``'s, say) is ever counted or killed as the kernel's."""
-    from grader.hosted.container import USER_VARIABLE, check_interpreter, kernel_user
+    from grader.kernels.container import USER_VARIABLE, check_interpreter, kernel_user
 
     if os.geteuid() != 0:
         pytest.skip("needs root: there is no other user to run the kernel as")

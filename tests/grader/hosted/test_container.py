@@ -10,8 +10,9 @@ import sys
 
 import pytest
 
-from grader.hosted import container, gradescope
+from grader.hosted import gradescope
 from grader.hosted.grading import HostedError, choose_isolation
+from grader.kernels import container
 from grader.pipeline import load_assignment
 
 needs_root = pytest.mark.skipif(os.geteuid() != 0, reason="only root has other users to be")

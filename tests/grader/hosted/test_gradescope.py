@@ -136,7 +136,7 @@ def test_no_process_of_the_notebook_outlives_it(hosted_hw, notebooks, public_tmp
     results, _ = run(layout(public_tmp, hosted_hw, json.dumps(nb).encode(), ALICE),
                      monkeypatch)
     assert results["score"] == hosted_hw.max_points("alice")  # the cell ran
-    from grader.hosted.container import processes_of
+    from grader.kernels.container import processes_of
 
     deadline = time.monotonic() + 5  # SIGKILLed: gone as soon as the kernel has ended it
     while processes_of(kernel_uid) and time.monotonic() < deadline:
@@ -158,7 +158,7 @@ HOPPER = (
 AFTER_THE_ENTRYPOINT = (
     "import sys, time\n"
     "from grader.hosted import gradescope\n"
-    "from grader.hosted.container import processes_of\n"
+    "from grader.kernels.container import processes_of\n"
     "status = gradescope.main([])\n"
     "seen = set()\n"
     "for _ in range(20):  # a second after it returned: long enough for a chain to show\n"
@@ -201,7 +201,7 @@ def test_a_chain_of_short_lived_processes_does_not_outlive_the_entrypoint(
 def test_a_python_other_users_cannot_run_is_named(public_tmp, kernel_uid, monkeypatch):
     import sys
 
-    from grader.hosted.container import check_interpreter, kernel_user
+    from grader.kernels.container import check_interpreter, kernel_user
 
     private = public_tmp / "private"
     private.mkdir(mode=0o700)
@@ -278,8 +278,8 @@ def test_a_package_without_its_assignment_says_so(hosted_hw, public_tmp, monkeyp
 
 
 def test_without_root_the_results_say_the_key_was_not_protected(monkeypatch):
-    from grader.hosted import container
     from grader.hosted.grading import choose_isolation
+    from grader.kernels import container
 
     monkeypatch.setattr(os, "geteuid", lambda: 1000)
     isolation = choose_isolation("container")

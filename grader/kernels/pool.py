@@ -3,7 +3,7 @@
 A cold kernel (:class:`grader.execute.LocalKernel`) spends about a second of CPU importing
 ipykernel, IPython, numpy, scipy and sympy before it runs a line of the submission; on two
 cores that alone caps the grader near nbgrader's speed. Here each worker slot owns a *zygote*
-(:mod:`grader.zygote`), a server that has done those imports once; a kernel is a ``fork`` of
+(:mod:`grader.kernels.zygote`), a server that has done those imports once; a kernel is a ``fork`` of
 it, which starts in milliseconds with the modules already in (copy-on-write) memory. Every
 submission still gets its own new process — fork semantics: a child that changes a module it
 inherited changes its own copy only — in its own session, with its own private working and
@@ -13,9 +13,9 @@ submission until the submission is moved into its (until then empty) working fol
 
 :class:`KernelPool` is the ``kernel_factory`` of :func:`grader.execute.execute_submission`:
 ``pool.kernel(workdir, control, limits) -> PooledKernel``. A pooled kernel is not a Jupyter
-kernel: it runs its cells in the IPython shell the zygote made (:mod:`grader.cell_server`),
+kernel: it runs its cells in the IPython shell the zygote made (:mod:`grader.kernels.cell_server`),
 and the grader talks to it over one Unix socket in its control folder
-(:mod:`grader.cell_channel`) — same cells, same error lines, same answers and limits as a cold
+(:mod:`grader.kernels.channel`) — same cells, same error lines, same answers and limits as a cold
 ipykernel (``tests/grader/test_cell_server.py`` runs both), at a fraction of the CPU. Launch,
 interrupt, kill and the exit status go through the zygote.
 
@@ -73,20 +73,20 @@ import json
 import math
 import os
 import queue
-import re
 import shutil
 import signal
 import socket
 import subprocess
 import sys
 import threading
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from grader.cell_channel import SOCKET_NAME, CellChannel, listen
-from grader.execute import LocalKernel, kernel_environment
+from grader.kernels.base import kernel_environment
+from grader.kernels.channel import SOCKET_NAME, CellChannel, listen
+from grader.kernels.local import LocalKernel
 from grader.limits import Limits
 from grader.sandbox import (
     SCRATCH,
@@ -113,10 +113,11 @@ __all__ = [
 ]
 
 ZYGOTE_SCRIPT = Path(__file__).with_name("zygote.py")
-WORLD_FILES = tuple(Path(__file__).parent / "sandbox" / f for f in ("world.py", "seccomp.py"))
+WORLD_FILES = tuple(Path(__file__).parent.parent / "sandbox" / f
+                    for f in ("world.py", "seccomp.py"))
 """Bound beside the zygote in the sandbox: each kernel's own namespaces and seccomp filter."""
 CELL_SERVER = Path(__file__).with_name("cell_server.py")
-"""What a forked kernel runs (:mod:`grader.cell_server`); bound beside the zygote."""
+"""What a forked kernel runs (:mod:`grader.kernels.cell_server`); bound beside the zygote."""
 
 ZYGOTE_START_TIMEOUT = 60.0
 """Seconds a zygote may take to import its modules (a loaded machine: several seconds)."""
@@ -134,53 +135,6 @@ PROCESSES = 64
 """Processes/threads a kernel may add to those its user has (``RLIMIT_NPROC``)."""
 
 
-PRELOADABLE: dict[str, tuple[str, ...]] = {
-    "numpy": ("numpy",),
-    "scipy": ("scipy", "scipy.linalg", "scipy.special", "scipy.integrate", "scipy.optimize"),
-    "sympy": ("sympy",),
-    "matplotlib": ("matplotlib", "matplotlib.pyplot"),
-}
-"""What a zygote may import for the class, by the package a notebook imports (numpy, scipy
-and sympy are the zygote's default, :data:`grader.zygote.PRELOAD`). Nothing else is ever
-preloaded: the list is fixed here, whatever a notebook names."""
-
-_IMPORT_LINE = re.compile(r"^\s*(?:from|import)\s+(.+)$", re.MULTILINE)
-_PACKAGE = re.compile(r"\b(" + "|".join(PRELOADABLE) + r")\b")
-
-
-def packages_imported(notebook: bytes) -> set[str]:
-    """Which of :data:`PRELOADABLE`'s packages a notebook's code cells import (``import`` and
-    ``from`` lines; the assignment's own Markdown names numpy and sympy, so only code counts).
-    A notebook that cannot be read gives none (the run itself will say what is wrong)."""
-    from grader.notebook_load import notebook_json
-
-    try:  # parsed within the limits every reader of a submission keeps
-        cells = notebook_json(notebook).get("cells", [])
-        code = "\n".join(
-            "".join(c["source"]) if isinstance(c["source"], list) else c["source"]
-            for c in cells if isinstance(c, dict) and c.get("cell_type") == "code")
-        lines = _IMPORT_LINE.findall(code)
-    except Exception:
-        return set()
-    return {name for line in lines for name in _PACKAGE.findall(line)}
-
-
-def preload_for(packages: Iterable[str]) -> tuple[str, ...]:
-    """The modules the zygotes import for a class whose notebooks import ``packages``
-    (:func:`packages_imported`): numpy always; scipy's, sympy's or matplotlib's modules if
-    asked for.
-
-    Every kernel then has them without importing them (sympy alone is 0.3 s of CPU a kernel;
-    a notebook drawing one figure took 0.5 s of CPU with ``import matplotlib.pyplot`` in the
-    kernel, 0.016 s with it preloaded), and a class that uses none of them does not make each
-    zygote pay for them (0.5 s of CPU at its start, and a larger process to fork for every
-    notebook). An import this does not see (``exec``, ``importlib``) only costs that kernel
-    the import; nothing else changes.
-    """
-    wanted = {"numpy", *packages}
-    return tuple(m for package in PRELOADABLE if package in wanted for m in PRELOADABLE[package])
-
-
 class ZygoteError(RuntimeError):
     """A zygote could not be started, died, or did not answer."""
 
@@ -192,7 +146,7 @@ def fork_available() -> bool:
 
 
 def child_limits(limits: Limits) -> dict[str, int]:
-    """The resource limits of a forked kernel (what :mod:`grader.zygote` applies).
+    """The resource limits of a forked kernel (what :mod:`grader.kernels.zygote` applies).
 
     ``as``: address space, ``limits.memory_bytes``; ``cpu``: CPU seconds, the whole-notebook
     limit plus :data:`CPU_MARGIN`; ``fsize``: :data:`FILE_BYTES`; ``nproc``: :data:`PROCESSES`
@@ -208,7 +162,8 @@ def zygote_command(die_with_parent: bool = False,
                    remove_own_folder: bool = True) -> list[str]:
     """The zygote's argv — the seam issue 5's sandbox wraps (module docstring).
 
-    ``preload``: the modules to import before forking (default :data:`grader.zygote.PRELOAD`;
+    ``preload``: the modules to import before forking (default
+    :data:`grader.kernels.zygote.PRELOAD`;
     what ipykernel itself needs to start is always imported). ``marker``: a ``--run=`` argument
     (the run folder's name) that the zygote ignores, so that the zygote and every kernel forked
     from it (same command line) can be found from outside. ``remove_own_folder``: the zygote
@@ -420,7 +375,7 @@ class _Forked:
     pid: int
     workdir: Path
     control: Path
-    listener: socket.socket  # grader.cell_channel.listen: the kernel connects to it
+    listener: socket.socket  # grader.kernels.channel.listen: the kernel connects to it
     limits: Limits
     sandboxed: bool = False  # workdir is inside the sandbox: not a path of this machine
     uid: int | None = None  # the uid of the slot's sandbox (as root)
@@ -689,7 +644,7 @@ class KernelPool:
         Hand out cold :class:`~grader.execute.LocalKernel` s only (also chosen automatically
         where :func:`fork_available` is false, or after a zygote failed to start).
     preload : sequence of str, optional
-        Modules each zygote imports (default :data:`grader.zygote.PRELOAD`: ipykernel,
+        Modules each zygote imports (default :data:`grader.kernels.zygote.PRELOAD`: ipykernel,
         IPython, numpy, scipy, sympy).
     sandbox : grader.sandbox.Sandbox, optional
         Run each slot's zygote, and so every kernel, in this sandbox (issues 5 and 11;

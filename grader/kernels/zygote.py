@@ -1,6 +1,7 @@
-"""The warm fork server ("zygote") of :mod:`grader.kernel_pool`: one per worker slot.
+"""The warm fork server ("zygote") of :mod:`grader.kernels.pool`: one per worker slot.
 
-Run by the grader as ``python grader/zygote.py`` (a script: this module imports nothing of the
+Run by the grader as ``python grader/kernels/zygote.py`` (a script: this module imports nothing
+of the
 grader, so nothing of the grader's state is in its memory), with the scrubbed kernel
 environment of :func:`grader.execute.kernel_environment`, never the grader's own. It
 
@@ -64,7 +65,7 @@ global random state), connects to the grader's socket ``S`` in its control folde
 own world, seals it: :func:`world.seal`), and serves the grader's requests there with its copy
 of the zygote's shell (:func:`cell_server.serve`): no Jupyter kernel is started — the cells run
 in the same IPython shell a Jupyter kernel runs them in, without its ZeroMQ channels, threads
-and start-up (:mod:`grader.cell_server`).
+and start-up (:mod:`grader.kernels.cell_server`).
 """
 
 from __future__ import annotations
@@ -98,7 +99,7 @@ WORLD_TIMEOUT = 10.0
 """Seconds a forked kernel may take to make its own world (mounts) before it is given up."""
 
 world = None  # grader/sandbox/world.py, bound beside this script in the sandbox
-cell_server = None  # grader/cell_server.py, beside this script (bound beside it in the sandbox)
+cell_server = None  # grader/kernels/cell_server.py, beside this script (and in the sandbox)
 shell = None  # the IPython shell every kernel runs its cells in (cell_server.make_shell)
 
 PR_SET_PDEATHSIG, PR_SET_DUMPABLE, PR_SET_CHILD_SUBREAPER = 1, 4, 36

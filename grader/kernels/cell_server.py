@@ -1,6 +1,6 @@
 """The cell server: what a kernel forked from a zygote runs instead of a Jupyter kernel.
 
-Bound beside :mod:`grader.zygote` (a script: like it, this module imports nothing of the
+Bound beside :mod:`grader.kernels.zygote` (a script: like it, this module imports nothing of the
 grader) and imported by it. The zygote makes one IPython shell (:func:`make_shell`) before
 its first fork; each forked kernel, once confined, connects to the grader's socket in its own
 control folder and runs what the grader sends (:func:`serve`) in its own copy of that shell —
@@ -23,7 +23,7 @@ says ``{"ready": true}``; then, for each request of the grader, in order::
 only when the code raised nothing, as ipykernel does). ``output``: characters the request
 printed or displayed — counted, never kept or sent, since output is never graded.
 Everything the kernel says is untrusted (it is the student's process): the grader bounds
-each line (:data:`grader.execute.MAX_MESSAGE`, read by :mod:`grader.cell_channel`) and
+each line (:data:`grader.execute.MAX_MESSAGE`, read by :mod:`grader.kernels.channel`) and
 matches replies by ``n``.
 
 Interrupts: SIGINT raises ``KeyboardInterrupt`` while a request runs and is ignored between

@@ -55,7 +55,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from grader.execute import LocalKernel
+from grader.kernels.local import LocalKernel
 from grader.limits import Limits
 
 USER_VARIABLE = "EULERTOP_KERNEL_USER"
@@ -459,7 +459,7 @@ def kernel_factory(user: KernelUser | None) -> Any:
 # The container mode as the third tier of ``eulertop grade`` (issue 22)
 
 
-def _free_uids() -> tuple[int, int] | None:
+def free_uids() -> tuple[int, int] | None:
     """A range ``(first, count)`` of uids that exist here and that no real user has, for
     kernels of their own: the sandbox's reserved range where it is mapped, else the part above
     10000 of the largest range a rootless container maps (at least 1000 uids); None if none."""
@@ -546,27 +546,3 @@ def private_folders(folders: Iterable[Path]) -> Iterator[list[Path]]:
                 os.chmod(folder, mode)
 
 
-def choose_tier() -> Any:
-    """The isolation ``eulertop grade`` uses here: :func:`grader.sandbox.probe`'s sandbox
-    (``world`` or ``bwrap-per-kernel``); else, as root where no user namespace can be made,
-    the :class:`ContainerTier`; else :class:`grader.sandbox.SandboxUnavailable` with the
-    cause and fix (the container mode's own obstacle added where it was tried)."""
-    from grader.sandbox import SandboxUnavailable, host, probe
-
-    try:
-        return probe()
-    except SandboxUnavailable as err:
-        refusal = err
-    if os.geteuid() != 0:
-        raise refusal
-    if refusal.diagnosis.kind == "missing" and host.userns_possible()[0]:
-        raise refusal  # a machine where bubblewrap would work: install it
-    uids = _free_uids()
-    why = ("this root has no other uid to give a kernel (its user namespace maps too few)"
-           if uids is None else check_interpreter(fresh_user(uids)))
-    if why is None:
-        return ContainerTier(uids, refusal.diagnosis.cause)
-    diagnosis = refusal.diagnosis
-    raise SandboxUnavailable(host.Diagnosis(
-        diagnosis.kind, f"{diagnosis.cause}; and the container mode cannot run here either: "
-        f"{why}", diagnosis.fix))

@@ -1,4 +1,4 @@
-"""The grader's end of a forked kernel's cell server (:mod:`grader.cell_server`).
+"""The grader's end of a forked kernel's cell server (:mod:`grader.kernels.cell_server`).
 
 The grader listens on a Unix socket in the kernel's private control folder
 (:func:`listen`) before asking the zygote to fork; the kernel connects once confined and says
@@ -20,7 +20,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from grader.execute import MAX_MESSAGE
+from grader.kernels.base import MAX_MESSAGE
 
 SOCKET_NAME = "s"
 """The listening socket's name in the control folder (a Unix socket path is ≤ 107 bytes)."""
