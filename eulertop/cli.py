@@ -16,7 +16,8 @@ from importlib import metadata
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "solve": ("solver.cli", "answer one rigid-body scene, or a JSON-lines batch of them"),
     "problems": ("problems.cli", "list the problem families, one line each"),
-    "generate": ("problems.cli", "generate an assignment: one notebook per student, and the key"),
+    "generate": ("eulertop.generate",
+                 "generate an assignment: one notebook per student, and the key"),
     "check": ("grader.cli", "run a notebook as the grader would: are its answers well formed?"),
     "grade": ("grader.cli", "grade every submission against the key: gradebook, feedback, summary"),
     "export": ("grader.lms.export", "write the gradebook Canvas, Moodle, Blackboard or Gradescope "

@@ -133,6 +133,7 @@ def _limits(args: argparse.Namespace):
 def run_grade(args: argparse.Namespace, execute=None) -> int:
     """Run ``eulertop grade``; ``execute`` replaces the execution stage (tests, benchmarks)."""
     from grader.gradebook import summary_table
+    from grader.lms.registry import CLASS_LISTS
     from grader.pipeline import UsageError, grade_assignment
     from grader.plain_text import printable
     from grader.progress import Progress
@@ -140,7 +141,7 @@ def run_grade(args: argparse.Namespace, execute=None) -> int:
 
     try:
         class_list = () if getattr(args, "roster", None) is None else \
-            read_roster(args.roster, args.roster_format).rows
+            read_roster(args.roster, args.roster_format, CLASS_LISTS).rows
         report = grade_assignment(
             args.hw, args.submissions, args.out, limits=_limits(args), jobs=args.jobs,
             force=args.force, reveal=args.reveal, execute=execute,

@@ -53,9 +53,9 @@ from pathlib import Path
 from typing import Any
 
 from grader.compare import KeyAnswer
-from grader.discover import Submission
 from grader.results import StudentResult
 from grader.submission_file import DEFAULT_MAX_BYTES, InvalidSubmission, read_submission
+from grader.submissions import Submission
 
 INSTALL = ("--cluster needs Dask distributed, which is not installed: "
            "pip install 'eulertop[cluster]'")

@@ -24,47 +24,11 @@ notebooks are reported.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 
-SUFFIX = ".ipynb"
+from grader.submissions import SUFFIX, Discovery, Problem, Submission
 
-
-@dataclass(frozen=True)
-class Submission:
-    """The one notebook submitted by a roster student."""
-
-    student_id: str
-    path: Path
-    late: bool = False  # the LMS marked it late (grader/lms)
-    source: str = ""  # how an LMS download matched it to the student (grader/lms)
-
-
-@dataclass(frozen=True)
-class Problem:
-    """Something in SUBMISSIONS that cannot be graded as it stands.
-
-    ``student_id`` is the roster id it concerns, or None when it concerns no roster student.
-    ``ignored`` marks a stray file that is not a submission at all (reported, not counted as
-    an ungraded submission).
-    """
-
-    path: Path
-    message: str
-    student_id: str | None = None
-    ignored: bool = False
-
-
-@dataclass(frozen=True)
-class Discovery:
-    """The submissions folder sorted out (module docstring); tuples in roster / name order."""
-
-    submissions: tuple[Submission, ...]
-    missing: tuple[str, ...]
-    problems: tuple[Problem, ...]
-    notes: tuple[str, ...] = ()  # what an LMS download's matching decided (late, newest …)
-    layout: str = "folder"  # or the LMS whose bulk download it was (grader/lms)
-    set_aside: tuple[Problem, ...] = ()  # files matched to a student and not graded, and why
     # (older uploads, several notebooks, entries refused from an archive): submissions.csv
 
 
@@ -130,7 +94,7 @@ def discover(folder: Path, roster_ids: Sequence[str],
         (:attr:`grader.lms.archive.Extraction.refused`): the student such a file would be the
         submission of gets an invalid submission saying why; everyone else is unaffected.
     """
-    from grader.lms.download import discover_download
+    from grader.lms.registry import discover_download
 
     refused = refused or {}
     lms = discover_download(Path(folder), roster_rows or [{"id": s} for s in roster_ids],

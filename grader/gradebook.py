@@ -23,10 +23,10 @@ import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from grader.discover import Problem
 from grader.plain_text import printable
 from grader.results import StudentResult
 from grader.statement_html import statement_html
+from grader.submissions import Problem
 
 MAX_SHOWN = 400
 """Characters of a submitted value or message shown before it is cut (the record keeps all)."""

@@ -62,7 +62,7 @@ from pathlib import Path
 from typing import Any
 
 from grader.compare import KeyAnswer, compare, key_answers, variable_names
-from grader.discover import Problem, Submission, discover
+from grader.discover import discover
 from grader.gradebook import (
     answers_rows,
     feedback_html,
@@ -79,6 +79,7 @@ from grader.results import (
     write_result,
 )
 from grader.submission_file import DEFAULT_MAX_BYTES, InvalidSubmission, read_submission
+from grader.submissions import Problem, Submission
 
 RESULTS, FEEDBACK, GRADES, LOCK = "results", "feedback", "grades.csv", ".lock"
 ANSWERS, DOWNLOAD, LMS_SUBMISSIONS = "answers.csv", "download", "submissions.csv"

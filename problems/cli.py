@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 
 def add_problems_arguments(parser: argparse.ArgumentParser) -> None:
@@ -64,8 +66,9 @@ def _progress(done: int, total: int) -> None:
         print(f"\r  {done}/{total} students", end=end, file=sys.stderr, flush=True)
 
 
-def run_generate(args: argparse.Namespace) -> int:
-    """Run ``eulertop generate``; see ``problems.generate`` for what it writes."""
+def run_generate(args: argparse.Namespace, class_lists: Mapping[str, Any] | None = None) -> int:
+    """Run ``eulertop generate``; see ``problems.generate`` for what it writes. ``class_lists``:
+    the LMS class-list formats a roster may be (:func:`problems.roster.read_roster`)."""
     from problems.generate import (
         GenerateError,
         TemplateError,
@@ -87,7 +90,7 @@ def run_generate(args: argparse.Namespace) -> int:
             if args.roster is None:
                 raise GenerateError("--roster CSV is required (or --reroll ID on an existing HW)")
             problems = None if args.problems is None else args.problems.split(",")
-            roster = read_roster(args.roster, getattr(args, "roster_format", None))
+            roster = read_roster(args.roster, getattr(args, "roster_format", None), class_lists)
             for note in roster.notes:
                 print(f"eulertop generate: {note}", file=sys.stderr)
             summary = generate_assignment(

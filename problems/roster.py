@@ -23,8 +23,10 @@ from __future__ import annotations
 import csv
 import io
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 ID_COLUMN = "id"
 MAX_ID_LENGTH = 100
@@ -104,7 +106,8 @@ ROSTER_FORMATS = ("eulertop", "canvas", "moodle", "blackboard", "gradescope")
 """``--roster-format`` values: ``eulertop`` is the CSV with a column ``id``."""
 
 
-def read_roster(path: Path | str, roster_format: str | None = None) -> Roster:
+def read_roster(path: Path | str, roster_format: str | None = None,
+                class_lists: Mapping[str, Any] | None = None) -> Roster:
     """Read and check a roster CSV.
 
     Parameters
@@ -117,6 +120,10 @@ def read_roster(path: Path | str, roster_format: str | None = None) -> Roster:
     roster_format : str, optional
         One of :data:`ROSTER_FORMATS`; default: recognised from the header (an LMS's class
         list when its columns are there, else a column ``id``).
+    class_lists : mapping, optional
+        The LMS class-list formats, by ``--roster-format`` name
+        (:data:`grader.lms.registry.CLASS_LISTS`, passed in by the front ends: the formats are
+        the grader's, a floor above this one); without them only an eulertop roster is read.
 
     Returns
     -------
@@ -141,7 +148,7 @@ def read_roster(path: Path | str, roster_format: str | None = None) -> Roster:
         header = next((r for r in reader if any(f.strip() for f in r)), None)
         if header is None:
             raise RosterError(f"{path}: the roster is empty (expected a header with a column 'id')")
-        lms = _lms_format(path, header, roster_format)
+        lms = _lms_format(path, header, roster_format, class_lists or {})
         if lms is not None:
             return _read_class_list(path, reader, header, lms)
         columns = _columns(f"{path}, line {reader.line_num}", header)
@@ -154,15 +161,17 @@ def read_roster(path: Path | str, roster_format: str | None = None) -> Roster:
     return Roster(columns=columns, rows=tuple(rows))
 
 
-def _lms_format(path: Path, header: list[str], roster_format: str | None):
-    """The LMS class-list format of ``header`` (None: an eulertop roster)."""
-    from grader.lms.registry import CLASS_LISTS
-
+def _lms_format(path: Path, header: list[str], roster_format: str | None,
+                class_lists: Mapping[str, Any]):
+    """The LMS class-list format of ``header`` among ``class_lists`` (None: an eulertop
+    roster)."""
     if roster_format == "eulertop":
         return None
     if roster_format is None:
-        return next((f for f in CLASS_LISTS.values() if f.matches(header)), None)
-    fmt = CLASS_LISTS[roster_format]
+        return next((f for f in class_lists.values() if f.matches(header)), None)
+    if roster_format not in class_lists:
+        raise RosterError(f"{path}: the {roster_format} class-list format is not known here")
+    fmt = class_lists[roster_format]
     if not fmt.matches(header):
         found = ", ".join(repr(c.strip()) for c in header)
         raise RosterError(f"{path}, line 1: not a {fmt.label}: it needs the columns "
@@ -172,8 +181,6 @@ def _lms_format(path: Path, header: list[str], roster_format: str | None):
 
 def _read_class_list(path: Path, reader, header: list[str], fmt) -> Roster:
     """An LMS class list (module docstring): rows that are students, each with its ``id``."""
-    from grader.lms.classlist import describe_fallbacks
-
     keep = [i for i, c in enumerate(header) if c.strip()]
     columns = [header[i].strip() for i in keep]
     seen = sorted({c for c in columns if columns.count(c) > 1})
@@ -197,7 +204,7 @@ def _read_class_list(path: Path, reader, header: list[str], fmt) -> Roster:
         raise RosterError(f"{path}: the {fmt.label} lists no students")
     where = " or ".join(repr(c) for c in fmt.id_columns)
     _check_ids(path, rows, lines, column=f"{where} (the student id of a {fmt.label})")
-    notes += describe_fallbacks(fmt, columns, used)
+    notes += fmt.describe_fallbacks(columns, used)
     names = ("id", *(c for c in columns if c != "id"))
     return Roster(columns=names, rows=tuple(rows), format=fmt.name, notes=tuple(notes))
 

@@ -18,10 +18,10 @@ from pathlib import Path
 from typing import Any
 
 from grader.compare import key_answers
-from grader.discover import Submission
 from grader.limits import Limits
 from grader.pipeline import Assignment, grade_one, load_assignment
 from grader.results import StudentResult
+from grader.submissions import Submission
 
 MODES = ("auto", "bwrap", "container")
 

@@ -86,6 +86,11 @@ class ClassListFormat:
     def matches(self, header: Sequence[str]) -> bool:
         return has_columns(header, self.required)
 
+    def describe_fallbacks(self, header: Sequence[str],
+                           used: Sequence[tuple[str, int]]) -> list[str]:
+        """:func:`describe_fallbacks` of this format."""
+        return describe_fallbacks(self, header, used)
+
     def student_id(self, row: Mapping[str, str]) -> tuple[str, str]:
         """``(id, column it came from)``; ``("", "")`` when every id column is empty."""
         for column in self.id_columns:

@@ -30,10 +30,9 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from types import ModuleType
 
-from grader.discover import Discovery, Problem, Submission
 from grader.lms.classlist import cell, fold
+from grader.submissions import Discovery, Problem, Submission
 
 NOTEBOOK = ".ipynb"
 SYSTEM_FILES = frozenset({".ds_store", "thumbs.db", "desktop.ini", "__macosx"})
@@ -133,25 +132,6 @@ def files_under(folder: Path) -> list[Path]:
     return out
 
 
-def _roots(folder: Path) -> list[Path]:
-    """``folder``, then its only sub-folder (if it has exactly one)."""
-    children = [c for c in folder.iterdir() if not is_system_file(c) and not c.name.startswith(".")]
-    only = children[0] if len(children) == 1 and children[0].is_dir() \
-        and not children[0].is_symlink() else None
-    return [folder] + ([only] if only else [])
-
-
-def layout(folder: Path) -> ModuleType | None:
-    """The LMS module that recognises the most entries of ``folder`` (ties: registry order), or
-    None when none recognises any (module docstring)."""
-    from grader.lms.registry import LMS
-
-    entries = [e for e in folder.iterdir() if not is_system_file(e)]
-    counts = {m: sum(map(m.recognises, entries)) for m in LMS.values()}
-    best = max(counts, key=counts.get, default=None)
-    return best if best is not None and counts[best] else None
-
-
 def settle(student_ids: Sequence[str], matched: Matched,
            refused: Mapping[Path, str] | None = None) -> Discovery:
     """The module docstring's rules, applied to what an LMS module found.
@@ -207,18 +187,6 @@ def _choose(sid: str, found: list[Candidate]) -> tuple[Candidate | None, str]:
     older = ", ".join(label(c) for c in ordered[:-1])
     return ordered[-1], (f"{sid}: {len(found)} notebooks; graded the newest, "
                          f"{label(ordered[-1])} (not {older})")
-
-
-def discover_download(folder: Path, student_rows: Sequence[Mapping[str, str]],
-                      refused: Mapping[Path, str] | None = None) -> Discovery | None:
-    """The discovery of an LMS download in ``folder``, or None when it is no LMS's layout."""
-    students = Students(student_rows)
-    for root in _roots(folder):
-        module = layout(root)
-        found = module.match_download(root, students) if module else None
-        if found is not None:
-            return settle(students.ids, found, refused)
-    return None
 
 
 def submissions_table(found: Discovery, root: Path) -> list[list[str]]:

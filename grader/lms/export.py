@@ -55,9 +55,10 @@ def _rows(assignment, roster_path: Path | None, roster_format: str | None) -> tu
     """The roster rows of the assignment's students, from ``--roster`` when given."""
     if roster_path is None:
         return assignment.rows
+    from grader.lms.registry import CLASS_LISTS
     from problems.roster import read_roster
 
-    roster = read_roster(roster_path, roster_format)
+    roster = read_roster(roster_path, roster_format, CLASS_LISTS)
     by_id = {r["id"]: r for r in roster.rows}
     absent = [sid for sid in assignment.ids if sid not in by_id]
     if absent:

@@ -23,7 +23,6 @@ import re
 from datetime import datetime
 from pathlib import Path
 
-from grader.discover import Problem
 from grader.lms.classlist import ClassListFormat, Grades, ImportError_, cell
 from grader.lms.download import (
     NOTEBOOK,
@@ -33,6 +32,7 @@ from grader.lms.download import (
     files_under,
     is_system_file,
 )
+from grader.submissions import Problem
 
 CLASS_LIST = ClassListFormat(
     name="gradescope",

@@ -282,8 +282,8 @@ def test_a_task_that_kills_its_worker_is_resubmitted(klass, local_run, tmp_path,
 
     from grader.cluster import grade_on_cluster
     from grader.compare import key_answers
-    from grader.discover import Submission
     from grader.pipeline import load_assignment
+    from grader.submissions import Submission
 
     hw, subs = klass
     marker = tmp_path / "died"

@@ -11,7 +11,6 @@ from pathlib import Path
 import pytest
 
 from grader.compare import compare, key_answers
-from grader.discover import Problem
 from grader.gradebook import (
     answer_counts,
     feedback_html,
@@ -21,6 +20,7 @@ from grader.gradebook import (
     summary_table,
 )
 from grader.results import StudentResult
+from grader.submissions import Problem
 from problems.generate import generate_assignment
 from problems.roster import Roster
 from problems.templates import FAMILIES

@@ -112,9 +112,9 @@ def test_the_key_reader_would_get_every_point_with_the_key(hosted_hw, notebooks,
     of 0 above means the key was out of reach, not that the notebook was broken."""
     from functools import partial
 
-    from grader.discover import Submission
     from grader.execute import execute_submission
     from grader.pipeline import grade_one
+    from grader.submissions import Submission
 
     key = hosted_hw.folder / "key.json"
     path = public_tmp / "alice.ipynb"
