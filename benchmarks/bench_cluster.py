@@ -70,7 +70,7 @@ def dask_overhead(tasks: list[tuple]) -> tuple[float, float]:
     """(seconds to start and stop a 2-worker LocalCluster, seconds per no-op task)."""
     from distributed import as_completed
 
-    from grader.cluster import cluster_client
+    from grader.executors.dask import cluster_client
 
     start = time.perf_counter()
     with cluster_client("local:2") as client:
@@ -104,7 +104,9 @@ def client_cost(hw: Path, graded: Path) -> tuple[float, float]:
     """Seconds per student of the grader process's own work, whatever the cluster: a record
     that came back as JSON made into its result file and feedback page (``_publish``), and
     the final rebuild of the gradebook and every page (``_rebuild``), into a scratch folder."""
-    from grader.pipeline import FEEDBACK, RESULTS, _publish, _rebuild, load_assignment
+    from grader.assignment import load_assignment
+    from grader.graded_folder import FEEDBACK, RESULTS
+    from grader.pipeline import _publish, _rebuild
     from grader.results import StudentResult, read_result
 
     a = load_assignment(hw)
@@ -139,8 +141,8 @@ def main(argv: list[str] | None = None) -> int:
     except ImportError:
         print("bench_cluster: needs pip install 'eulertop[cluster]'", file=sys.stderr)
         return 2
+    from grader.assignment import load_assignment
     from grader.compare import key_answers
-    from grader.pipeline import load_assignment
 
     n = args.students
     with tempfile.TemporaryDirectory() as folder:

@@ -293,7 +293,7 @@ def run_demo(args: argparse.Namespace) -> int:
     expected = hand_in(out)
     print(f"{len(list((out / SUBMISSIONS).glob('*.ipynb')))} notebooks handed in")
     _step(f"3/4 grading (time limit {args.timeout:g} s per notebook; progress below)")
-    from grader.pipeline import UsageError
+    from grader.assignment import UsageError
 
     try:
         run = grade(out, args.timeout, args.jobs)

@@ -132,9 +132,11 @@ def _limits(args: argparse.Namespace):
 
 def run_grade(args: argparse.Namespace, execute=None) -> int:
     """Run ``eulertop grade``; ``execute`` replaces the execution stage (tests, benchmarks)."""
+    from grader.assignment import UsageError
     from grader.gradebook import summary_table
+    from grader.graded_folder import graded_folder
     from grader.lms.registry import CLASS_LISTS
-    from grader.pipeline import UsageError, grade_assignment
+    from grader.pipeline import grade_assignment
     from grader.plain_text import printable
     from grader.progress import Progress
     from problems.roster import RosterError, read_roster
@@ -163,7 +165,7 @@ def run_grade(args: argparse.Namespace, execute=None) -> int:
             os._exit(130)  # abandoned kernels' threads: do not wait for them at exit
         return 130
     print(printable(summary_table(report.results, report.problems)), end="")
-    out = args.out or args.hw / "graded"
+    out = graded_folder(args.hw, args.out)
     kept = f"; {len(report.unchanged)} unchanged, kept (--force regrades)" if report.unchanged \
         else ""
     print(f"wrote {out / 'grades.csv'}, {out / 'results'}/, {out / 'feedback'}/, "

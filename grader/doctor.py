@@ -137,9 +137,10 @@ def _start_one_kernel(tier: object) -> tuple[bool, str]:
     """Start one kernel of ``tier`` as ``eulertop grade`` starts a student's, and run a cell."""
     from functools import partial
 
+    from grader.assignment import UsageError
     from grader.execute import execute_submission
     from grader.limits import Limits
-    from grader.pipeline import UsageError, preflight
+    from grader.pipeline import preflight
     from grader.sandbox import run_folder
 
     start = time.monotonic()

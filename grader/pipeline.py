@@ -45,7 +45,6 @@ inside SUBMISSIONS (:func:`require_out_outside`), where the gradebook would beco
 
 from __future__ import annotations
 
-import fcntl
 import hashlib
 import json
 import os
@@ -53,22 +52,35 @@ import shutil
 import sys
 import threading
 from collections.abc import Callable, Iterator, Mapping, Sequence, Set
-from concurrent.futures import ThreadPoolExecutor, wait
 from contextlib import ExitStack, contextmanager, suppress
 from dataclasses import dataclass
-from datetime import UTC, datetime
 from functools import partial
 from pathlib import Path
 from typing import Any
 
-from grader.compare import KeyAnswer, compare, key_answers, variable_names
+from grader.assignment import Assignment, UsageError, load_assignment
+from grader.compare import key_answers
 from grader.discover import discover
+from grader.executors import Interrupted
+from grader.executors.local import run_local, warm_kernels
+from grader.grade_one import Execute, ungraded_result
 from grader.gradebook import (
     answers_rows,
     feedback_html,
     gradebook_csv,
     gradebook_rows,
     ran_code,
+)
+from grader.graded_folder import (
+    ANSWERS,
+    DOWNLOAD,
+    FEEDBACK,
+    GRADES,
+    LMS_SUBMISSIONS,
+    REPORT,
+    RESULTS,
+    graded_folder,
+    run_lock,
 )
 from grader.lms.classlist import merge_rows
 from grader.results import (
@@ -80,49 +92,6 @@ from grader.results import (
 )
 from grader.submission_file import DEFAULT_MAX_BYTES, InvalidSubmission, read_submission
 from grader.submissions import Problem, Submission
-
-RESULTS, FEEDBACK, GRADES, LOCK = "results", "feedback", "grades.csv", ".lock"
-ANSWERS, DOWNLOAD, LMS_SUBMISSIONS = "answers.csv", "download", "submissions.csv"
-
-Execute = Callable[[Path, Sequence[str], Any], Any]
-"""``execute_submission(path, variables, limits) -> Execution`` (grader/API.md)."""
-
-
-class UsageError(Exception):
-    """The run cannot start (no assignment, no key, unreadable folder); nothing was written."""
-
-
-class RunInProgress(UsageError):
-    """Another grading run holds the output folder's lock."""
-
-
-class Interrupted(KeyboardInterrupt):
-    """Ctrl-C: the run stopped; ``graded`` of ``total`` submissions have their records. Those
-    in flight were stopped and have none (the next run grades them)."""
-
-    def __init__(self, graded: int, total: int) -> None:
-        super().__init__(f"{graded} of {total} graded")
-        self.graded, self.total = graded, total
-
-
-@dataclass(frozen=True)
-class Assignment:
-    """What grading needs from ``HW``: the roster, each student's public questions, the key."""
-
-    folder: Path
-    title: str
-    columns: tuple[str, ...]
-    rows: tuple[dict, ...]
-    questions: tuple[int, ...]
-    students: dict  # assignment.json "students": id -> {"questions": [public question, ...]}
-    key: dict       # key.json
-
-    @property
-    def ids(self) -> tuple[str, ...]:
-        return tuple(r["id"] for r in self.rows)
-
-    def key_hash(self, student_id: str) -> str:
-        return self.key["students"][student_id]["hash"]
 
 
 @dataclass(frozen=True)
@@ -148,198 +117,12 @@ class RunReport:
 # inputs
 
 
-def _read_json(path: Path, what: str) -> dict:
-    if not path.is_file():
-        raise UsageError(f"{path}: no {what} here (is this an assignment folder written by "
-                         "'eulertop generate'?)")
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
-        raise UsageError(f"{path}: cannot read the {what}: {e}") from None
-
-
-def load_assignment(hw: Path) -> Assignment:
-    """Read ``HW/assignment.json`` and ``HW/key.json``; :class:`UsageError` if unusable."""
-    hw = Path(hw)
-    if not hw.is_dir():
-        raise UsageError(f"{hw}: no such assignment folder")
-    manifest = _read_json(hw / "assignment.json", "assignment manifest (assignment.json)")
-    key = _read_json(hw / "key.json", "answer key (key.json)")
-    try:
-        rows = tuple(manifest["roster"]["rows"])
-        students = manifest["students"]
-        absent = [r["id"] for r in rows if r["id"] not in key["students"]
-                  or r["id"] not in students]
-        questions = tuple(range(1, len(manifest["problems"]) + 1))
-        columns = tuple(manifest["roster"]["columns"])
-        title = manifest.get("title", hw.name)
-    except (KeyError, TypeError) as e:
-        raise UsageError(f"{hw}: assignment.json or key.json is not in the generator's "
-                         f"layout (no {e})") from None
-    if absent:
-        raise UsageError(f"{hw}: key.json has no entry for {', '.join(absent)}; regenerate "
-                         "the assignment")
-    return Assignment(hw, title, columns, rows, questions, students, key)
-
-
-def file_sha256(path: Path) -> str:
-    """SHA-256 (hex) of a file's bytes."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
-def claimed_student(path: Path) -> str | None:
-    """The student id a notebook's own metadata names, if any — only ever *reported*.
-
-    The generator writes ``metadata["eulertop"]["student"]``; ``"student_id"`` is accepted too.
-    Anything unreadable gives None (the execution stage reports what is wrong with the file);
-    it is parsed within the limits of :func:`grader.notebook_load.notebook_json`.
-    """
-    from grader.notebook_load import notebook_json
-
-    try:
-        meta = notebook_json(Path(path).read_bytes())["metadata"]["eulertop"]
-        claim = meta.get("student", meta.get("student_id"))
-    except Exception:
-        return None
-    return claim if isinstance(claim, str) else None
-
-
-def now() -> str:
-    """The ``graded_at`` stamp: UTC, to the second."""
-    return datetime.now(UTC).isoformat(timespec="seconds")
-
-
 # --------------------------------------------------------------------------------------------
 # one student
 
 
-def _execution_record(execution: Any) -> dict:
-    # no duration: it differs on every run, and graded_at is the record's one volatile field
-    record = {"status": execution.status, "message": execution.message,
-              "cell_errors": list(execution.cell_errors),
-              "output_truncated": execution.output_truncated}
-    if getattr(execution, "retry", False):
-        record["retry"] = True
-    if getattr(execution, "isolation", ""):
-        record["isolation"] = execution.isolation
-    return record
-
-
-def grade_submission(
-    submission: Submission,
-    expected: Sequence[KeyAnswer],
-    key_sha256: str,
-    execute: Execute,
-    limits: Any,
-    sha256: str | None = None,
-) -> StudentResult:
-    """Execute one submission, compare its answers, and make its record; never raises.
-
-    A notebook that cannot be loaded (``SubmissionError``), a kernel that dies, a time-out, or a
-    grader fault on this one file gives a ``failed`` record saying so, with no points.
-    """
-    from grader.notebook_load import SubmissionError
-
-    sha256 = sha256 or file_sha256(submission.path)
-    notes = []
-    fault = False  # the grader's own failure, not the student's: graded again next time
-    claim = claimed_student(submission.path)
-    if claim is not None and claim != submission.student_id:
-        notes.append(f"note: the notebook's metadata names student {claim!r}; it was graded as "
-                     f"{submission.student_id!r}, from its file name")
-    try:
-        execution = execute(submission.path, variable_names(expected), limits)
-    except SubmissionError as e:
-        execution = None
-        notes.insert(0, f"not a valid notebook: {e}")
-    except Exception as e:  # one student's fault must not stop the others
-        execution = None
-        fault = True
-        notes.insert(0, f"the grader could not run this notebook ({type(e).__name__}: {e})")
-    extracted = execution.answers if execution is not None else {}
-    answers = compare(expected, extracted)
-    if execution is not None and (execution.status != "ok" or not extracted):
-        notes.insert(0, execution.message or f"execution status {execution.status}")
-    return StudentResult(
-        student_id=submission.student_id,
-        status="graded" if extracted else "failed",  # fail closed: nothing read, nothing given
-        message="\n".join(notes),
-        answers=answers,
-        points=sum(a.verdict.points for a in answers),
-        max_points=sum(k.answer.points for k in expected),
-        submission_sha256=sha256,
-        key_sha256=key_sha256,
-        execution=(_execution_record(execution) if execution is not None else
-                   {"retry": True} if fault else {}),
-        sandboxed=bool(getattr(execution, "sandboxed", False)),
-        graded_at=now(),
-    )
-
-
-def ungraded_result(
-    student_id: str, status: str, message: str, expected: Sequence[KeyAnswer], key_sha256: str
-) -> StudentResult:
-    """The record of a student with no gradable submission (missing, or ambiguous)."""
-    answers = compare(expected, None)
-    return StudentResult(student_id, status, message, answers, 0.0,
-                         sum(k.answer.points for k in expected), None, key_sha256, {}, False,
-                         now())
-
-
 # --------------------------------------------------------------------------------------------
 # the run
-
-
-@contextmanager
-def run_lock(out: Path) -> Iterator[None]:
-    """Hold ``OUT/.lock`` (``fcntl.flock``) for the run, or raise :class:`RunInProgress`.
-
-    The file is removed when the run ends. Removing a lock file races with a run that opened it
-    just before: that run could then lock the removed file while a third run creates and locks
-    a new one. So a run that gets the lock checks that the path still names the file it locked
-    (same device and inode) and otherwise opens it again; the holder removes it only while it
-    still holds the lock.
-    """
-    path = out / LOCK
-    for _ in range(100):
-        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            holder = os.pread(fd, 64, 0).decode(errors="replace").strip()
-            os.close(fd)
-            who = f" (pid {holder})" if holder.isdigit() else ""
-            raise RunInProgress(f"{out}: another 'eulertop grade' run{who} is in progress on "
-                                "this folder; wait for it to finish") from None
-        if _same_file(fd, path):
-            break
-        os.close(fd)  # locked a file that its holder removed meanwhile: take the new one
-    else:
-        raise RunInProgress(f"{out}: cannot take the lock {path} (it keeps being replaced)")
-    try:
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, str(os.getpid()).encode(), 0)
-        yield
-    finally:
-        try:
-            if _same_file(fd, path):
-                os.unlink(path)
-        finally:
-            os.close(fd)  # releases the lock
-
-
-def _same_file(fd: int, path: Path) -> bool:
-    """Does ``path`` still name the open file ``fd``?"""
-    try:
-        st = os.stat(path)
-    except FileNotFoundError:
-        return False
-    mine = os.fstat(fd)
-    return (st.st_dev, st.st_ino) == (mine.st_dev, mine.st_ino)
 
 
 def require_out_outside(out: Path, submissions: Path) -> None:
@@ -493,7 +276,7 @@ def grade_assignment(
         Rows of an LMS class list (``grade --roster``) whose columns are added to the
         roster's, by student id, to match an LMS download (:func:`grader.lms.classlist.merge_rows`).
     cluster : str, optional
-        Grade on a Dask cluster (:mod:`grader.cluster`): a scheduler address
+        Grade on a Dask cluster (:mod:`grader.executors.dask`): a scheduler address
         (``tcp://HOST:PORT``) or ``local:N`` (a LocalCluster of N workers); ``jobs`` is then
         unused (each worker grades as many at once as it has threads) and the sandbox is
         that of each worker's machine.
@@ -512,7 +295,7 @@ def grade_assignment(
     if not archive and (not submissions.is_dir()
                         or not os.access(submissions, os.R_OK | os.X_OK)):
         raise UsageError(f"{submissions}: not a readable folder of submissions (nor a .zip)")
-    out = Path(hw) / "graded" if out is None else Path(out)
+    out = graded_folder(hw, out)
     require_out_outside(out, submissions)
     if not archive:  # a zip is looked into once unpacked, below
         require_submissions(submissions, discover(submissions, a.ids,
@@ -553,8 +336,13 @@ def grade_assignment(
         from grader.kernels.preload import preload_for
 
         # the kernels' zygotes start first: they import while this process writes
-        with _kernels(warm and bool(to_run) and cluster is None, min(jobs, len(to_run)),
-                      found_sandbox, preload_for(packages)) as f:
+        def publish(result: StudentResult) -> None:  # the one writer of records
+            _publish(a, out, result, reveal)
+            if progress:
+                progress(result)
+
+        with warm_kernels(warm and bool(to_run) and cluster is None, min(jobs, len(to_run)),
+                          found_sandbox, preload_for(packages)) as f:
             run = execute if f is None else partial(execute, kernel_factory=f)
             if own_execute and to_run and cluster is None:
                 preflight(run, limits)  # before anything of the class is written
@@ -567,13 +355,12 @@ def grade_assignment(
                 progress = on_plan(len(to_run) + len(to_write)) or progress
             _publish_all(a, out, to_write, reveal, progress)
             if cluster is not None:
-                _run_on_cluster(cluster, a, out, to_run, execute, limits, reveal, progress,
-                                sandbox=sandbox, cold=cold_kernels,
-                                preload=preload_for(packages))
+                _run_on_cluster(cluster, to_run, execute, limits, publish, sandbox=sandbox,
+                                cold=cold_kernels, preload=preload_for(packages))
             else:
                 if to_run:
                     _prepare_report()
-                _run_all(a, out, to_run, run, limits, jobs, reveal, progress)
+                run_local(to_run, run, limits, jobs, publish)
         results = {sid: read_result(out / RESULTS / f"{sid}.json") for sid in a.ids}
         graded_now = (tuple(t[0].student_id for t in to_run)
                       + tuple(r.student_id for r in to_write))
@@ -686,33 +473,10 @@ def preflight(run: Execute, limits: Any) -> None:
         f"{execution.message}. Run 'eulertop doctor' for what this machine allows")
 
 
-@contextmanager
-def _kernels(warm: bool, slots: int, sandbox: Any = None,
-             preload: Sequence[str] | None = None) -> Iterator[Callable | None]:
-    """The kernel factory of the run: a warm pool's (closed at the end), or None (default);
-    its zygotes import ``preload`` (:func:`grader.kernels.preload.preload_for`)."""
-    if not warm:
-        yield None
-        return
-    from grader.kernels.pool import KernelPool
-    from grader.sandbox import run_folder
-
-    with run_folder(), KernelPool(slots, sandbox=sandbox, preload=preload) as pool:
-        yield pool.kernel
-
-
-def _run_all(a, out, to_run, execute, limits, jobs, reveal, progress) -> None:
-    """Execute and grade ``to_run`` on ``jobs`` threads; each worker publishes its own record."""
-    if not to_run:
-        return
-    with ExitStack() as stack:
-        _run_all_in(stack, a, out, to_run, execute, limits, jobs, reveal, progress)
-
-
 def _require_cluster(cluster: str) -> None:
     """:class:`UsageError` when ``--cluster`` cannot be used here (Dask not installed, a
     malformed ``local:N``, a scheduler that cannot be reached), before anything is written."""
-    from grader.cluster import ClusterError, require_distributed, require_reachable
+    from grader.executors.dask import ClusterError, require_distributed, require_reachable
 
     try:
         require_distributed()
@@ -721,129 +485,32 @@ def _require_cluster(cluster: str) -> None:
         raise UsageError(str(e)) from None
 
 
-def _run_on_cluster(cluster, a, out, to_run, execute, limits, reveal, progress, *,
-                    sandbox: bool, cold: bool, preload: Sequence[str] | None = None) -> None:
-    """:func:`_run_all` on a Dask cluster (:func:`grader.cluster.grade_on_cluster`): the
-    workers run :func:`grade_one`; this process writes every record, as they come back."""
+def _run_on_cluster(cluster, to_run, execute, limits, publish, *, sandbox: bool, cold: bool,
+                    preload: Sequence[str] | None = None) -> None:
+    """The run on a Dask cluster (:func:`grader.executors.dask.grade_on_cluster`): the workers
+    run :func:`grader.grade_one.grade_one`; this process publishes every record, as they come
+    back."""
     if not to_run:
         return
-    from grader.cluster import ClusterError, cluster_client, grade_on_cluster
+    from grader.executors.dask import ClusterError, cluster_client, grade_on_cluster
 
     published = []
     stop = threading.Event()
 
-    def publish(result: StudentResult) -> None:
-        _publish(a, out, result, reveal)
+    def counted(result: StudentResult) -> None:
+        publish(result)
         published.append(result.student_id)
-        if progress:
-            progress(result)
 
     try:
         with cluster_client(cluster) as client:
             try:
-                grade_on_cluster(client, to_run, limits, publish, execute=execute,
+                grade_on_cluster(client, to_run, limits, counted, execute=execute,
                                  sandbox=sandbox, cold=cold, stop=stop, preload=preload)
             except KeyboardInterrupt:
                 stop.set()  # in-flight tasks are cancelled when the client closes
                 raise Interrupted(len(published), len(to_run)) from None
     except ClusterError as e:
         raise UsageError(str(e)) from None
-
-
-RETRIES = 2
-"""Times a submission is run again after a failure that is not its own (:func:`grade_one`)."""
-
-
-@contextmanager
-def _copies_folder() -> Iterator[Path]:
-    """A private folder of the run folder for the grader's own copies of submissions."""
-    from grader.sandbox import fresh_folder, run_folder
-
-    with run_folder() as run:
-        folder = fresh_folder(run, "s")
-        try:
-            yield folder
-        finally:
-            shutil.rmtree(folder, ignore_errors=True)
-
-
-def grade_one(submission: Submission, expected: Sequence[KeyAnswer], key_hash: str,
-              limits: Any, execute: Execute | None = None, sha: str | None = None,
-              copies: Path | None = None) -> StudentResult:
-    """Grade ONE submission — the unit every way of grading shares (the local pool, a cluster,
-    the hosted entrypoints): its record, never an exception.
-
-    The submission is read as safely as in :func:`_plan` (a regular file under
-    ``limits.submission_bytes``; checked to be ``sha`` when given), copied into a private
-    folder (``copies``, default a new one in the run folder), executed by ``execute``
-    (default :func:`grader.execute.execute_submission`, in the sandbox) and compared with
-    ``expected`` in this process. A run that failed for a reason that is not the student's
-    (``Execution.retry``: no kernel could be started) is run again, up to :data:`RETRIES`
-    times; if it still fails, its record says so and the next run grades it again."""
-    if copies is None:
-        with _copies_folder() as own:
-            return grade_one(submission, expected, key_hash, limits, execute, sha, own)
-    if execute is None:
-        from grader.execute import execute_submission as execute
-    max_bytes = getattr(limits, "submission_bytes", DEFAULT_MAX_BYTES)
-    try:
-        data = read_submission(submission.path, max_bytes)
-    except (OSError, InvalidSubmission) as e:
-        why = (f"invalid submission: {e}" if isinstance(e, InvalidSubmission) else
-               f"cannot read {submission.path.name}: {e.strerror}")
-        return ungraded_result(submission.student_id, "failed", why, expected, key_hash)
-    if sha is None:
-        sha = hashlib.sha256(data).hexdigest()
-    if hashlib.sha256(data).hexdigest() != sha:
-        return ungraded_result(submission.student_id, "failed", "invalid submission: the file "
-                               "changed while the class was being graded", expected, key_hash)
-    from grader.sandbox import fresh_folder
-
-    folder = fresh_folder(copies, "c")
-    copy = folder / submission.path.name
-    try:
-        fd = os.open(copy, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        own = Submission(submission.student_id, copy)
-        for _ in range(RETRIES + 1):
-            result = grade_submission(own, expected, key_hash, execute, limits, sha)
-            if not result.execution.get("retry"):
-                break
-        return result
-    finally:
-        shutil.rmtree(folder, ignore_errors=True)
-
-
-def _run_all_in(stack, a, out, to_run, execute, limits, jobs, reveal, progress) -> None:
-    stop = threading.Event()
-    published = []
-
-    def work(submission, expected, key_hash, sha):
-        if stop.is_set():
-            return
-        result = grade_one(submission, expected, key_hash, limits, execute, sha, copies)
-        if stop.is_set():
-            return  # stopped by Ctrl-C while it ran: no record, the next run grades it
-        _publish(a, out, result, reveal)
-        published.append(result.student_id)
-        if progress:
-            progress(result)
-
-    copies = stack.enter_context(_copies_folder())
-    pool = ThreadPoolExecutor(max_workers=jobs, thread_name_prefix="eulertop-grade")
-    futures = [pool.submit(work, *task) for task in to_run]
-    try:
-        wait(futures)
-    except KeyboardInterrupt:
-        # Ctrl-C: start nothing new and keep nothing of what is in flight; the caller's
-        # closing of the kernel pool stops those kernels (a second Ctrl-C exits at once)
-        stop.set()
-        pool.shutdown(wait=False, cancel_futures=True)
-        raise Interrupted(len(published), len(to_run)) from None
-    pool.shutdown()
-    for f in futures:
-        f.result()  # a fault in publishing (disk full …) must not pass silently
 
 
 def _publish_all(a: Assignment, out: Path, results: Sequence[StudentResult], reveal: bool,
@@ -874,7 +541,7 @@ def _class_report(a: Assignment, out: Path, results: Mapping[str, StudentResult 
 
     try:
         report = build_report(class_data(a, results), {s.student_id: s.path for s in submissions})
-        write_report(report, out / "report.html")
+        write_report(report, out / REPORT)
     except Exception as e:
         sys.stderr.write(f"eulertop grade: the class report could not be written "
                          f"({type(e).__name__}: {e}); the grades are complete\n")

@@ -1,5 +1,5 @@
 """Hosted autograders (issue 15): Gradescope and PrairieLearn, thin adapters over
-:func:`grader.pipeline.grade_one`.
+:func:`grader.grade_one.grade_one`.
 
 Each platform has one module for its paths, metadata and results format
 (:mod:`grader.hosted.gradescope`, :mod:`grader.hosted.prairielearn`); both grade through

@@ -30,6 +30,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from grader.assignment import Assignment, UsageError
+from grader.grade_one import claimed_student
 from grader.gradebook import number
 from grader.hosted.grading import (
     HostedError,
@@ -41,7 +43,6 @@ from grader.hosted.grading import (
     open_package,
 )
 from grader.lms.download import Students
-from grader.pipeline import Assignment, UsageError, claimed_student
 from grader.results import StudentResult, atomic_write_text
 
 ROOT_VARIABLE = "EULERTOP_GRADESCOPE_ROOT"

@@ -1,5 +1,5 @@
 """What both hosted entrypoints share: the package's configuration, the choice of isolation,
-finding the submitted notebook, and grading it through :func:`grader.pipeline.grade_one`.
+finding the submitted notebook, and grading it through :func:`grader.grade_one.grade_one`.
 
 Isolation modes (``--sandbox``)
     ``auto`` (default): bubblewrap where it can start (:func:`grader.sandbox.available`), else
@@ -17,9 +17,10 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
+from grader.assignment import Assignment, load_assignment
 from grader.compare import key_answers
+from grader.grade_one import grade_one
 from grader.limits import Limits
-from grader.pipeline import Assignment, grade_one, load_assignment
 from grader.results import StudentResult
 from grader.submissions import Submission
 

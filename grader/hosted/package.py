@@ -32,9 +32,9 @@ from collections.abc import Iterable
 from importlib import metadata
 from pathlib import Path
 
+from grader.assignment import Assignment, UsageError, load_assignment
 from grader.hosted.grading import CONFIG, MODES, limits_dict
 from grader.limits import Limits
-from grader.pipeline import Assignment, UsageError, load_assignment
 
 PLATFORMS = ("gradescope", "prairielearn")
 VENV = "/opt/eulertop"

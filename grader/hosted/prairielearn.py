@@ -24,6 +24,8 @@ import zlib
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+from grader.assignment import Assignment, UsageError
+from grader.grade_one import claimed_student
 from grader.gradebook import number
 from grader.hosted.grading import (
     HostedError,
@@ -33,7 +35,6 @@ from grader.hosted.grading import (
     grade_notebook,
     open_package,
 )
-from grader.pipeline import Assignment, UsageError, claimed_student
 from grader.results import StudentResult, atomic_write_text
 
 ROOT_VARIABLE = "EULERTOP_PRAIRIELEARN_ROOT"

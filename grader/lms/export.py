@@ -89,9 +89,10 @@ def build_grades(hw: Path, graded: Path, roster: Path | None = None,
                  roster_format: str | None = None, column_id: str | None = None,
                  missing_as_zero: bool = False):
     """The :class:`~grader.lms.classlist.Grades` of a graded assignment, and its records."""
+    from grader.assignment import load_assignment
     from grader.gradebook import number
+    from grader.graded_folder import RESULTS
     from grader.lms.classlist import Grades
-    from grader.pipeline import RESULTS, load_assignment
     from grader.results import read_result
 
     a = load_assignment(hw)
@@ -114,15 +115,15 @@ def write_export(hw: Path, lms: str, out: Path | None = None, graded: Path | Non
     """Write the import file of ``lms`` and ``answers.csv``; their paths.
 
     ``options``: ``roster``, ``roster_format``, ``column_id``, ``missing_as_zero`` of
-    :func:`build_grades`. Raises :class:`ExportError`, ``grader.pipeline.UsageError``,
+    :func:`build_grades`. Raises :class:`ExportError`, ``grader.assignment.UsageError``,
     ``problems.roster.RosterError`` or ``grader.lms.classlist.ImportError_`` on bad input.
     """
     from grader.gradebook import answers_rows, gradebook_csv
+    from grader.graded_folder import ANSWERS, graded_folder
     from grader.lms.registry import LMS
-    from grader.pipeline import ANSWERS
     from grader.results import atomic_write_text
 
-    graded = Path(graded) if graded is not None else Path(hw) / "graded"
+    graded = graded_folder(hw, graded)
     grades, a, results = build_grades(Path(hw), graded, **options)
     table = LMS[lms].write_import(grades)
     out = Path(out) if out is not None else graded / f"{lms}-import.csv"
@@ -136,8 +137,8 @@ def write_export(hw: Path, lms: str, out: Path | None = None, graded: Path | Non
 
 def run_export(args: argparse.Namespace) -> int:
     """Run ``eulertop export``."""
+    from grader.assignment import UsageError
     from grader.lms.classlist import ImportError_
-    from grader.pipeline import UsageError
     from problems.roster import RosterError
 
     try:

@@ -10,12 +10,13 @@ Reads result records and the key, never runs student code (design.md). One call,
 * :mod:`grader.report.copying` — answers matching another student's key or wrong answer;
 * :mod:`grader.report.code_similarity` — nearly identical notebook code (token shingles);
 * :mod:`grader.report.students`, :mod:`grader.report.figures`, :mod:`grader.report.page` —
-  the table, the figures and the page;
+  the table, the figures and the page; :mod:`grader.report.write` writes them;
 * :mod:`grader.report.cli` — ``eulertop report``.
 """
 
-from grader.report.assemble import ClassReport, build_report, report_for, write_report
+from grader.report.assemble import ClassReport, build_report
 from grader.report.classdata import ClassData, load_class
+from grader.report.write import report_for, write_report
 
 __all__ = ["ClassData", "ClassReport", "build_report", "load_class", "report_for",
            "write_report"]

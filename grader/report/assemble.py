@@ -15,15 +15,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from grader.gradebook import gradebook_csv
-from grader.report.classdata import ClassData, load_class
+from grader.report.classdata import ClassData
 from grader.report.code_similarity import SimilarCode, notebook_code, similar_code
 from grader.report.copying import CopyPair, copy_pairs
 from grader.report.items import ItemStats, item_statistics
 from grader.report.slips import SlipGroup, slip_groups
-from grader.report.students import student_rows
-from grader.results import atomic_write_text
-
-HTML = "report.html"
 
 
 @dataclass(frozen=True)
@@ -133,35 +129,3 @@ def items_csv(report: ClassReport) -> str:
     return gradebook_csv(rows)
 
 
-def companion_paths(page: Path) -> tuple[Path, Path]:
-    """The CSV files written beside a page: ``report.html`` → ``report.csv`` (students) and
-    ``report_items.csv`` (items)."""
-    page = Path(page)
-    return page.with_suffix(".csv"), page.with_name(f"{page.stem}_items.csv")
-
-
-def write_report(report: ClassReport, page: Path) -> Path:
-    """Write the page to ``page`` and its two CSV files beside it (:func:`companion_paths`),
-    each atomically; returns ``page``."""
-    from grader.report.page import report_html
-
-    page = Path(page)
-    page.parent.mkdir(parents=True, exist_ok=True)
-    students_path, items_path = companion_paths(page)
-    table = student_rows(report.data, report.slips, report.pairs, report.code)
-    students = gradebook_csv(table)
-    atomic_write_text(students_path, students)
-    atomic_write_text(items_path, items_csv(report))
-    atomic_write_text(page, report_html(report, table, students, students_path.name))
-    return page
-
-
-def report_for(hw: Path, graded: Path | None = None,
-               submissions: Mapping[str, Path] | None = None,
-               page: Path | None = None) -> tuple[ClassReport, Path]:
-    """Load, analyse and write in one call: ``(report, path of the page)``; the page goes to
-    ``page`` (default ``GRADED/report.html``, ``GRADED`` defaulting to ``hw/graded``)."""
-    graded = Path(hw) / "graded" if graded is None else Path(graded)
-    data = load_class(hw, graded)
-    report = build_report(data, submissions)
-    return report, write_report(report, graded / HTML if page is None else page)

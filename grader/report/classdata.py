@@ -1,7 +1,7 @@
 """What the class report reads: the assignment, the key and the result records — nothing else.
 
 The report never runs student code (design.md, "Where the next parts go"). It reads
-``HW/assignment.json`` and ``HW/key.json`` (through :func:`grader.pipeline.load_assignment`, the
+``HW/assignment.json`` and ``HW/key.json`` (through :func:`grader.assignment.load_assignment`, the
 grader's one reader, so a broken folder gets the same message) and ``GRADED/results/<id>.json``
 (:func:`grader.results.read_result`). Submitted notebooks are read only as text, for the code
 similarity check (:mod:`grader.report.code_similarity`).
@@ -21,8 +21,9 @@ from typing import Any
 
 import numpy as np
 
+from grader.assignment import Assignment, UsageError, load_assignment
 from grader.compare import key_answers
-from grader.pipeline import RESULTS, Assignment, UsageError, load_assignment
+from grader.graded_folder import RESULTS, graded_folder
 from grader.results import StudentResult, read_result
 from problems.answers import Answer
 
@@ -61,7 +62,7 @@ class ClassData:
 
     Attributes
     ----------
-    assignment : grader.pipeline.Assignment
+    assignment : grader.assignment.Assignment
         The assignment as the grader reads it.
     items : tuple of Item
         Every answer, in question order (from the first student's key; the generator gives every
@@ -105,11 +106,11 @@ def load_class(hw: Path, graded: Path | None = None) -> ClassData:
 
     Raises
     ------
-    grader.pipeline.UsageError
+    grader.assignment.UsageError
         No assignment, unreadable key, or no result records (grade first).
     """
     a = load_assignment(hw)
-    folder = (Path(hw) / "graded" if graded is None else Path(graded)) / RESULTS
+    folder = graded_folder(hw, graded) / RESULTS
     if not folder.is_dir():
         raise UsageError(f"{folder}: no result records here; run 'eulertop grade' first "
                          "(or pass --graded DIR)")

@@ -35,8 +35,8 @@ def submitted_notebooks(folder: Path, ids) -> dict[str, Path]:
 
 def run_report(args: argparse.Namespace) -> int:
     """Run ``eulertop report``; the exit status."""
-    from grader.pipeline import UsageError, load_assignment
-    from grader.report.assemble import report_for
+    from grader.assignment import UsageError, load_assignment
+    from grader.report.write import report_for
 
     try:
         if args.out is not None and args.out.is_dir():

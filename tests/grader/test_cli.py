@@ -27,7 +27,7 @@ import pytest
 
 from eulertop.cli import build_parser, main
 from grader import cli as grader_cli
-from grader.pipeline import run_lock
+from grader.graded_folder import run_lock
 from grader.progress import Progress
 from grader.results import StudentResult, read_result
 from problems.generate import generate_assignment

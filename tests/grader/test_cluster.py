@@ -1,4 +1,4 @@
-"""Grading on Dask distributed (``eulertop grade --cluster``, :mod:`grader.cluster`).
+"""Grading on Dask distributed (``eulertop grade --cluster``, :mod:`grader.executors.dask`).
 
 A real ``dask scheduler`` and two ``dask worker`` processes on 127.0.0.1 (subprocesses, no
 mock) grade a class of 40 real notebooks with real kernels, in each worker's sandbox; one
@@ -23,7 +23,7 @@ from pathlib import Path
 import pytest
 
 from eulertop.cli import main
-from grader import cluster as cluster_module
+from grader.executors import dask as cluster_module
 from grader.limits import Limits
 from grader.pipeline import grade_assignment
 from grader.results import read_result
@@ -280,9 +280,9 @@ def test_a_task_that_kills_its_worker_is_resubmitted(klass, local_run, tmp_path,
     import dask
     from distributed import Client, LocalCluster
 
-    from grader.cluster import grade_on_cluster
+    from grader.assignment import load_assignment
     from grader.compare import key_answers
-    from grader.pipeline import load_assignment
+    from grader.executors.dask import grade_on_cluster
     from grader.submissions import Submission
 
     hw, subs = klass

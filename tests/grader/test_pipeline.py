@@ -17,8 +17,10 @@ from pathlib import Path
 
 import pytest
 
+from grader.assignment import UsageError
+from grader.graded_folder import RunInProgress, run_lock
 from grader.notebook_load import SubmissionError
-from grader.pipeline import RunInProgress, UsageError, grade_assignment, run_lock
+from grader.pipeline import grade_assignment
 from grader.results import StudentResult, read_result
 from problems.generate import generate_assignment
 from problems.roster import Roster
@@ -344,7 +346,7 @@ class FlakyStart(FakeExecute):
 
 
 def test_a_kernel_that_could_not_start_is_retried_within_the_run(hw, subs):
-    from grader.pipeline import RETRIES
+    from grader.grade_one import RETRIES
 
     execute = FlakyStart(RETRIES)
     r = _by_id(_run(hw, subs, execute))
@@ -353,7 +355,7 @@ def test_a_kernel_that_could_not_start_is_retried_within_the_run(hw, subs):
 
 
 def test_a_kernel_that_never_started_is_not_kept_and_the_next_run_grades_it(hw, subs):
-    from grader.pipeline import RETRIES
+    from grader.grade_one import RETRIES
 
     first = _by_id(_run(hw, subs, FlakyStart(RETRIES + 1)))
     assert first["alice"].status == "failed" and first["alice"].execution["retry"] is True
@@ -407,9 +409,9 @@ def test_a_run_that_locked_a_removed_lock_file_takes_the_new_one(hw, subs, first
     """The race of removing a lock file: a run opens OUT/.lock, the holder removes it and
     releases, the run locks the removed file. It must notice and lock the file the path names
     now, or it and a third run would both hold "the" lock."""
-    import grader.pipeline as pipeline
+    import grader.graded_folder as graded_folder
 
-    real_flock = pipeline.fcntl.flock
+    real_flock = graded_folder.fcntl.flock
 
     lock = hw / "graded" / ".lock"
     calls = []
@@ -420,11 +422,11 @@ def test_a_run_that_locked_a_removed_lock_file_takes_the_new_one(hw, subs, first
         calls.append(fd)
         return real_flock(fd, op)
 
-    monkeypatch.setattr(pipeline.fcntl, "flock", flock_after_removal)
+    monkeypatch.setattr(graded_folder.fcntl, "flock", flock_after_removal)
     with run_lock(hw / "graded"):
         assert len(calls) == 2  # the first file was found removed; the second one is held
         assert lock.is_file()
-        monkeypatch.setattr(pipeline.fcntl, "flock", real_flock)
+        monkeypatch.setattr(graded_folder.fcntl, "flock", real_flock)
         with pytest.raises(RunInProgress):  # and it really is the lock others see
             with run_lock(hw / "graded"):
                 pass

@@ -86,7 +86,7 @@ def preloads(monkeypatch):
         asked.append(preload)
         yield None
 
-    monkeypatch.setattr(pipeline, "_kernels", kernels)
+    monkeypatch.setattr(pipeline, "warm_kernels", kernels)
     return asked
 
 
@@ -133,7 +133,7 @@ def test_a_notebook_that_plots_runs_the_same_with_matplotlib_preloaded(tmp_path)
 ])
 def test_a_dask_worker_rebuilds_the_preload_from_the_plugins_name(settings):
     """A worker that joins after the plugin was registered makes it from its name alone."""
-    from grader.cluster import WorkerKernels, _settings
+    from grader.executors.dask import WorkerKernels, _settings
 
     plugin = WorkerKernels(**settings)
     assert _settings(plugin.name) == settings

@@ -25,9 +25,10 @@ import pytest
 from eulertop.cli import build_parser
 from grader import cli as grader_cli
 from grader import notebook_load
+from grader.assignment import load_assignment
 from grader.lms.export import write_export
 from grader.notebook_load import SubmissionError, json_shape, read_notebook
-from grader.pipeline import grade_assignment, load_assignment
+from grader.pipeline import grade_assignment
 from grader.report.code_similarity import MAX_COMPARED_CHARS
 from grader.results import UNSTORABLE, AnswerResult, StudentResult, read_result, write_result
 from problems.answers import Verdict
@@ -362,7 +363,7 @@ def peak():
 _MEASURE = _PEAK + """
 from grader.check import CheckUsageError, answer_specs
 from grader.notebook_load import SubmissionError, read_notebook
-from grader.pipeline import claimed_student
+from grader.grade_one import claimed_student
 from grader.report.code_similarity import notebook_code
 
 def attempt(reader, path):

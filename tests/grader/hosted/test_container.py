@@ -10,10 +10,10 @@ import sys
 
 import pytest
 
+from grader.assignment import load_assignment
 from grader.hosted import gradescope
 from grader.hosted.grading import HostedError, choose_isolation
 from grader.kernels import container
-from grader.pipeline import load_assignment
 
 needs_root = pytest.mark.skipif(os.geteuid() != 0, reason="only root has other users to be")
 

@@ -13,11 +13,11 @@ from pathlib import Path
 
 import pytest
 
+from grader.assignment import load_assignment
 from grader.hosted import gradescope
 from grader.hosted.grading import CONFIG
 from grader.hosted.package import gradescope_zip
 from grader.limits import Limits
-from grader.pipeline import load_assignment
 from tests.grader.hosted.conftest import code_cell, run_entrypoint
 from tests.grader.hosted.platform_formats import check_gradescope
 
@@ -113,7 +113,7 @@ def test_the_key_reader_would_get_every_point_with_the_key(hosted_hw, notebooks,
     from functools import partial
 
     from grader.execute import execute_submission
-    from grader.pipeline import grade_one
+    from grader.grade_one import grade_one
     from grader.submissions import Submission
 
     key = hosted_hw.folder / "key.json"

@@ -15,10 +15,10 @@ from pathlib import Path
 
 import pytest
 
+from grader.assignment import load_assignment
 from grader.hosted import prairielearn
 from grader.hosted.grading import CONFIG
 from grader.hosted.package import NOTEBOOK, prairielearn_question, variant_ids
-from grader.pipeline import load_assignment
 from problems.generate import generate_assignment
 from problems.roster import Roster
 from problems.templates import FAMILIES

@@ -15,8 +15,8 @@ from pathlib import Path
 
 import pytest
 
+from grader.assignment import UsageError
 from grader.lms.archive import ArchiveError, ZipLimits, copy_entry, extract_download
-from grader.pipeline import UsageError
 from tests.grader.lms.conftest import grade
 from tests.grader.lms.exports import write_zip
 

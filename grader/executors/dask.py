@@ -1,7 +1,7 @@
 """Grading on a Dask distributed cluster: ``eulertop grade HW SUBS --cluster ADDRESS``.
 
 The executor of ``--cluster`` (design.md, "executors — where grade_one runs"): the local pool
-runs :func:`grader.pipeline.grade_one` on threads of this machine; this module runs the same
+runs :func:`grader.grade_one.grade_one` on threads of this machine; this module runs the same
 function on the workers of a Dask cluster. Nothing else of a run changes: the grader process
 (the Dask *client*) plans the run, holds ``OUT/.lock``, and alone writes result records,
 feedback pages and the gradebook, so resume, locking and the reports are those of a local run.
@@ -255,7 +255,7 @@ def _plugin(name: str) -> WorkerKernels:
 
 
 def grade_remote(task: Task, limits: Any, execute: Callable | None, plugin: str) -> dict:
-    """The Dask task: :func:`grader.pipeline.grade_one` of one submission on this worker.
+    """The Dask task: :func:`grader.grade_one.grade_one` of one submission on this worker.
 
     The bytes are written to a new private file (0600) of the worker's run folder, under the
     submission's own file name, and ``grade_one`` grades that file (checking ``task.sha``);
@@ -264,7 +264,7 @@ def grade_remote(task: Task, limits: Any, execute: Callable | None, plugin: str)
     import shutil
     from functools import partial
 
-    from grader.pipeline import grade_one
+    from grader.grade_one import grade_one
     from grader.sandbox import fresh_folder
 
     kernels = _plugin(plugin)
@@ -316,7 +316,7 @@ def _fault_record(run: tuple, why: str) -> StudentResult:
     """A ``failed`` record for a submission the cluster could not grade: graded next run."""
     from dataclasses import replace
 
-    from grader.pipeline import ungraded_result
+    from grader.grade_one import ungraded_result
 
     submission, expected, key_hash, sha = run
     record = ungraded_result(submission.student_id, "failed",
@@ -327,7 +327,7 @@ def _fault_record(run: tuple, why: str) -> StudentResult:
 
 def _unreadable(run: tuple, err: Exception) -> StudentResult:
     """The record :func:`grade_one` gives a submission it cannot read (same words)."""
-    from grader.pipeline import ungraded_result
+    from grader.grade_one import ungraded_result
 
     submission, expected, key_hash, _ = run
     why = (f"invalid submission: {err}" if isinstance(err, InvalidSubmission) else

@@ -1,0 +1,66 @@
+"""The assignment a class is graded against (floor 4): ``HW/assignment.json`` and ``HW/key.json``
+read once into an :class:`Assignment`, with each student's key derived once."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+
+class UsageError(Exception):
+    """The run cannot start (no assignment, no key, unreadable folder); nothing was written."""
+
+
+@dataclass(frozen=True)
+class Assignment:
+    """What grading needs from ``HW``: the roster, each student's public questions, the key."""
+
+    folder: Path
+    title: str
+    columns: tuple[str, ...]
+    rows: tuple[dict, ...]
+    questions: tuple[int, ...]
+    students: dict  # assignment.json "students": id -> {"questions": [public question, ...]}
+    key: dict       # key.json
+
+    @property
+    def ids(self) -> tuple[str, ...]:
+        return tuple(r["id"] for r in self.rows)
+
+    def key_hash(self, student_id: str) -> str:
+        return self.key["students"][student_id]["hash"]
+
+
+def _read_json(path: Path, what: str) -> dict:
+    if not path.is_file():
+        raise UsageError(f"{path}: no {what} here (is this an assignment folder written by "
+                         "'eulertop generate'?)")
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise UsageError(f"{path}: cannot read the {what}: {e}") from None
+
+
+def load_assignment(hw: Path) -> Assignment:
+    """Read ``HW/assignment.json`` and ``HW/key.json``; :class:`UsageError` if unusable."""
+    hw = Path(hw)
+    if not hw.is_dir():
+        raise UsageError(f"{hw}: no such assignment folder")
+    manifest = _read_json(hw / "assignment.json", "assignment manifest (assignment.json)")
+    key = _read_json(hw / "key.json", "answer key (key.json)")
+    try:
+        rows = tuple(manifest["roster"]["rows"])
+        students = manifest["students"]
+        absent = [r["id"] for r in rows if r["id"] not in key["students"]
+                  or r["id"] not in students]
+        questions = tuple(range(1, len(manifest["problems"]) + 1))
+        columns = tuple(manifest["roster"]["columns"])
+        title = manifest.get("title", hw.name)
+    except (KeyError, TypeError) as e:
+        raise UsageError(f"{hw}: assignment.json or key.json is not in the generator's "
+                         f"layout (no {e})") from None
+    if absent:
+        raise UsageError(f"{hw}: key.json has no entry for {', '.join(absent)}; regenerate "
+                         "the assignment")
+    return Assignment(hw, title, columns, rows, questions, students, key)
