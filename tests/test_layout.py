@@ -1,0 +1,216 @@
+"""One house (issue 24): every import points down a floor, or sideways without a circle.
+
+The imports are read statically (``ast``) from every module of the four top-level packages,
+function-level imports included — a lazy import is still a dependency — and those under
+``if TYPE_CHECKING:`` left out. The floors are data (:data:`FLOORS`): the package or module,
+its floor; a module takes the floor of the longest prefix listed. Checked:
+
+* every module has a floor (a new module must be placed);
+* no module imports one on a higher floor;
+* no circle between modules (strongly connected components of one);
+* no circle between rooms: the top-level packages, and grader's sub-packages among themselves.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ("solver", "problems", "grader", "eulertop")
+
+FLOORS = {
+    # the lecture's physics, then problems built on it
+    "solver": 0,
+    "problems": 10,
+    # grader, floor 0: records and pure helpers
+    "grader.limits": 20, "grader.plain_text": 20, "grader.statement_html": 20,
+    "grader.results": 20, "grader.submissions": 20, "grader.submission_file": 20,
+    "grader.notebook_load": 20, "grader.extract": 20,
+    # 1–2: one disposable world; one kernel
+    "grader.sandbox": 21,
+    "grader.kernels": 22,
+    # 3: the stages of one submission
+    "grader.execute": 23, "grader.compare": 23,
+    # 4: the unit, and what it is graded against, and where its records go
+    "grader.assignment": 24, "grader.graded_folder": 24, "grader.grade_one": 24,
+    # 5: views of records, and file formats
+    "grader.gradebook": 25, "grader.progress": 25, "grader.lms": 25, "grader.report": 25,
+    # 6: where grade_one runs; where submissions come from
+    "grader.executors": 26, "grader.discover": 26,
+    # 7: the class run
+    "grader.pipeline": 27,
+    # 8: front ends
+    "grader": 28, "grader.cli": 28, "grader.check": 28, "grader.doctor": 28,
+    "grader.report.cli": 28, "grader.lms.export": 28, "grader.hosted": 28,
+    # the console script and what composes the rooms
+    "eulertop": 40,
+}
+
+SUBPACKAGES = ("grader.sandbox", "grader.kernels", "grader.executors", "grader.lms",
+               "grader.report", "grader.hosted")
+
+
+def module_files() -> dict[str, Path]:
+    found = {}
+    for package in PACKAGES:
+        for path in (ROOT / package).rglob("*.py"):
+            name = ".".join(path.relative_to(ROOT).with_suffix("").parts)
+            found[name.removesuffix(".__init__")] = path
+    return found
+
+
+MODULES = module_files()
+
+
+def _is_type_checking(test: ast.expr) -> bool:
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or \
+        (isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
+
+
+def imports_of(name: str, path: Path) -> set[str]:
+    """The project's modules that module ``name`` imports (at any depth in its code)."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    named: set[str] = set()
+
+    def visit(node: ast.AST) -> None:
+        if isinstance(node, ast.If) and _is_type_checking(node.test):
+            for child in node.orelse:
+                visit(child)
+            return
+        if isinstance(node, ast.Import):
+            named.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parts = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join([*parts, *([node.module] if node.module else [])])
+            for alias in node.names:  # `from grader.sandbox import world` names a module
+                full = f"{base}.{alias.name}"
+                named.add(full if full in MODULES else base)
+        for child in ast.iter_child_nodes(node):
+            visit(child)
+
+    visit(ast.parse(path.read_text(encoding="utf-8")))
+    out = set()
+    for target in named:
+        while target and target not in MODULES:
+            target = target.rpartition(".")[0]
+        if target and target != name:
+            out.add(target)
+    return out
+
+
+GRAPH = {name: imports_of(name, path) for name, path in MODULES.items()}
+
+
+def floor(name: str) -> int:
+    parts = name.split(".")
+    for i in range(len(parts), 0, -1):
+        prefix = ".".join(parts[:i])
+        if prefix in FLOORS:
+            return FLOORS[prefix]
+    raise KeyError(name)
+
+
+def circles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one node (Tarjan, iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    found = []
+    counter = 0
+    for root in graph:
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph.get(root, ()))))]
+        index[root] = low[root] = counter
+        counter += 1
+        stack.append(root)
+        on.add(root)
+        while work:
+            node, children = work[-1]
+            child = next(children, None)
+            if child is not None:
+                if child not in index:
+                    index[child] = low[child] = counter
+                    counter += 1
+                    stack.append(child)
+                    on.add(child)
+                    work.append((child, iter(sorted(graph.get(child, ())))))
+                elif child in on:
+                    low[node] = min(low[node], index[child])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[node])
+            if low[node] == index[node]:
+                component = []
+                while True:
+                    top = stack.pop()
+                    on.discard(top)
+                    component.append(top)
+                    if top == node:
+                        break
+                if len(component) > 1:
+                    found.append(sorted(component))
+    return found
+
+
+def rooms(level: str) -> dict[str, set[str]]:
+    """The import graph between rooms: ``top`` — the top-level packages; ``sub`` — grader's
+    sub-packages among themselves (its loose modules belong to no sub-package)."""
+    def room(name: str) -> str | None:
+        if level == "top":
+            return name.split(".")[0]
+        return next((s for s in SUBPACKAGES if name == s or name.startswith(s + ".")), None)
+
+    graph: dict[str, set[str]] = {}
+    for a, targets in GRAPH.items():
+        for b in targets:
+            ra, rb = room(a), room(b)
+            if ra and rb and ra != rb:
+                graph.setdefault(ra, set()).add(rb)
+    return graph
+
+
+def test_the_walk_sees_the_project():
+    """The reader finds what is there: a known downward edge, and a lazy import."""
+    assert "grader.pipeline" in GRAPH["grader.cli"]  # imported inside run_grade
+    assert "grader.execute" in GRAPH["grader.grade_one"]  # imported inside grade_one
+    assert {"solver", "problems", "grader", "eulertop"} <= set(MODULES)
+    assert len(MODULES) > 100
+
+
+def test_every_module_has_a_floor():
+    unplaced = []
+    for name in MODULES:
+        try:
+            floor(name)
+        except KeyError:
+            unplaced.append(name)
+    assert unplaced == []
+
+
+def test_no_module_imports_a_higher_floor():
+    upward = sorted(f"{a} (floor {floor(a)}) imports {b} (floor {floor(b)})"
+                    for a, targets in GRAPH.items() for b in targets if floor(a) < floor(b))
+    assert upward == []
+
+
+def test_no_circle_between_modules():
+    assert circles(GRAPH) == []
+
+
+@pytest.mark.parametrize("level", ["top", "sub"])
+def test_no_circle_between_rooms(level):
+    assert circles(rooms(level)) == []
+
+
+def test_the_circle_finder_finds_circles():
+    """Control of the tests above: the finder reports a circle when there is one."""
+    assert circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert circles({"a": {"b"}, "b": set()}) == []
