@@ -4,8 +4,10 @@ read once into an :class:`Assignment`, with each student's key derived once."""
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+
+from grader.compare import KeyAnswer, key_answers
 
 
 class UsageError(Exception):
@@ -23,10 +25,18 @@ class Assignment:
     questions: tuple[int, ...]
     students: dict  # assignment.json "students": id -> {"questions": [public question, ...]}
     key: dict       # key.json
+    _expected: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def ids(self) -> tuple[str, ...]:
         return tuple(r["id"] for r in self.rows)
+
+    def expected(self, student_id: str) -> tuple[KeyAnswer, ...]:
+        """``student_id``'s key answers (:func:`grader.compare.key_answers`), derived once per
+        loaded assignment: the key does not change while it is loaded."""
+        if student_id not in self._expected:
+            self._expected[student_id] = tuple(key_answers(self.key, student_id))
+        return self._expected[student_id]
 
     def key_hash(self, student_id: str) -> str:
         return self.key["students"][student_id]["hash"]

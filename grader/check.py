@@ -2,7 +2,8 @@
 formed?
 
 For a student, before submitting. The notebook runs exactly as in ``eulertop grade``
-(:func:`grader.execute.execute_submission`, default :class:`~grader.limits.Limits`), then each
+(:func:`grader.grade_one.run_one`: the same safe read, private copy, kernel start and retries;
+default :class:`~grader.limits.Limits`), then each
 answer listed in the notebook's own ``metadata["eulertop"]`` (the public answer spec written
 by the generator: names, kinds, units, vector lengths, options, symbols — never values) is
 reported as *well formed*, *missing* or *malformed and why*
@@ -19,7 +20,8 @@ grade``, in contrast, refuses to run without a sandbox unless told ``--no-sandbo
 
 Exit status: 0 when every answer is present and well formed; 1 otherwise (or when the notebook
 could not be run to the end); 2 on usage errors — no such file, not a notebook, no eulertop
-metadata — with one line saying what to do, never a traceback.
+metadata, not a regular file or over the size limit (as ``eulertop grade`` would refuse it) —
+with one line saying what to do, never a traceback.
 
 Module-level imports stay light: ``eulertop --help`` imports this module.
 """
@@ -122,10 +124,13 @@ def check_notebook(path: Path, limits: Any) -> CheckReport:
     CheckUsageError
         See :func:`answer_specs`.
     """
-    from grader.execute import execute_submission
+    from grader.grade_one import run_one
 
     specs = answer_specs(path)
-    execution = execute_submission(Path(path), [s["variable"] for s in specs], limits)
+    run = run_one(Path(path), [s["variable"] for s in specs], limits)
+    if run.execution is None:  # too large, not a regular file, or no kernel could run it
+        raise CheckUsageError(f"{path}: {run.problem}")
+    execution = run.execution
     answers = tuple(
         AnswerCheck(s["variable"], s, check_value(s, execution.answers.get(s["variable"])))
         for s in specs

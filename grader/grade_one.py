@@ -8,6 +8,7 @@ import os
 import shutil
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -64,52 +65,44 @@ def _execution_record(execution: Any) -> dict:
     return record
 
 
-def grade_submission(
-    submission: Submission,
-    expected: Sequence[KeyAnswer],
-    key_sha256: str,
-    execute: Execute,
-    limits: Any,
-    sha256: str | None = None,
-) -> StudentResult:
-    """Execute one submission, compare its answers, and make its record; never raises.
+@dataclass(frozen=True)
+class Run:
+    """What running one submission gave (:func:`run_one`)."""
 
-    A notebook that cannot be loaded (``SubmissionError``), a kernel that dies, a time-out, or a
-    grader fault on this one file gives a ``failed`` record saying so, with no points.
-    """
-    from grader.notebook_load import SubmissionError
+    execution: Any | None  # the Execution (grader.execute); None when it did not run
+    problem: str = ""  # why it did not run, or could not be read: for a person
+    fault: bool = False  # the grader's own failure, not the student's: graded again next time
+    sha256: str | None = None  # of the bytes that ran; None when they could not be read
+    claim: str | None = None  # the student id the notebook's own metadata names, if any
 
-    sha256 = sha256 or file_sha256(submission.path)
+
+def record(student_id: str, expected: Sequence[KeyAnswer], key_sha256: str,
+           run: Run) -> StudentResult:
+    """The record of a submission that ran (or could not): its answers compared with
+    ``expected``. A notebook that cannot be loaded, a kernel that dies, a time-out, or a grader
+    fault gives a ``failed`` record saying so, with no points (fail closed)."""
     notes = []
-    fault = False  # the grader's own failure, not the student's: graded again next time
-    claim = claimed_student(submission.path)
-    if claim is not None and claim != submission.student_id:
-        notes.append(f"note: the notebook's metadata names student {claim!r}; it was graded as "
-                     f"{submission.student_id!r}, from its file name")
-    try:
-        execution = execute(submission.path, variable_names(expected), limits)
-    except SubmissionError as e:
-        execution = None
-        notes.insert(0, f"not a valid notebook: {e}")
-    except Exception as e:  # one student's fault must not stop the others
-        execution = None
-        fault = True
-        notes.insert(0, f"the grader could not run this notebook ({type(e).__name__}: {e})")
+    if run.claim is not None and run.claim != student_id:
+        notes.append(f"note: the notebook's metadata names student {run.claim!r}; it was "
+                     f"graded as {student_id!r}, from its file name")
+    if run.problem:
+        notes.insert(0, run.problem)
+    execution = run.execution
     extracted = execution.answers if execution is not None else {}
     answers = compare(expected, extracted)
     if execution is not None and (execution.status != "ok" or not extracted):
         notes.insert(0, execution.message or f"execution status {execution.status}")
     return StudentResult(
-        student_id=submission.student_id,
+        student_id=student_id,
         status="graded" if extracted else "failed",  # fail closed: nothing read, nothing given
         message="\n".join(notes),
         answers=answers,
         points=sum(a.verdict.points for a in answers),
         max_points=sum(k.answer.points for k in expected),
-        submission_sha256=sha256,
+        submission_sha256=run.sha256,
         key_sha256=key_sha256,
         execution=(_execution_record(execution) if execution is not None else
-                   {"retry": True} if fault else {}),
+                   {"retry": True} if run.fault else {}),
         sandboxed=bool(getattr(execution, "sandboxed", False)),
         graded_at=now(),
     )
@@ -123,6 +116,20 @@ def ungraded_result(
     return StudentResult(student_id, status, message, answers, 0.0,
                          sum(k.answer.points for k in expected), None, key_sha256, {}, False,
                          now())
+
+
+def submission_bytes(limits: Any) -> int:
+    """The largest submission read (``limits.submission_bytes``; the default where the limits
+    given have none)."""
+    return getattr(limits, "submission_bytes", DEFAULT_MAX_BYTES)
+
+
+def unreadable(path: Path, err: OSError | InvalidSubmission) -> str:
+    """Why a submission file could not be read — the one wording of every stage that reads
+    one (the plan, :func:`grade_one`, the Dask executor)."""
+    if isinstance(err, InvalidSubmission):
+        return f"invalid submission: {err}"
+    return f"cannot read {Path(path).name}: {getattr(err, 'strerror', None) or err}"
 
 
 RETRIES = 2
@@ -142,49 +149,72 @@ def copies_folder() -> Iterator[Path]:
             shutil.rmtree(folder, ignore_errors=True)
 
 
-def grade_one(submission: Submission, expected: Sequence[KeyAnswer], key_hash: str,
-              limits: Any, execute: Execute | None = None, sha: str | None = None,
-              copies: Path | None = None) -> StudentResult:
-    """Grade ONE submission — the unit every way of grading shares (the local pool, a cluster,
-    the hosted entrypoints): its record, never an exception.
+def _execute(path: Path, variables: Sequence[str], execute: Execute,
+             limits: Any) -> tuple[Any | None, str, bool]:
+    """One attempt: ``(execution or None, why not, the grader's fault)``; never raises."""
+    from grader.notebook_load import SubmissionError
 
-    The submission is read as safely as in :func:`_plan` (a regular file under
+    try:
+        return execute(path, variables, limits), "", False
+    except SubmissionError as e:
+        return None, f"not a valid notebook: {e}", False
+    except Exception as e:  # one student's fault must not stop the others
+        return None, f"the grader could not run this notebook ({type(e).__name__}: {e})", True
+
+
+def run_one(path: Path, variables: Sequence[str], limits: Any,
+            execute: Execute | None = None, sha: str | None = None,
+            copies: Path | None = None) -> Run:
+    """Run ONE submission file — what grading and ``eulertop check`` share: a :class:`Run`,
+    never an exception.
+
+    The file is read as safely as the class run's plan reads it (a regular file under
     ``limits.submission_bytes``; checked to be ``sha`` when given), copied into a private
-    folder (``copies``, default a new one in the run folder), executed by ``execute``
-    (default :func:`grader.execute.execute_submission`, in the sandbox) and compared with
-    ``expected`` in this process. A run that failed for a reason that is not the student's
-    (``Execution.retry``: no kernel could be started) is run again, up to :data:`RETRIES`
-    times; if it still fails, its record says so and the next run grades it again."""
+    folder (``copies``, default a new one in the run folder) and executed there by
+    ``execute`` (default :func:`grader.execute.execute_submission`, in the sandbox). A run
+    that failed for a reason that is not the student's (``Execution.retry``: no kernel could be
+    started; or a fault of the grader's) is run again, up to :data:`RETRIES` times."""
     if copies is None:
         with copies_folder() as own:
-            return grade_one(submission, expected, key_hash, limits, execute, sha, own)
+            return run_one(path, variables, limits, execute, sha, own)
     if execute is None:
         from grader.execute import execute_submission as execute
-    max_bytes = getattr(limits, "submission_bytes", DEFAULT_MAX_BYTES)
+    path = Path(path)
     try:
-        data = read_submission(submission.path, max_bytes)
+        data = read_submission(path, submission_bytes(limits))
     except (OSError, InvalidSubmission) as e:
-        why = (f"invalid submission: {e}" if isinstance(e, InvalidSubmission) else
-               f"cannot read {submission.path.name}: {e.strerror}")
-        return ungraded_result(submission.student_id, "failed", why, expected, key_hash)
+        return Run(None, unreadable(path, e))
     if sha is None:
         sha = hashlib.sha256(data).hexdigest()
     if hashlib.sha256(data).hexdigest() != sha:
-        return ungraded_result(submission.student_id, "failed", "invalid submission: the file "
-                               "changed while the class was being graded", expected, key_hash)
+        return Run(None, "invalid submission: the file changed while the class was being graded")
     from grader.sandbox import fresh_folder
 
     folder = fresh_folder(copies, "c")
-    copy = folder / submission.path.name
+    copy = folder / path.name
     try:
         fd = os.open(copy, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
         with os.fdopen(fd, "wb") as f:
             f.write(data)
-        own = Submission(submission.student_id, copy)
+        claim = claimed_student(copy)
         for _ in range(RETRIES + 1):
-            result = grade_submission(own, expected, key_hash, execute, limits, sha)
-            if not result.execution.get("retry"):
+            execution, problem, fault = _execute(copy, variables, execute, limits)
+            if not (fault or getattr(execution, "retry", False)):
                 break
-        return result
+        return Run(execution, problem, fault, sha, claim)
     finally:
         shutil.rmtree(folder, ignore_errors=True)
+
+
+def grade_one(submission: Submission, expected: Sequence[KeyAnswer], key_hash: str,
+              limits: Any, execute: Execute | None = None, sha: str | None = None,
+              copies: Path | None = None) -> StudentResult:
+    """Grade ONE submission — the unit every way of grading shares (the local pool, Dask
+    workers, the hosted entrypoints): :func:`run_one`, then its answers compared with
+    ``expected`` in this process (:func:`record`); never an exception. A submission that could
+    not be read is recorded failed, saying why; one whose run still failed for a reason not
+    the student's is recorded with ``"retry": true``, and the next run grades it again."""
+    run = run_one(submission.path, variable_names(expected), limits, execute, sha, copies)
+    if run.sha256 is None:
+        return ungraded_result(submission.student_id, "failed", run.problem, expected, key_hash)
+    return record(submission.student_id, expected, key_hash, run)

@@ -59,11 +59,10 @@ from pathlib import Path
 from typing import Any
 
 from grader.assignment import Assignment, UsageError, load_assignment
-from grader.compare import key_answers
 from grader.discover import discover
 from grader.executors import Interrupted
 from grader.executors.local import run_local, warm_kernels
-from grader.grade_one import Execute, ungraded_result
+from grader.grade_one import Execute, submission_bytes, ungraded_result, unreadable
 from grader.gradebook import (
     answers_rows,
     feedback_html,
@@ -185,14 +184,13 @@ def _plan(a: Assignment, found, out: Path, force: bool, sandboxed: bool = False,
     by_id = {s.student_id: s for s in found.submissions}
     for sid in a.ids:
         old = None if force else read_result(out / RESULTS / f"{sid}.json")
-        expected, key_hash = key_answers(a.key, sid), a.key_hash(sid)
+        expected, key_hash = a.expected(sid), a.key_hash(sid)
         if sid in by_id:
             try:
                 data = read_submission(by_id[sid].path, max_bytes)
             except (OSError, InvalidSubmission) as e:
-                why = (f"invalid submission: {e}" if isinstance(e, InvalidSubmission) else
-                       f"cannot read {by_id[sid].path.name}: {e.strerror}")
-                fresh = ungraded_result(sid, "failed", why, expected, key_hash)
+                fresh = ungraded_result(sid, "failed", unreadable(by_id[sid].path, e), expected,
+                                        key_hash)
                 if _unchanged(old, None, key_hash, fresh):
                     kept.append(sid)
                 else:
@@ -220,7 +218,7 @@ def _publish(a: Assignment, out: Path, result: StudentResult, reveal: bool) -> N
     write_result(out / RESULTS, result)
     key = None
     if reveal:
-        key = {k.variable: k.answer.value for k in key_answers(a.key, result.student_id)}
+        key = {k.variable: k.answer.value for k in a.expected(result.student_id)}
     page = feedback_html(a.title, result, a.students[result.student_id]["questions"], key)
     atomic_write_text(out / FEEDBACK / f"{result.student_id}.html", page)
 
@@ -297,41 +295,30 @@ def grade_assignment(
         raise UsageError(f"{submissions}: not a readable folder of submissions (nor a .zip)")
     out = graded_folder(hw, out)
     require_out_outside(out, submissions)
-    if not archive:  # a zip is looked into once unpacked, below
-        require_submissions(submissions, discover(submissions, a.ids,
-                                                  merge_rows(a.rows, class_list)), a.ids)
-    own_execute = execute is None
-    found_sandbox = None
-    if execute is None and cluster is None:
-        found_sandbox = _sandbox(sandbox)
-    elif execute is None and not sandbox:
-        sys.stderr.write(WITHOUT_SANDBOX)  # on the cluster's workers
+    rows = merge_rows(a.rows, class_list)
+    found = None  # discovered once: here, or for a zip once unpacked, below
+    if not archive:
+        found = discover(submissions, a.ids, rows)
+        require_submissions(submissions, found, a.ids)
+    own_execute = execute is None  # not one a test or a benchmark injected
+    execute, found_sandbox, warm, sandboxed = _choose_executor(execute, cold_kernels, sandbox,
+                                                               cluster)
     container = getattr(found_sandbox, "tier", None) == "container"
-    warm = execute is None and not cold_kernels and not container
-    if execute is None or limits is None:
+    if limits is None:
         from grader.limits import Limits
 
-        if execute is None and cluster is None:
-            from grader.execute import execute_submission
-
-            execute = (partial(execute_submission, kernel_factory=found_sandbox.kernel_factory())
-                       if container else
-                       partial(execute_submission, sandbox=found_sandbox is not None))
-        limits = limits or Limits()
+        limits = Limits()
     made = _make_out(out)
     with _unmade_on(NoKernel, made), run_lock(out), ExitStack() as private:
         if container:  # kernels run as other users of this machine: nothing of ours for them
             found_sandbox.private_folders(private, hw, submissions, out)
         remove_stale_temporaries(out, out / RESULTS, out / FEEDBACK)
-        refused = None  # archive entries refused one by one: their owners' invalid submissions
-        if archive:
+        if archive:  # entries refused one by one: their owners' invalid submissions
             submissions, refused = _unpack(submissions, out)
-        found = discover(submissions, a.ids, merge_rows(a.rows, class_list), refused)
-        if archive:
+            found = discover(submissions, a.ids, rows, refused)
             require_submissions(submissions, found, a.ids)
-        sandboxed = found_sandbox is not None if cluster is None else sandbox and not execute
         to_run, to_write, kept, packages = _plan(a, found, out, force, sandboxed,
-                                       getattr(limits, "submission_bytes", DEFAULT_MAX_BYTES))
+                                                 submission_bytes(limits))
         jobs = jobs or os.cpu_count() or 1
         from grader.kernels.preload import preload_for
 
@@ -392,6 +379,30 @@ def _lms_table(found: Any, root: Path) -> list[list[str]]:
 WITHOUT_SANDBOX = ("eulertop grade: WARNING: grading WITHOUT a sandbox (--no-sandbox): student "
                    "code runs as you and can read the answer key, other submissions and your "
                    "files, and reach the network; every result record and grades.csv say so\n")
+
+
+def _choose_executor(execute: Execute | None, cold_kernels: bool, sandbox: bool,
+                     cluster: str | None) -> tuple[Execute | None, Any, bool, bool]:
+    """How the run executes: ``(execute, the isolation found, warm, sandboxed)``.
+
+    A given ``execute`` (tests, benchmarks) is used as it is, unsandboxed; on a cluster each
+    worker finds its own sandbox (``execute`` stays None); otherwise the isolation tier of
+    this machine (:func:`_sandbox`) — the container tier with cold kernels of their own uids,
+    the others with a warm pool unless ``cold_kernels``."""
+    if execute is not None:
+        return execute, None, False, False
+    if cluster is not None:
+        if not sandbox:
+            sys.stderr.write(WITHOUT_SANDBOX)  # on the cluster's workers
+        return None, None, False, sandbox
+    from grader.execute import execute_submission
+
+    found = _sandbox(sandbox)
+    if getattr(found, "tier", None) == "container":
+        return partial(execute_submission, kernel_factory=found.kernel_factory()), found, \
+            False, True
+    return partial(execute_submission, sandbox=found is not None), found, not cold_kernels, \
+        found is not None
 
 
 def _sandbox(wanted: bool) -> Any:
@@ -559,6 +570,6 @@ def _rebuild(a: Assignment, out: Path, results: Mapping[str, StudentResult | Non
     for sid, r in present.items():
         if sid in published:
             continue
-        key = ({k.variable: k.answer.value for k in key_answers(a.key, sid)} if reveal else None)
+        key = ({k.variable: k.answer.value for k in a.expected(sid)} if reveal else None)
         page = feedback_html(a.title, r, a.students[sid]["questions"], key)
         atomic_write_text(out / FEEDBACK / f"{sid}.html", page)

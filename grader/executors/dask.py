@@ -54,7 +54,7 @@ from typing import Any
 
 from grader.compare import KeyAnswer
 from grader.results import StudentResult
-from grader.submission_file import DEFAULT_MAX_BYTES, InvalidSubmission, read_submission
+from grader.submission_file import InvalidSubmission, read_submission
 from grader.submissions import Submission
 
 INSTALL = ("--cluster needs Dask distributed, which is not installed: "
@@ -326,13 +326,12 @@ def _fault_record(run: tuple, why: str) -> StudentResult:
 
 
 def _unreadable(run: tuple, err: Exception) -> StudentResult:
-    """The record :func:`grade_one` gives a submission it cannot read (same words)."""
-    from grader.grade_one import ungraded_result
+    """The record :func:`grade_one` gives a submission it cannot read (its wording)."""
+    from grader.grade_one import ungraded_result, unreadable
 
     submission, expected, key_hash, _ = run
-    why = (f"invalid submission: {err}" if isinstance(err, InvalidSubmission) else
-           f"cannot read {submission.path.name}: {getattr(err, 'strerror', err)}")
-    return ungraded_result(submission.student_id, "failed", why, expected, key_hash)
+    return ungraded_result(submission.student_id, "failed", unreadable(submission.path, err),
+                           expected, key_hash)
 
 
 def grade_on_cluster(
@@ -378,7 +377,9 @@ def grade_on_cluster(
 
     plugin = WorkerKernels(sandbox, cold, preload)
     _register(client, plugin)
-    max_bytes = getattr(limits, "submission_bytes", DEFAULT_MAX_BYTES)
+    from grader.grade_one import submission_bytes
+
+    max_bytes = submission_bytes(limits)
     pending = list(reversed(to_run))
     attempts: dict[str, int] = {}
     by_key: dict[str, tuple] = {}

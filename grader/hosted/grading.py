@@ -18,7 +18,6 @@ from pathlib import Path
 from typing import Any
 
 from grader.assignment import Assignment, load_assignment
-from grader.compare import key_answers
 from grader.grade_one import grade_one
 from grader.limits import Limits
 from grader.results import StudentResult
@@ -142,7 +141,7 @@ def find_notebook(folder: Path, preferred: str | None = None) -> tuple[Path | No
 def grade_notebook(a: Assignment, student_id: str, path: Path, limits: Limits,
                    isolation: Isolation) -> StudentResult:
     """Grade ``path`` as ``student_id``'s submission (their variant's key): its record."""
-    return grade_one(Submission(student_id, Path(path)), key_answers(a.key, student_id),
+    return grade_one(Submission(student_id, Path(path)), a.expected(student_id),
                      a.key_hash(student_id), limits, isolation.execute)
 
 

@@ -22,7 +22,6 @@ from typing import Any
 import numpy as np
 
 from grader.assignment import Assignment, UsageError, load_assignment
-from grader.compare import key_answers
 from grader.graded_folder import RESULTS, graded_folder
 from grader.results import StudentResult, read_result
 from problems.answers import Answer
@@ -94,13 +93,14 @@ class ClassData:
         return next((a for a in self.results[student_id].answers if a.variable == variable), None)
 
 
-def load_class(hw: Path, graded: Path | None = None) -> ClassData:
+def load_class(hw: Path | Assignment, graded: Path | None = None) -> ClassData:
     """Read an assignment and its graded records.
 
     Parameters
     ----------
-    hw : Path
-        The assignment folder (``eulertop generate``'s output).
+    hw : Path or Assignment
+        The assignment folder (``eulertop generate``'s output), or the assignment already
+        loaded from it (read once).
     graded : Path, optional
         The grading output folder (default ``hw/graded``), holding ``results/``.
 
@@ -109,8 +109,8 @@ def load_class(hw: Path, graded: Path | None = None) -> ClassData:
     grader.assignment.UsageError
         No assignment, unreadable key, or no result records (grade first).
     """
-    a = load_assignment(hw)
-    folder = graded_folder(hw, graded) / RESULTS
+    a = hw if isinstance(hw, Assignment) else load_assignment(hw)
+    folder = graded_folder(a.folder, graded) / RESULTS
     if not folder.is_dir():
         raise UsageError(f"{folder}: no result records here; run 'eulertop grade' first "
                          "(or pass --graded DIR)")
@@ -124,7 +124,7 @@ def load_class(hw: Path, graded: Path | None = None) -> ClassData:
 def class_data(a: Assignment, results: Mapping[str, StudentResult | None]) -> ClassData:
     """The class from an assignment already loaded and its records (None: no record yet)."""
     present = {sid: r for sid, r in results.items() if r is not None and sid in a.students}
-    keys = {sid: {k.variable: k.answer for k in key_answers(a.key, sid)} for sid in a.ids}
+    keys = {sid: {k.variable: k.answer for k in a.expected(sid)} for sid in a.ids}
     return ClassData(a, _items(a), present, keys)
 
 
@@ -134,7 +134,7 @@ def _items(a: Assignment) -> tuple[Item, ...]:
     items: dict[str, Item] = {}
     for sid in a.ids:
         families = {q["question"]: q["family"] for q in a.key["students"][sid]["questions"]}
-        for k in key_answers(a.key, sid):
+        for k in a.expected(sid):
             items.setdefault(k.variable, Item(k.variable, k.question, k.answer.name,
                                               k.answer.kind, families[k.question]))
     return tuple(sorted(items.values(), key=lambda i: i.question))

@@ -42,12 +42,13 @@ def run_report(args: argparse.Namespace) -> int:
         if args.out is not None and args.out.is_dir():
             raise UsageError(f"--out {args.out}: is a folder; give the page's file name, "
                              "e.g. report.html")
+        a = load_assignment(args.hw)  # read once
         submissions = None
         if args.submissions is not None:
             if not args.submissions.is_dir():
                 raise UsageError(f"--submissions {args.submissions}: not a folder")
-            submissions = submitted_notebooks(args.submissions, load_assignment(args.hw).ids)
-        report, page = report_for(args.hw, args.graded, submissions, args.out)
+            submissions = submitted_notebooks(args.submissions, a.ids)
+        report, page = report_for(a, args.graded, submissions, args.out)
     except UsageError as err:
         print(f"eulertop report: {err}", file=sys.stderr)
         return 2

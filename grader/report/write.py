@@ -6,6 +6,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from pathlib import Path
 
+from grader.assignment import Assignment, load_assignment
 from grader.gradebook import gradebook_csv
 from grader.graded_folder import REPORT, graded_folder
 from grader.report.assemble import ClassReport, build_report, items_csv
@@ -36,12 +37,14 @@ def write_report(report: ClassReport, page: Path) -> Path:
     return page
 
 
-def report_for(hw: Path, graded: Path | None = None,
+def report_for(hw: Path | Assignment, graded: Path | None = None,
                submissions: Mapping[str, Path] | None = None,
                page: Path | None = None) -> tuple[ClassReport, Path]:
     """Load, analyse and write in one call: ``(report, path of the page)``; the page goes to
-    ``page`` (default ``GRADED/report.html``, ``GRADED`` defaulting to ``hw/graded``)."""
-    graded = graded_folder(hw, graded)
-    data = load_class(hw, graded)
+    ``page`` (default ``GRADED/report.html``, ``GRADED`` defaulting to ``hw/graded``). ``hw``:
+    the assignment folder, or the assignment already loaded from it."""
+    a = hw if isinstance(hw, Assignment) else load_assignment(hw)
+    graded = graded_folder(a.folder, graded)
+    data = load_class(a, graded)
     report = build_report(data, submissions)
     return report, write_report(report, graded / REPORT if page is None else page)

@@ -57,6 +57,8 @@ def test_missing_and_malformed_answers_are_named_with_the_reason(generated_assig
     ("no_metadata", "has no eulertop answer list in its metadata: check works on the notebook "
                     "you were given"),
     ("damaged", "its eulertop metadata is damaged"),
+    # read as grade reads a submission (grader.grade_one.run_one): a regular file only
+    ("link", "alice.ipynb is a symbolic link, not a file"),
 ])
 def test_usage_errors_exit_2_with_one_line(generated_assignment, write_golden, tmp_path, capsys,
                                            case, fragment):
@@ -70,6 +72,8 @@ def test_usage_errors_exit_2_with_one_line(generated_assignment, write_golden, t
         else:
             nb["metadata"]["eulertop"]["questions"][0]["answers"][0]["kind"] = "number"
         path.write_text(json.dumps(nb))
+    elif case == "link":
+        path.symlink_to(generated_assignment.release())
     status, out, err = _check(path, capsys)
     assert status == 2 and out == ""
     assert err.startswith("eulertop check: ") and fragment in err
