@@ -1,5 +1,8 @@
 """The assignment a class is graded against (floor 4): ``HW/assignment.json`` and ``HW/key.json``
-read once into an :class:`Assignment`, with each student's key derived once."""
+read once into an :class:`Assignment`, with each student's key derived once.
+
+Floor 4 of grader/ (the unit, what it is graded against, where its records go; grader/API.md).
+"""
 
 from __future__ import annotations
 

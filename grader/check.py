@@ -24,6 +24,8 @@ metadata, not a regular file or over the size limit (as ``eulertop grade`` would
 with one line saying what to do, never a traceback.
 
 Module-level imports stay light: ``eulertop --help`` imports this module.
+
+Floor 8 of grader/ (front ends; grader/API.md).
 """
 
 from __future__ import annotations

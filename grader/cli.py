@@ -6,6 +6,8 @@ pipeline, nbclient and the comparison are imported inside the run functions.
 Exit status of ``grade``: 0 when every submission was graded (whatever the scores), 1 when
 some could not be (listed on stderr), 2 on usage errors (no assignment, no key, an unreadable
 folder, bad options, another run in progress) — one line, no traceback.
+
+Floor 8 of grader/ (front ends; grader/API.md).
 """
 
 from __future__ import annotations

@@ -10,6 +10,8 @@ extracted *and* compared correct. When nothing could be extracted (the notebook 
 the kernel died, the run was cut at its time limit) every answer is ``missing`` with no points,
 whatever the notebook's saved outputs say; a comparison that itself fails marks that answer
 ``invalid``, never correct.
+
+Floor 3 of grader/ (the stages of one submission; grader/API.md).
 """
 
 from __future__ import annotations

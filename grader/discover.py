@@ -19,6 +19,8 @@ zip bomb, names that collide) makes only its own student's submission invalid, s
 
 Hidden entries (``.ipynb_checkpoints``, ``.DS_Store``) are ignored; other files that are not
 notebooks are reported.
+
+Floor 6 of grader/ (where grade_one runs; where submissions come from; grader/API.md).
 """
 
 from __future__ import annotations

@@ -9,6 +9,8 @@ checked by starting one kernel exactly as a student's starts (:func:`grader.pipe
 
 Exit status: 0 when grading can run safely here (a tier was found and its kernel ran), 1
 otherwise.
+
+Floor 8 of grader/ (front ends; grader/API.md).
 """
 
 from __future__ import annotations

@@ -55,6 +55,8 @@ Swapping the kernel (issue 5's sandbox, warm kernels)
     factory, a submission runs in a one-slot sandboxed pool of its own (:mod:`grader.sandbox`)
     where a sandbox can be had (``sandbox=None``), and in an unsandboxed :class:`LocalKernel`
     otherwise or with ``sandbox=False``. ``Execution.sandboxed`` says which it was.
+
+Floor 3 of grader/ (the stages of one submission; grader/API.md).
 """
 
 from __future__ import annotations

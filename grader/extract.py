@@ -42,6 +42,8 @@ Trust
     nothing of the key (the grader sends variable *names* only and compares in its own
     process), so forging gains nothing; breaking the extraction loses the student their own
     answers, never anyone else's.
+
+Floor 0 of grader/ (records and pure helpers; grader/API.md).
 """
 
 from __future__ import annotations

@@ -1,5 +1,8 @@
 """ONE submission graded (floor 4): the unit every front end shares — the local pool, Dask
-workers, the hosted entrypoints — and, without a key, ``eulertop check`` (:func:`run_one`)."""
+workers, the hosted entrypoints — and, without a key, ``eulertop check`` (:func:`run_one`).
+
+Floor 4 of grader/ (the unit, what it is graded against, where its records go; grader/API.md).
+"""
 
 from __future__ import annotations
 

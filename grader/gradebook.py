@@ -11,6 +11,8 @@ values, exception messages their code raised, which verdict messages echo) but t
 text too — and the page loads nothing from anywhere (no scripts, no external styles). Question
 statements are shown as mathematics: their Markdown rendered and their LaTeX turned into MathML
 (:func:`grader.statement_html.statement_html`: raw HTML in them escaped, the MathML cleaned).
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """
 
 from __future__ import annotations

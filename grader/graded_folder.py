@@ -1,6 +1,9 @@
 """The output folder of a class run (floor 4): its layout, its default (``HW/graded``) and the
 lock that keeps two runs apart. Only the run writes records; the report and the LMS exports
-read them by this layout."""
+read them by this layout.
+
+Floor 4 of grader/ (the unit, what it is graded against, where its records go; grader/API.md).
+"""
 
 from __future__ import annotations
 

@@ -2,6 +2,8 @@
 
 A record with no behaviour, shared by ``eulertop grade`` and ``eulertop check`` (the student's
 check runs under exactly the grader's limits).
+
+Floor 0 of grader/ (records and pure helpers; grader/API.md).
 """
 
 from __future__ import annotations

@@ -27,6 +27,8 @@ Decisions
 
 Cells are numbered for people: ``cell 7`` is the seventh cell of the notebook counting
 Markdown cells too, as a student scrolling through it would count.
+
+Floor 0 of grader/ (records and pure helpers; grader/API.md).
 """
 
 from __future__ import annotations

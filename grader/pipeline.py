@@ -41,6 +41,8 @@ process, so a killed run never leaves a stale lock behind; a run that ends remov
 Refused before anything is written (:class:`UsageError`, exit 2): a SUBMISSIONS folder that
 holds no submission for any roster student (:func:`require_submissions`), and an output folder
 inside SUBMISSIONS (:func:`require_out_outside`), where the gradebook would become a submission.
+
+Floor 7 of grader/ (the class run; grader/API.md).
 """
 
 from __future__ import annotations

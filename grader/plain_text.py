@@ -11,6 +11,8 @@ A Python string can also hold what no file can: a *lone surrogate* (``\\ud800``)
 answer's JSON escape or a file name's undecodable byte (``b"\\xff"`` becomes ``"\\udcff"``).
 UTF-8 cannot encode one, so writing it stops the writer; :func:`printable` shows surrogates as
 their escapes too, and :func:`storable` shows only them (issue 23).
+
+Floor 0 of grader/ (records and pure helpers; grader/API.md).
 """
 
 from __future__ import annotations

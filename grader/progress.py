@@ -3,6 +3,8 @@
 On a terminal, one line redrawn in place (a bar, the counts, the last student); anywhere else
 (a log, a CI job, a pipe) one plain line per finished student, so nothing is full of ``\\r``.
 Called from the worker threads, hence the lock: this is the run's one piece of shared state.
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """
 
 from __future__ import annotations

@@ -24,6 +24,8 @@ Text no file can hold
     (:func:`grader.plain_text.storable`) and its message says so (:data:`UNSTORABLE`), so the
     record is written and the next run does not meet the same string again; and
     :func:`atomic_write_text` writes anything left of the kind as its escape rather than fail.
+
+Floor 0 of grader/ (records and pure helpers; grader/API.md).
 """
 
 from __future__ import annotations

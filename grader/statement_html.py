@@ -10,6 +10,8 @@ latex2mathml does not escape text inside ``\\text{…}`` or stray ``&``, so its 
 trusted: :func:`clean_mathml` re-writes it keeping only MathML elements and presentation
 attributes, with all text escaped. A formula latex2mathml cannot read is shown as its LaTeX
 source, escaped, in ``<code>``.
+
+Floor 0 of grader/ (records and pure helpers; grader/API.md).
 """
 
 from __future__ import annotations

@@ -4,6 +4,8 @@ The grader opens a student's file exactly once, here, and works from the bytes i
 follows a symbolic link (a link to the solutions notebook would otherwise be graded), never
 blocks on a FIFO or a device (``/dev/zero`` would never end), and never reads more than the
 size limit (a 75 MB notebook is refused before it is read, not after it is parsed).
+
+Floor 0 of grader/ (records and pure helpers; grader/API.md).
 """
 
 from __future__ import annotations

@@ -1,6 +1,9 @@
 """What discovery finds (floor 0): a :class:`Submission` to grade, a :class:`Problem` that
 cannot be graded as it stands, and the whole :class:`Discovery` of a submissions folder —
-shared by :mod:`grader.discover` and every LMS format of :mod:`grader.lms`."""
+shared by :mod:`grader.discover` and every LMS format of :mod:`grader.lms`.
+
+Floor 0 of grader/ (records and pure helpers; grader/API.md).
+"""
 
 from __future__ import annotations
 

@@ -214,3 +214,19 @@ def test_the_circle_finder_finds_circles():
     """Control of the tests above: the finder reports a circle when there is one."""
     assert circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
     assert circles({"a": {"b"}, "b": set()}) == []
+
+
+def test_every_grader_module_names_its_floor_in_its_docstring():
+    """A reader of any grader module learns its floor's job from its docstring
+    ("Floor N of grader/ (…)"), and the number agrees with :data:`FLOORS`."""
+    import re
+
+    wrong = []
+    for name, path in MODULES.items():
+        if not name.startswith("grader"):
+            continue
+        doc = ast.get_docstring(ast.parse(path.read_text(encoding="utf-8"))) or ""
+        said = re.search(r"Floor (\d) of grader/ \(", doc)
+        if said is None or int(said.group(1)) != floor(name) - FLOORS["grader.limits"]:
+            wrong.append(name)
+    assert wrong == []

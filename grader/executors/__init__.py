@@ -1,6 +1,9 @@
 """Where :func:`grader.grade_one.grade_one` runs (floor 6): this machine's threads and warm
 kernels (:mod:`local`) or a Dask cluster (:mod:`dask`). Each hands every record back to the
-run (``publish``), the one writer of records."""
+run (``publish``), the one writer of records.
+
+Floor 6 of grader/ (where grade_one runs; where submissions come from; grader/API.md).
+"""
 
 from __future__ import annotations
 

@@ -36,6 +36,8 @@ Flow
 
 ``dask[distributed]`` is an optional dependency (``pip install eulertop[cluster]``); this module
 imports it only inside functions, and :func:`require_distributed` says what to install.
+
+Floor 6 of grader/ (where grade_one runs; where submissions come from; grader/API.md).
 """
 
 from __future__ import annotations

@@ -1,6 +1,9 @@
 """The local executor (floor 6): ``jobs`` threads grading on this machine, with a warm pool of
 kernels (:class:`grader.kernels.pool.KernelPool`); every record handed back to the run
-(``publish``) as soon as it is made."""
+(``publish``) as soon as it is made.
+
+Floor 6 of grader/ (where grade_one runs; where submissions come from; grader/API.md).
+"""
 
 from __future__ import annotations
 

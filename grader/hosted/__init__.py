@@ -7,4 +7,6 @@ Each platform has one module for its paths, metadata and results format
 (:mod:`grader.kernels.container` where bubblewrap cannot start). ``eulertop package``
 (:mod:`grader.hosted.package`) builds what each platform takes. ``docs/hosted.md`` describes the
 formats and the documents they follow.
+
+Floor 8 of grader/ (front ends; grader/API.md).
 """

@@ -19,6 +19,8 @@ Results
     ``score`` (points), ``execution_time`` (s), ``output`` (what happened, the isolation used,
     the score), and one test per answer: ``name``, ``score``, ``max_score``, ``output`` (the
     feedback message), ``visibility`` (the package's ``--visibility``).
+
+Floor 8 of grader/ (front ends; grader/API.md).
 """
 
 from __future__ import annotations

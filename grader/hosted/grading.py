@@ -5,6 +5,8 @@ Isolation modes (``--sandbox``)
     ``auto`` (default): bubblewrap where it can start (:func:`grader.sandbox.available`), else
     the container mode (:mod:`grader.kernels.container`). ``bwrap``: bubblewrap or nothing.
     ``container``: always the container mode. The mode used is stated in every result.
+
+Floor 8 of grader/ (front ends; grader/API.md).
 """
 
 from __future__ import annotations

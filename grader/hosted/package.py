@@ -15,6 +15,8 @@ PrairieLearn (:func:`prairielearn_question`)
     the variants' key, the settings; PrairieLearn copies it to ``/grade/tests``, never to
     students). ``OUT/grader-image/``: a ``Dockerfile`` that builds the grading image from the
     wheel. ``OUT/solutions/<name>/``: each variant's solutions, for the instructor only.
+
+Floor 8 of grader/ (front ends; grader/API.md).
 """
 
 from __future__ import annotations

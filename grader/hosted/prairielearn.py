@@ -14,6 +14,8 @@ Results
     a notebook), ``score`` (points / max points, in [0, 1]), ``message`` (what happened, the
     isolation used, the points), and ``tests``: one per answer with ``name``, ``points``,
     ``max_points``, ``message`` (the feedback).
+
+Floor 8 of grader/ (front ends; grader/API.md).
 """
 
 from __future__ import annotations

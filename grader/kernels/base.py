@@ -1,6 +1,9 @@
 """The kernel contract (floor 2, ``grader/kernels/``): what every kernel a run starts is — its
 process protocol (:class:`KernelProcess`), the factory that makes one, the environment it
-gets, and the limits every channel to it keeps."""
+gets, and the limits every channel to it keeps.
+
+Floor 2 of grader/ (one kernel; grader/API.md).
+"""
 
 from __future__ import annotations
 

@@ -23,12 +23,14 @@ says ``{"ready": true}``; then, for each request of the grader, in order::
 only when the code raised nothing, as ipykernel does). ``output``: characters the request
 printed or displayed — counted, never kept or sent, since output is never graded.
 Everything the kernel says is untrusted (it is the student's process): the grader bounds
-each line (:data:`grader.execute.MAX_MESSAGE`, read by :mod:`grader.kernels.channel`) and
+each line (:data:`grader.kernels.base.MAX_MESSAGE`, read by :mod:`grader.kernels.channel`) and
 matches replies by ``n``.
 
 Interrupts: SIGINT raises ``KeyboardInterrupt`` while a request runs and is ignored between
 requests, and ``input()`` and ``getpass()`` raise ``StdinNotImplementedError``, as in ipykernel
 run by a front end that allows no input (nbclient, nbgrader).
+
+Floor 2 of grader/ (one kernel; grader/API.md).
 """
 
 from __future__ import annotations

@@ -4,9 +4,11 @@ The grader listens on a Unix socket in the kernel's private control folder
 (:func:`listen`) before asking the zygote to fork; the kernel connects once confined and says
 it is ready; :class:`CellChannel` then sends it requests one at a time and reads the replies.
 Everything the kernel says is untrusted: a line longer than
-:data:`grader.execute.MAX_MESSAGE` is dropped
+:data:`grader.kernels.base.MAX_MESSAGE` is dropped
 unread, a line that is not a reply to the request in hand is ignored, and a kernel that hangs
 up (it died) raises :class:`ChannelClosed`.
+
+Floor 2 of grader/ (one kernel; grader/API.md).
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """The container sandbox mode: where bubblewrap cannot start (a Docker container with the
 default seccomp profile, as on Gradescope and PrairieLearn), run the kernel as another user.
 
-What it does (:class:`ContainerKernel`, a :class:`grader.execute.LocalKernel`)
+What it does (:class:`ContainerKernel`, a :class:`grader.kernels.local.LocalKernel`)
     * As root, the kernel runs as an unprivileged user (:func:`kernel_user`: ``nobody``, or the
       ``--kernel-user`` option / ``EULERTOP_KERNEL_USER``), with no supplementary groups. Its
       working folder (the copy of the submission; ``HOME`` and ``TMPDIR``) and its control
@@ -39,6 +39,8 @@ kernels, each as a uid of its own never used before (:func:`grader.sandbox.slot_
 uid of a rootless container's range), so that no two students' kernels share a user; the
 instructor's folders (assignment, submissions, output) are made private to root for the run
 (:func:`private_folders`).
+
+Floor 2 of grader/ (one kernel; grader/API.md).
 """
 
 from __future__ import annotations

@@ -2,7 +2,10 @@
 
 ``world`` or ``bwrap-per-kernel`` (:func:`grader.sandbox.probe`), else — as root, where no user
 namespace can be made — the ``container`` tier (:class:`grader.kernels.container.ContainerTier`);
-else a refusal with the cause and its fix. ``eulertop grade`` and ``eulertop doctor`` ask here."""
+else a refusal with the cause and its fix. ``eulertop grade`` and ``eulertop doctor`` ask here.
+
+Floor 2 of grader/ (one kernel; grader/API.md).
+"""
 
 from __future__ import annotations
 

@@ -1,5 +1,8 @@
 """A cold kernel (floor 2): a fresh ipykernel on this machine, launched, interrupted and
-killed in one class (:class:`LocalKernel`), talked to through jupyter_client."""
+killed in one class (:class:`LocalKernel`), talked to through jupyter_client.
+
+Floor 2 of grader/ (one kernel; grader/API.md).
+"""
 
 from __future__ import annotations
 

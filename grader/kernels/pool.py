@@ -1,6 +1,6 @@
 """Warm kernels: one fresh kernel process per submission, forked from a pre-imported zygote.
 
-A cold kernel (:class:`grader.execute.LocalKernel`) spends about a second of CPU importing
+A cold kernel (:class:`grader.kernels.local.LocalKernel`) spends about a second of CPU importing
 ipykernel, IPython, numpy, scipy and sympy before it runs a line of the submission; on two
 cores that alone caps the grader near nbgrader's speed. Here each worker slot owns a *zygote*
 (:mod:`grader.kernels.zygote`), a server that has done those imports once; a kernel is a ``fork`` of
@@ -61,7 +61,9 @@ Residual risks, and the sandbox (issues 5 and 11)
 
 Fallback
     Where ``fork`` is unavailable (not Linux) or a zygote cannot be started, kernels are cold
-    (:class:`grader.execute.LocalKernel`); ``eulertop grade --cold-kernels`` asks for that.
+    (:class:`grader.kernels.local.LocalKernel`); ``eulertop grade --cold-kernels`` asks for that.
+
+Floor 2 of grader/ (one kernel; grader/API.md).
 """
 
 from __future__ import annotations
@@ -641,7 +643,7 @@ class KernelPool:
     prewarm : bool
         Fork each slot's next kernel while the current one runs.
     cold : bool
-        Hand out cold :class:`~grader.execute.LocalKernel` s only (also chosen automatically
+        Hand out cold :class:`~grader.kernels.local.LocalKernel` s only (also chosen automatically
         where :func:`fork_available` is false, or after a zygote failed to start).
     preload : sequence of str, optional
         Modules each zygote imports (default :data:`grader.kernels.zygote.PRELOAD`: ipykernel,
@@ -729,13 +731,13 @@ class KernelPool:
 
 
 class PooledKernel(LocalKernel):
-    """A forked kernel from a :class:`KernelPool` slot (:class:`grader.execute.KernelProcess`).
+    """A forked kernel from a :class:`KernelPool` slot (:class:`grader.kernels.base.KernelProcess`).
 
     ``workdir`` and ``control`` are :func:`~grader.execute.execute_submission`'s folders: the
     submission copied into ``workdir`` is moved into the forked kernel's own working folder
     (made in the slot's folder, empty until then) when the kernel is handed out. If the slot's
     zygote cannot be started, this kernel (and every later one) is a cold
-    :class:`~grader.execute.LocalKernel` instead.
+    :class:`~grader.kernels.local.LocalKernel` instead.
     """
 
     def __init__(self, pool: KernelPool, workdir: Path, control: Path, limits: Limits) -> None:

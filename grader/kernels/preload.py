@@ -1,5 +1,8 @@
 """What a class's zygotes preload (floor 2): the packages its notebooks' code imports, read
-from the submissions, out of a fixed list."""
+from the submissions, out of a fixed list.
+
+Floor 2 of grader/ (one kernel; grader/API.md).
+"""
 
 from __future__ import annotations
 

@@ -3,7 +3,7 @@
 Run by the grader as ``python grader/kernels/zygote.py`` (a script: this module imports nothing
 of the
 grader, so nothing of the grader's state is in its memory), with the scrubbed kernel
-environment of :func:`grader.execute.kernel_environment`, never the grader's own. It
+environment of :func:`grader.kernels.base.kernel_environment`, never the grader's own. It
 
 1. makes itself non-dumpable (``PR_SET_DUMPABLE 0``: no ptrace, no ``/proc/<pid>/mem`` for
    processes without ``CAP_SYS_PTRACE``), a child subreaper (``PR_SET_CHILD_SUBREAPER``: a
@@ -66,6 +66,8 @@ own world, seals it: :func:`world.seal`), and serves the grader's requests there
 of the zygote's shell (:func:`cell_server.serve`): no Jupyter kernel is started — the cells run
 in the same IPython shell a Jupyter kernel runs them in, without its ZeroMQ channels, threads
 and start-up (:mod:`grader.kernels.cell_server`).
+
+Floor 2 of grader/ (one kernel; grader/API.md).
 """
 
 from __future__ import annotations

@@ -11,4 +11,6 @@ detection from the header), :mod:`~grader.lms.download` (turning matched files i
 :mod:`~grader.lms.export` is ``eulertop export``.
 
 Which sources each format follows is written in ``docs/lms.md``.
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """

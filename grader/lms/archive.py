@@ -31,6 +31,8 @@ Extraction goes into a fresh folder that the grader owns (``OUT/download``): it 
 under a temporary name beside it and renamed into place, replacing the previous run's. A
 refused entry leaves an empty placeholder file where it would have been, so that the LMS
 modules see its name and find its owner; :attr:`Extraction.refused` says which files those are.
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """
 
 from __future__ import annotations

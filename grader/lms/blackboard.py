@@ -17,6 +17,8 @@ Upload — Grade Center → Work Offline → Upload
     ``Last Name, First Name, Username, <title> [Total Pts: <N> Score] |<column id>``, every
     field quoted; Blackboard matches students by Username and the column by its
     ``|<column id>`` (``--assignment-id``) — without one it creates a new column.
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """
 
 from __future__ import annotations

@@ -27,6 +27,8 @@ Import — Grades → Import
     ``Points Possible`` row, then one row per student; Canvas matches students by ID (then the
     SIS columns) and the column by its ``(<assignment id>)`` — or, without it, by title,
     creating a new assignment when none has that title.
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """
 
 from __future__ import annotations

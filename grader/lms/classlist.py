@@ -9,6 +9,8 @@ Every other column is kept unchanged, for matching submissions and for export.
 
 Rows that are not students (Canvas's ``Points Possible`` row, its ``Test Student``, Blackboard's
 preview user) are left out by :attr:`ClassListFormat.skip`, which says why.
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """
 
 from __future__ import annotations

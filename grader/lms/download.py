@@ -23,6 +23,8 @@ Every file matched to a student and not graded is kept in :attr:`Discovery.set_a
 for ``submissions.csv`` (:func:`submissions_table`). The layout is recognised in the folder
 given, or in its only sub-folder (a zip that holds one folder, a download unzipped into a folder
 of its own).
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """
 
 from __future__ import annotations

@@ -13,6 +13,8 @@ written beside the results every time, too.
 
 Exit status: 0 written, 2 a usage error (no graded results, a roster without the LMS's
 identifiers …), one line, no traceback.
+
+Floor 8 of grader/ (front ends; grader/API.md).
 """
 
 from __future__ import annotations

@@ -15,6 +15,8 @@ Bulk download — Assignment → Review Grades → "Export Submissions" (a zip)
 
 Upload — a score upload
     ``Email, SID, Score``, one row per student.
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """
 
 from __future__ import annotations

@@ -29,6 +29,8 @@ Import — Grades → Import → CSV file
     ``First name, Last name, ID number, Email address, <title>, Feedback``: in the import form,
     map "Email address" (or "ID number") to the user field of the same name, the title column
     to the assignment's grade item and "Feedback" to its feedback.
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """
 
 from __future__ import annotations

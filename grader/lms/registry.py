@@ -1,5 +1,8 @@
 """The LMS modules, in the order their layouts are recognised, and their class-list formats;
-which LMS's download a folder is, and its discovery (:func:`discover_download`)."""
+which LMS's download a folder is, and its discovery (:func:`discover_download`).
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
+"""
 
 from __future__ import annotations
 

@@ -12,6 +12,8 @@ Reads result records and the key, never runs student code (design.md). One call,
 * :mod:`grader.report.students`, :mod:`grader.report.figures`, :mod:`grader.report.page` —
   the table, the figures and the page; :mod:`grader.report.write` writes them;
 * :mod:`grader.report.cli` — ``eulertop report``.
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """
 
 from grader.report.assemble import ClassReport, build_report

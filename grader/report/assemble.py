@@ -5,6 +5,8 @@ statistics, the known mistakes, the common wrong answers, the copied-answer and 
 checks; :func:`write_report` writes ``report.html`` (one self-contained page,
 :mod:`grader.report.page`), ``report.csv`` (the per-student table) and ``report_items.csv``
 (the statistics per question and per answer) beside it, atomically.
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """
 
 from __future__ import annotations

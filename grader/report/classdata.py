@@ -9,6 +9,8 @@ similarity check (:mod:`grader.report.code_similarity`).
 Numbers are compared as flat float arrays: a scalar or an angle is an array of one, a vector its
 components (:func:`numeric`); booleans, choices and expressions are left out of the numerical
 analyses (a choice among three options is shared by chance far too often to prove anything).
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """
 
 from __future__ import annotations

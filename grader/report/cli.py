@@ -4,6 +4,8 @@ Writes the class report of a graded assignment (``report.html``, with ``report.c
 ``report_items.csv`` beside it). ``eulertop grade`` writes the same report at the end of every
 run; this command rewrites it, for instance with the submissions folder for the code comparison.
 Exit status 0, or 2 on a usage error (one line naming what is wrong, no traceback).
+
+Floor 8 of grader/ (front ends; grader/API.md).
 """
 
 from __future__ import annotations

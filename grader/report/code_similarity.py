@@ -21,6 +21,8 @@ Bounded per notebook (issue 23): a notebook is read as safely as for grading (a 
 of at most the submission size limit, its JSON within :func:`grader.notebook_load.notebook_json`'s
 limits), and only the first :data:`MAX_COMPARED_CHARS` characters of its code are tokenised; the
 report names the notebooks that were cut (:attr:`NotebookCode.cut`).
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """
 
 from __future__ import annotations

@@ -29,6 +29,8 @@ flagged when that expectation is at most :data:`ALPHA`.
 
 These are flags for a person to look at — two students working together, a shared worked
 example — never penalties.
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """
 
 from __future__ import annotations

@@ -6,6 +6,8 @@ is made directly (no ``pyplot``: no global state, safe in the grader's threads),
 is left out so that the same class gives the same bytes.
 
 Colours name what they show, the same in every figure and in the tables (:data:`COLOURS`).
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """
 
 from __future__ import annotations

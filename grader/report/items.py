@@ -19,6 +19,8 @@ Flags for a person to look at (:func:`item_flags`):
   one relation to the key (which points at the key);
 * ``hard``: facility below :data:`HARD_FACILITY` (and not broken);
 * ``low discrimination`` / ``negative discrimination``.
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """
 
 from __future__ import annotations

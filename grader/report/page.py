@@ -14,6 +14,8 @@ Sorting the table
     twenty lines, no library, no network — re-sorts on a click. The hash pins that exact
     script: any other script (say, markup smuggled in through a student's string value) is
     refused by the browser, on top of every value being HTML-escaped.
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """
 
 from __future__ import annotations

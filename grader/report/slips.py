@@ -18,6 +18,8 @@ Students sharing a relation on an answer form a :class:`SlipGroup`; groups of at
 :data:`MIN_GROUP` students are reported, largest first, with the formula to add as a known
 mistake to the template (``problems.answers.Mistake``). A group holding most of the class on a
 question that almost nobody got right points at the key instead (a template bug).
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """
 
 from __future__ import annotations

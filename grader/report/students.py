@@ -5,6 +5,8 @@ them — the common slips they made, the classmates their answers match (flagged
 those whose code is nearly the same. Written as CSV by :func:`grader.gradebook.gradebook_csv`,
 like every table of the project. Rows are sorted by score, highest first (ties by roster
 order), so the table reads well even where the page's sorting script does not run.
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 """
 
 from __future__ import annotations

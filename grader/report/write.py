@@ -1,5 +1,8 @@
 """The class report written (``OUT/report.html`` and its two CSV files beside it): the last
-step, composing :mod:`grader.report.assemble` (the analyses) and :mod:`grader.report.page`."""
+step, composing :mod:`grader.report.assemble` (the analyses) and :mod:`grader.report.page`.
+
+Floor 5 of grader/ (views of records, and file formats; grader/API.md).
+"""
 
 from __future__ import annotations
 

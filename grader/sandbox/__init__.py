@@ -53,6 +53,8 @@ Run folders (:func:`run_folder`)
     cannot remove it; the next run removes such stale folders — only those whose name matches
     exactly that pattern, that belong to this user, and whose grader pid is no longer alive
     (:func:`remove_stale_run_folders`).
+
+Floor 1 of grader/ (one student, one disposable world; grader/API.md).
 """
 
 from __future__ import annotations

@@ -9,6 +9,8 @@ the real cause, in words, and the fix for it. ``eulertop grade`` refuses with it
 ``eulertop doctor`` prints the facts one line each.
 
 Nothing here starts a sandbox (:func:`grader.sandbox.probe` does) or changes the machine.
+
+Floor 1 of grader/ (one student, one disposable world; grader/API.md).
 """
 
 from __future__ import annotations

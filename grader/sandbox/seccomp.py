@@ -20,6 +20,8 @@ Why each is refused
     With ``ipc`` (the ``bwrap-per-kernel`` tier, whose kernels cannot set the limits of their own
     IPC namespace, :mod:`grader.sandbox`): ``shmget`` and ``msgget`` too — SysV memory that no
     process limit counts and that outlives its maker until the sandbox ends.
+
+Floor 1 of grader/ (one student, one disposable world; grader/API.md).
 """
 
 from __future__ import annotations

@@ -33,6 +33,8 @@ read-only; every capability of the main thread dropped; ``no_new_privs``; the se
 :mod:`seccomp` on every thread (no ``ptrace``, ``process_vm_*``, ``mount``, ``unshare``,
 ``setns``, ``keyctl``, ``bpf``, ``memfd_create`` …), after which nothing of the above can be
 undone.
+
+Floor 1 of grader/ (one student, one disposable world; grader/API.md).
 """
 
 from __future__ import annotations

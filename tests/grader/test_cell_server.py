@@ -3,7 +3,7 @@ against a
 Jupyter kernel.
 
 Reference: ipykernel itself. Every notebook here runs twice, in a cold
-:class:`~grader.execute.LocalKernel` (ipykernel driven by nbclient, as nbgrader and Jupyter
+:class:`~grader.kernels.local.LocalKernel` (ipykernel driven by nbclient, as nbgrader and Jupyter
 run it) and in a kernel forked from a zygote (IPython's shell behind the cell server), and the
 two records must agree: status, each cell's error line, answers, output truncation. Then what
 only the cell server has: a kernel that writes junk, overlong lines or forged replies into its

@@ -447,3 +447,22 @@ def test_the_command_exits_2_with_one_line(hw, subs, tmp_path, capsys, case):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith(expected) and err.count("\n") == 1 and "Traceback" not in err
+
+
+@pytest.mark.parametrize("reveal", [False, True])
+def test_each_students_key_is_derived_once_per_run(hw, subs, monkeypatch, reveal):
+    """Issue 24: the plan, the records, the pages (with ``--reveal`` the key's values) and the
+    class report all use each student's key; it is derived from key.json once per run
+    (round 2 derived it three or four times)."""
+    import grader.assignment
+
+    derived = []
+    real = grader.assignment.key_answers
+
+    def counting(key, student_id):
+        derived.append(student_id)
+        return real(key, student_id)
+
+    monkeypatch.setattr(grader.assignment, "key_answers", counting)
+    _run(hw, subs, FakeExecute(), reveal=reveal)
+    assert sorted(derived) == sorted(ROSTER)
