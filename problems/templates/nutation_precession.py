@@ -39,14 +39,16 @@ lands far inside 1e-3, and every known mistake is at least 5e-3 away.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 from scipy.special import ellipk
 
-from problems.answers import Answer, Mistake, distinguishable_answers
+from problems.answers import Answer, Mistake
+from problems.family import Parameter, distinguishable, reject_unless
 from problems.rounding import latex_sig, round_sig
-from problems.templates.sleeping_top import draw_top
-from problems.variant import Variant, first_acceptable
+from problems.templates.sleeping_top import TOP_KINDS, TOP_PARAMETERS, draw_top
 from solver.heavy_top import constants_of_motion, critical_spin, cubic_roots, nutation
 
 NAME = "nutation_precession"
@@ -199,7 +201,20 @@ def _statement(noun: str, p: dict[str, float]) -> str:
     )
 
 
-def _variant(rng: np.random.Generator) -> Variant | None:
+PARAMETERS: dict[str, Parameter] = {
+    "top": TOP_PARAMETERS["top"],
+    "I1": Parameter(unit="kg m^2", description="transverse moment about the tip"),
+    "I3": Parameter(unit="kg m^2", description="moment about the symmetry axis"),
+    "Mgl": Parameter(unit="J", description="weight times tip-to-centre distance"),
+    "beta0": Parameter(unit="rad", low=TILT[0], high=TILT[1], description="tilt when let go"),
+    "omega3": Parameter(unit="rad/s", description="spin (a multiple of the critical spin)"),
+    "alpha_dot0": Parameter(unit="rad/s", description="precession rate when let go"),
+}
+
+
+def draw(rng: np.random.Generator) -> dict[str, Any] | None:
+    """A real top's moments and ``Mgl`` (rounded), its spin (a multiple of the critical spin),
+    the tilt, and one time in two a push ``α̇0`` (a multiple of ``Mgl/p_γ``)."""
     top = draw_top(rng)
     I1, I3, Mgl = (round_sig(x, SIG) for x in (top.I1, top.I3, top.Mgl))
     if I3 > 2 * I1:  # pragma: no cover - rounding cannot cross this for real tops
@@ -209,32 +224,26 @@ def _variant(rng: np.random.Generator) -> Variant | None:
     alpha_dot0 = 0.0
     if rng.random() < 0.5:
         alpha_dot0 = round_sig(rng.uniform(*PUSH) * Mgl / (I3 * omega3), SIG)
-    if not _well_posed(_state(I1, I3, Mgl, beta0, omega3, alpha_dot0)):
-        return None
-    answers = distinguishable_answers(
-        lambda: _answers(I1, I3, Mgl, beta0, omega3, alpha_dot0), MARGIN
-    )
-    if answers is None:
-        return None
-    params = {"I1": I1, "I3": I3, "Mgl": Mgl, "beta0": beta0, "omega3": omega3,
-              "alpha_dot0": alpha_dot0}
-    units = {"I1": "kg m^2", "I3": "kg m^2", "Mgl": "J", "beta0": "rad", "omega3": "rad/s",
-             "alpha_dot0": "rad/s"}
-    return Variant(NAME, TITLE, params, units, _statement(top.kind.noun, params), answers)
+    return {"top": top.kind.shape, "I1": I1, "I3": I3, "Mgl": Mgl, "beta0": beta0,
+            "omega3": omega3, "alpha_dot0": alpha_dot0}
 
 
-def generate(rng: np.random.Generator) -> Variant:
-    """One variant: a top let go at a tilt; its nutation period and mean precession (R20).
+def _numbers(params: Mapping[str, Any]) -> tuple[float, ...]:
+    return tuple(params[n] for n in ("I1", "I3", "Mgl", "beta0", "omega3", "alpha_dot0"))
 
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The only source of randomness.
 
-    Returns
-    -------
-    Variant
-        Answers ``T_nut`` (s) and ``mean_rate`` (rad/s), computed by
-        :func:`solver.heavy_top.nutation` from the displayed (3-figure) parameters.
+def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
+    """``T_nut`` and ``mean_rate`` (R20), from :func:`solver.heavy_top.nutation` on the shown
+    (3-figure) parameters.
+
+    Raises :class:`~problems.family.IllPosed` for a nearly steady motion, one near the
+    separatrix or swinging too low, or a known mistake close to the key.
     """
-    return first_acceptable(_variant, rng, NAME, MAX_ATTEMPTS)
+    numbers = _numbers(params)
+    reject_unless(_well_posed(_state(*numbers)), "nearly steady, near the separatrix, or low")
+    return distinguishable(lambda: _answers(*numbers), MARGIN)
+
+
+def statement(params: Mapping[str, Any]) -> str:
+    noun = next(k.noun for k in TOP_KINDS if k.shape == params["top"])
+    return _statement(noun, params)

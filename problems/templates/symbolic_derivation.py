@@ -36,17 +36,18 @@ each other are resampled.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import cache
+from typing import Any
 
 import numpy as np
 import sympy as sp
 
-from problems.answers import Answer, Mistake, distinguishable_answers
+from problems.answers import Answer, Mistake
+from problems.family import Parameter, distinguishable
 from problems.rounding import latex_sig, round_sig
 from problems.templates.sleeping_top import draw_top
-from problems.variant import Variant, first_acceptable
 from solver.heavy_top import constants_of_motion, critical_spin
 from solver.symbolic import (
     SYMBOLS,
@@ -317,33 +318,44 @@ def _statement(q: Quantity, params: dict[str, float]) -> str:
     )
 
 
-def _variant(rng: np.random.Generator) -> Variant | None:
-    index = int(rng.integers(len(QUANTITIES)))
-    q, c = QUANTITIES[index], _compiled(index)
+PARAMETERS: dict[str, Parameter] = {
+    "quantity": Parameter(choices=tuple(q.name for q in QUANTITIES),
+                          description="the quantity to derive"),
+    **{name: Parameter(unit=unit, description=f"${symbol}$")
+       for name, (symbol, _, unit) in _PARAM.items()},
+}
+"""The quantity, and the numbers it needs: those of its symbols (:attr:`Quantity.symbols`)."""
+
+
+def draw(rng: np.random.Generator) -> dict[str, Any]:
+    """A quantity of :data:`QUANTITIES`, and the values of its symbols for a real top in a
+    plausible state (:func:`_state`)."""
+    q = QUANTITIES[int(rng.integers(len(QUANTITIES)))]
     state = _state(rng)
-    params = {n: state[n] for n in q.symbols}
-    answers = distinguishable_answers(
-        lambda: (_number_answer(q, c, list(params.values())),), MARGIN
-    )
-    if answers is None:
-        return None
-    (number,) = answers
-    units = {n: _PARAM[n][2] for n in params}
-    return Variant(NAME, q.title, params, units, _statement(q, params), (c.expression, number))
+    return {"quantity": q.name, **{n: state[n] for n in q.symbols}}
 
 
-def generate(rng: np.random.Generator) -> Variant:
-    """One derivation variant (R14–R16, R18, R19), from ``rng`` only.
+def _quantity(params: Mapping[str, Any]) -> tuple[Quantity, _Compiled]:
+    index = next(i for i, q in enumerate(QUANTITIES) if q.name == params["quantity"])
+    return QUANTITIES[index], _compiled(index)
 
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The only source of randomness.
 
-    Returns
-    -------
-    Variant
-        Answers ``<quantity>_expr`` (expression) and ``<quantity>`` (its value, scalar), for a
-        quantity drawn from :data:`QUANTITIES`.
+def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
+    """``<quantity>_expr`` (derived by :mod:`solver.symbolic`) and ``<quantity>``, its value
+    at the shown parameters.
+
+    Raises :class:`~problems.family.IllPosed` when a numerical mistake is close to the key.
     """
-    return first_acceptable(_variant, rng, NAME, MAX_ATTEMPTS)
+    q, c = _quantity(params)
+    values = [params[n] for n in q.symbols]
+    (number,) = distinguishable(lambda: (_number_answer(q, c, values),), MARGIN)
+    return (c.expression, number)
+
+
+def heading(params: Mapping[str, Any]) -> str:
+    return _quantity(params)[0].title
+
+
+def statement(params: Mapping[str, Any]) -> str:
+    q, _ = _quantity(params)
+    return _statement(q, {n: params[n] for n in q.symbols})

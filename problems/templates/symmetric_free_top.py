@@ -17,14 +17,16 @@ mistake (e.g. ``sin Ωt ≈ 0``, where turning ω the wrong way round gives the 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from problems.answers import Answer, Mistake, distinguishable_answers
+from problems.answers import Answer, Mistake
+from problems.family import Parameter, distinguishable, reject_unless
 from problems.rounding import latex_sig, round_sig
-from problems.variant import Variant, first_acceptable
 from solver.inertia import shape_tensor
 from solver.parameters import ParameterError
 from solver.torque_free import (
@@ -58,6 +60,7 @@ MAX_ATTEMPTS = 1000
 class Body:
     """A uniform solid cylinder from everyday life, and how it is thrown (SI ranges)."""
 
+    label: str  # its parameter value
     noun: str
     story: str
     mass: tuple[float, float]  # kg
@@ -67,16 +70,16 @@ class Body:
 
 
 BODIES: tuple[Body, ...] = (
-    Body("a coin", "is flipped into the air", (3e-3, 10e-3), (9.5e-3, 15e-3), (1.5e-3, 2.5e-3),
-         (100.0, 250.0)),
-    Body("a dinner plate", "is tossed up spinning", (0.4, 0.7), (0.11, 0.14), (0.015, 0.025),
-         (5.0, 15.0)),
-    Body("an ice-hockey puck", "slides off the ice and tumbles through the air", (0.156, 0.170),
-         (0.037, 0.039), (0.024, 0.026), (20.0, 60.0)),
-    Body("a can of soup", "is thrown like a spiral pass", (0.30, 0.45), (0.033, 0.042),
+    Body("coin", "a coin", "is flipped into the air", (3e-3, 10e-3), (9.5e-3, 15e-3),
+         (1.5e-3, 2.5e-3), (100.0, 250.0)),
+    Body("plate", "a dinner plate", "is tossed up spinning", (0.4, 0.7), (0.11, 0.14),
+         (0.015, 0.025), (5.0, 15.0)),
+    Body("puck", "an ice-hockey puck", "slides off the ice and tumbles through the air",
+         (0.156, 0.170), (0.037, 0.039), (0.024, 0.026), (20.0, 60.0)),
+    Body("can", "a can of soup", "is thrown like a spiral pass", (0.30, 0.45), (0.033, 0.042),
          (0.10, 0.12), (10.0, 30.0)),
-    Body("a rolling pin", "is thrown spinning about its long axis", (0.6, 1.0), (0.025, 0.03),
-         (0.38, 0.45), (5.0, 15.0)),
+    Body("rolling_pin", "a rolling pin", "is thrown spinning about its long axis", (0.6, 1.0),
+         (0.025, 0.03), (0.38, 0.45), (5.0, 15.0)),
 )
 
 TILT = (math.radians(5.0), math.radians(30.0))
@@ -99,8 +102,9 @@ class Draw:
     t: float
 
 
-def _draw(rng: np.random.Generator) -> Draw | None:
-    """A draw, or None if the rounding pushed ``I3`` past ``2 I1`` (no rigid body)."""
+def draw(rng: np.random.Generator) -> dict[str, Any] | None:
+    """A body of :data:`BODIES`, its moments (4 figures), ω(0) and ``t`` (None: the rounding
+    pushed ``I3`` past ``2 I1``, no rigid body)."""
     body = BODIES[rng.integers(len(BODIES))]
     mass, radius, height = (round_sig(rng.uniform(*r), SIG)
                             for r in (body.mass, body.radius, body.height))
@@ -111,10 +115,29 @@ def _draw(rng: np.random.Generator) -> Draw | None:
     omega3 = rng.uniform(*body.spin)
     wobble = omega3 * math.tan(rng.uniform(*TILT))
     phi = rng.uniform(0.0, 2.0 * math.pi)
-    omega0 = tuple(round_sig([wobble * math.cos(phi), wobble * math.sin(phi), omega3], SIG))
+    omega0 = round_sig([wobble * math.cos(phi), wobble * math.sin(phi), omega3], SIG).tolist()
     period = 2.0 * math.pi / abs(float(body_precession_rate(I1, I3, omega0[2])))
     t = round_sig(rng.uniform(*PHASE_TIME) * period, SIG)
-    return Draw(body, mass, radius, height, I1, I3, omega0, t)
+    return {"body": body.label, "mass": mass, "radius": radius, "height": height,
+            "I1": I1, "I3": I3, "omega0": omega0, "t": t}
+
+
+def _draw_of(params: Mapping[str, Any]) -> Draw:
+    body = next(b for b in BODIES if b.label == params["body"])
+    return Draw(body, params["mass"], params["radius"], params["height"], params["I1"],
+                params["I3"], tuple(params["omega0"]), params["t"])
+
+
+PARAMETERS: dict[str, Parameter] = {
+    "body": Parameter(choices=tuple(b.label for b in BODIES), description="the body thrown"),
+    "mass": Parameter(unit="kg", cell=False, description="mass"),
+    "radius": Parameter(unit="m", cell=False, description="radius"),
+    "height": Parameter(unit="m", cell=False, description="length along the axis"),
+    "I1": Parameter(unit="kg m^2", figures=SIG_MOMENTS, description="transverse moment"),
+    "I3": Parameter(unit="kg m^2", figures=SIG_MOMENTS, description="axial moment"),
+    "omega0": Parameter(unit="rad/s", shape=(3,), description="ω(0), body frame"),
+    "t": Parameter(unit="s", description="the time ω(t) is asked at"),
+}
 
 
 def _turned(omega0: tuple[float, ...], rate: float, t: float) -> list[float]:
@@ -231,43 +254,17 @@ def _statement(d: Draw) -> str:
     )
 
 
-def _variant(d: Draw | None) -> Variant | None:
-    if d is None:
-        return None
-    answers = distinguishable_answers(lambda: _answers(d), MARGIN)
-    if answers is None:
-        return None
-    return Variant(
-        family=NAME,
-        title=TITLE,
-        params={"I1": d.I1, "I3": d.I3, "omega0": list(d.omega0), "t": d.t},
-        param_units={"I1": "kg m^2", "I3": "kg m^2", "omega0": "rad/s", "t": "s"},
-        statement=_statement(d),
-        answers=answers,
-    )
+def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
+    """``Omega``, ``T_body``, ``omega_t``, ``alpha_dot`` and ``theta`` (R8), computed by
+    :mod:`solver.torque_free` from the shown (rounded) values.
 
-
-def generate(rng: np.random.Generator) -> Variant:
-    """One variant of a torque-free symmetric top (R8), from ``rng`` only.
-
-    Parameters are rounded to the figures shown and every answer is computed from the rounded
-    values by :mod:`solver.torque_free`. Draws whose known mistakes are not well separated from
-    the key are resampled.
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The only source of randomness; the same generator state gives the same variant.
-
-    Returns
-    -------
-    Variant
-        Parameters (SI), statement and answers of one student's question.
-
-    Raises
-    ------
-    RuntimeError
-        No acceptable draw in ``MAX_ATTEMPTS`` (a template bug: about one draw in a few is
-        rejected).
+    Raises :class:`~problems.family.IllPosed` for no rigid body (``I3 > 2 I1``) or a known
+    mistake close to the key (e.g. ``sin Ωt ≈ 0``).
     """
-    return first_acceptable(lambda r: _variant(_draw(r)), rng, NAME, MAX_ATTEMPTS)
+    d = _draw_of(params)
+    reject_unless(d.I3 <= 2 * d.I1, "no rigid body: I3 > 2 I1")
+    return distinguishable(lambda: _answers(d), MARGIN)
+
+
+def statement(params: Mapping[str, Any]) -> str:
+    return _statement(_draw_of(params))
