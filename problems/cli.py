@@ -149,7 +149,8 @@ def _test(args: argparse.Namespace) -> int:
 
 
 def _preview(args: argparse.Namespace) -> int:
-    from problems.preview import preview_page, preview_text, write_page
+    from problems.files import write_text_atomically
+    from problems.preview import preview_page, preview_text
 
     family = _family(args)
     seeds = _seeds(args)
@@ -157,7 +158,7 @@ def _preview(args: argparse.Namespace) -> int:
     page, variants = preview_page(family, seeds)
     for line in preview_text(family, seeds, variants):
         print(line)
-    write_page(out, page)
+    write_text_atomically(out, page)
     print(f"wrote {out}")
     return 0
 

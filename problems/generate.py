@@ -578,18 +578,19 @@ def _questions_record(questions: Sequence[Question]) -> list[dict] | None:
 def _outside_families(families: Mapping[str, Family], questions: Sequence[Question],
                       out: Path) -> dict[str, dict]:
     """The manifest's record of the families from outside the package that the questions
-    use: where each comes from, its file (relative to ``out``) and the file's SHA-256."""
+    use: a family from a file, that file (relative to ``out``, so that a reroll finds it where
+    the assignment was generated); one from an installed package, its entry point; and the
+    SHA-256 of its file."""
     used = dict.fromkeys(n for q in questions for n in q.pool)
     record = {}
     for name in used:
         family = families[name]
         if family.origin == "built-in" or family.path is None:
             continue
-        record[name] = {
-            "origin": family.origin,
-            "file": os.path.relpath(Path(family.path).resolve(), out.resolve()),
-            "sha256": hashlib.sha256(Path(family.path).read_bytes()).hexdigest(),
-        }
+        path = Path(family.path)
+        where = ({"origin": family.origin} if family.origin.startswith("entry point") else
+                 {"file": os.path.relpath(path.resolve(), out.resolve())})
+        record[name] = {**where, "sha256": hashlib.sha256(path.read_bytes()).hexdigest()}
     return record
 
 
@@ -603,10 +604,12 @@ def recorded_families(manifest: Mapping, out: Path,
     for name, where in manifest.get("families", {}).items():
         if name in found:
             continue
+        if "file" not in where:
+            raise GenerateError(f"--reroll: family {name!r} ({where.get('origin')}) is not "
+                                "installed here")
         path = Path(out) / where["file"]
         try:
-            found[name] = load_family_file(path.parent if path.name == "__init__.py" else path,
-                                           where.get("origin"))
+            found[name] = load_family_file(path.parent if path.name == "__init__.py" else path)
         except FamilyError as e:
             raise GenerateError(f"--reroll: family {name!r} of {out / ASSIGNMENT}: {e}") from None
     return found

@@ -57,24 +57,18 @@ _KIND_HINTS = {
 TITLE_CELL = """\
 # {title}
 
-**Check your notebook before you submit.** On JupyterHub or Colab, run in a new cell, once: \
-`%pip install eulertop` (or the address your instructor gives), then \
-`!eulertop check {file}` — save the notebook first. In a terminal: `eulertop check {file}`. \
-It runs the notebook top to bottom as the grader will and lists each answer as ok, missing or \
-malformed; it never says whether an answer is right.\
+**Before you submit**, save and check the notebook: on JupyterHub or Colab run \
+`%pip install eulertop` (or the address your instructor gives) once, then \
+`!eulertop check {file}`; in a terminal, `eulertop check {file}`. It says which answers are \
+missing or malformed, never whether they are right.\
 """
 
 RULES = """\
 **Student:** {who}
 
-Your numbers differ from your classmates': this notebook is yours alone.
-
-- Use the parameters in the cell below as given: the key is computed from exactly these values.
-- Write each answer into its variable in the question's answer cell (leave `None` to skip it); \
-add cells for your working anywhere. Only these variables are graded, after the whole \
-notebook runs top to bottom in a fresh kernel; what you print or plot does not count.
-- Numbers may be Python or numpy numbers, vectors lists or arrays, expressions sympy \
-expressions (or strings) in the named symbols.
+Your numbers are yours alone: use them as given (the key is computed from exactly these \
+values). Write each answer into its variable in the answer cell (leave `None` to skip it); only \
+these variables are graded, after the whole notebook runs in a fresh kernel.
 
 {conventions}
 """
@@ -148,7 +142,7 @@ def _parameter_cell(variants: Sequence[Variant]) -> str:
 
 def comparison_line(variants_answers: Sequence[Any], question: int) -> str:
     """The line under a question saying how each of its answers is compared, e.g.
-    ``*Compared:* `q1_T`, `q1_L`: within 0.1 % (relative).``; answers compared alike share
+    ``*Compared:* `q1_T`, `q1_L`: within 0.1 %.``; answers compared alike share
     one entry. Derived from each answer's own kind and tolerances
     (:func:`problems.answers.comparison_rule`), never typed into a template."""
     groups: dict[str, list[str]] = {}

@@ -7,16 +7,13 @@ reads it — heading, statement and the line saying how each answer is compared,
 feedback pages' renderer (:func:`grader.statement_html.statement_html`, imported here only:
 ``problems/`` sits below ``grader/``) — then the answer cell.
 
-The page is one self-contained HTML file (no script, nothing loaded), written atomically.
+The page is one self-contained HTML file (no script, nothing loaded).
 """
 
 from __future__ import annotations
 
 import html
-import os
-import tempfile
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 
@@ -110,19 +107,3 @@ def preview_text(family: Family, seeds: Sequence[int], variants: Sequence[Varian
         key = ", ".join(f"{a.name} = {_shown(a.value)}" for a in v.answers)
         lines += [f"seed {seed}: {v.title}", f"  parameters: {params}", f"  key: {key}"]
     return lines
-
-
-def write_page(path: Path, page: str) -> None:
-    """Write ``page`` to ``path`` atomically (a temporary file beside it, renamed)."""
-    path = Path(path)
-    handle, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent or ".")
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8") as f:
-            f.write(page)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp made it private
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise

@@ -153,30 +153,20 @@ def _answers(d: Draw) -> tuple[Answer, ...]:
 
 def _statement(d: Draw) -> str:
     b, s = d.body, d.spin_axis
-    axes = "; ".join(
-        f"$\\hat e_{i}$ {d.axes[i - 1]}, $I_{i} = {latex_sig(d.moments[i - 1], SIG_MOMENTS)}$ kg m²"
-        for i in (1, 2, 3)
-    )
     w = ",\\ ".join(latex_sig(x, SIG) for x in d.omega0)
     how = ("mainly about its intermediate axis $\\hat e_2$, with a small perturbation"
            if s == 2 else f"mainly about $\\hat e_{s}$, with a large wobble")
     return (
-        f"{b.noun[0].upper()}{b.noun[1:]} ({b.description}) is tossed into the air spinning "
-        f"{how}. Its principal axes and moments about the centre of mass, **ordered** "
-        f"$I_1 < I_2 < I_3$, are: {axes} (`I1`, `I2`, `I3`; use them as given).\n\n"
-        "At $t = 0$ the body-frame components of the angular velocity are "
-        f"$(\\omega_1, \\omega_2, \\omega_3) = ({w})$ rad/s (`omega0`). Solve Euler's "
-        "equations exactly (Jacobi elliptic functions), not in the small-amplitude "
-        "approximation.\n\n"
-        "1. `period`: the period $P$ (s) of $\\boldsymbol\\omega(t)$ in the body frame: the "
-        "smallest $P > 0$ with $\\boldsymbol\\omega(t + P) = \\boldsymbol\\omega(t)$ for all "
-        "three components.\n"
-        "2. `t_flip`: the flip time (s): the time $\\omega_2$ takes to go from one of its "
-        "maxima to the next minimum (for a body spun near $\\hat e_2$, the time it takes to "
-        "turn over).\n"
+        f"{b.noun[0].upper()}{b.noun[1:]} ({b.description}) is tossed spinning {how}. Its "
+        "principal axes and moments about the centre of mass, **ordered** $I_1 < I_2 < I_3$, "
+        f"are: {near_axis.axes_text(d)} (`I1`, `I2`, `I3`). At $t = 0$, "
+        f"$\\boldsymbol\\omega = ({w})$ rad/s in body components (`omega0`). Solve Euler's "
+        "equations exactly (Jacobi elliptic functions).\n\n"
+        "1. `period`: the least $P > 0$ with $\\boldsymbol\\omega(t + P) = "
+        "\\boldsymbol\\omega(t)$, all three components;\n"
+        "2. `t_flip`: the time $\\omega_2$ takes from a maximum to the next minimum;\n"
         "3. `circled_axis`: the principal axis that $\\boldsymbol\\omega$ circles in the body "
-        "frame (the one whose component of $\\boldsymbol\\omega$ never changes sign): "
-        '`"1"`, `"2"` or `"3"`.'
+        'frame (its component never changes sign): `"1"`, `"2"` or `"3"`.'
     )
 
 

@@ -135,19 +135,21 @@ def _satellite_answers(params: Mapping[str, Any]) -> tuple | None:
     )
 
 
+_ASK = ("Find the kinetic energy $T$, the angular momentum $\\mathbf L$ about the centre of "
+        "mass (along the same axes as $\\boldsymbol\\omega$), and the angle between "
+        "$\\mathbf L$ and $\\boldsymbol\\omega$ (from 0 to π).")
+
+
 def _satellite_statement(params: Mapping[str, Any]) -> str:
     tensor, omega = params["I"], params["omega"]
     rows = " \\\\ ".join(" & ".join(latex_sig(x, 4) for x in row) for row in tensor)
     return (
-        "A small satellite tumbles after the failure of its attitude control. In its body axes "
-        "its inertia tensor about the centre of mass is (`I`, kg m²)\n\n"
-        f"$$\\mathsf I = \\begin{{pmatrix}} {rows} \\end{{pmatrix}}\\ \\mathrm{{kg\\,m^2}},$$\n\n"
-        "and its angular velocity has the body components "
+        "A small satellite tumbles after its attitude control failed. In its body axes, its "
+        "inertia tensor about the centre of mass is (`I`)\n\n"
+        f"$$\\mathsf I = \\begin{{pmatrix}} {rows} \\end{{pmatrix}}\\ \\mathrm{{kg\\,m^2}},$$"
+        "\n\nand its angular velocity is "
         f"$\\boldsymbol\\omega = ({', '.join(format_sig(w, 3) for w in omega)})$ rad/s "
-        "(`omega`).\n\n"
-        "Find the rotational kinetic energy $T$, the angular momentum $\\mathbf L$ about the "
-        "centre of mass (body components), and the angle between $\\mathbf L$ and "
-        f"$\\boldsymbol\\omega$ in radians (between 0 and π)."
+        f"(`omega`).\n\n{_ASK}"
     )
 
 
@@ -184,15 +186,11 @@ def _disc_statement(params: Mapping[str, Any]) -> str:
     M, R, theta, w = (params[n] for n in ("M", "R", "theta", "omega"))
     return (
         f"A {params['disc']}, a uniform thin disc of mass $M = {latex_sig(M, 3)}$ kg (`M`) and "
-        f"radius $R = {latex_sig(R, 3)}$ m (`R`), is mounted askew on its axle: the axle passes "
-        "through the disc's centre, but the disc's symmetry axis makes the angle "
-        f"$\\theta = {latex_sig(theta, 3)}$ rad (`theta`) with it. The axle spins at "
-        f"$\\omega = {latex_sig(w, 3)}$ rad/s (`omega`).\n\n"
-        "Take axes through the disc's centre with $z$ along the axle and the disc's symmetry "
-        "axis in the $xz$ plane, along $(\\sin\\theta, 0, \\cos\\theta)$, at the instant "
-        "shown. Find the kinetic energy $T$, the angular momentum $\\mathbf L$ about the "
-        "centre (components along $x, y, z$), and the angle between $\\mathbf L$ and "
-        f"$\\boldsymbol\\omega$ in radians (between 0 and π)."
+        f"radius $R = {latex_sig(R, 3)}$ m (`R`), is mounted askew: its axle passes through its "
+        f"centre at the angle $\\theta = {latex_sig(theta, 3)}$ rad (`theta`) to its symmetry "
+        f"axis, and spins at $\\omega = {latex_sig(w, 3)}$ rad/s (`omega`). Take $z$ along the "
+        "axle and the symmetry axis along $(\\sin\\theta, 0, \\cos\\theta)$ at this "
+        f"instant.\n\n{_ASK}"
     )
 
 

@@ -75,8 +75,8 @@ _OMEGA3_IS_GAMMA_DOT = (
     "component α̇ cos β along ê₃."
 )
 _EXPRESSION_TASK = (
-    "For a **symmetric** body ($I_2 = I_1$), write the kinetic energy as an expression in "
-    "`I1, I3, beta, alpha_dot, beta_dot, gamma_dot` (a sympy expression or a string, e.g. "
+    "`T_expr`: for a **symmetric** body ($I_2 = I_1$), $T$ as an expression in "
+    "`I1, I3, beta, alpha_dot, beta_dot, gamma_dot` (sympy, or a string such as "
     "`\"I1*beta_dot**2/2 + ...\"`)."
 )
 
@@ -196,15 +196,14 @@ def _body_text(params: Mapping[str, Any]) -> str:
     I1, I3 = latex_sig(params["I1"], 3), latex_sig(params["I3"], 3)
     if params["scene"] == "toy_top":
         return (
-            "A toy top spins with its tip fixed on a table. Its principal moments about the tip "
-            f"are $I_1 = I_2 = {I1}$ kg m² (`I1`, about any axis through the tip "
-            f"perpendicular to the symmetry axis) and $I_3 = {I3}$ kg m² (`I3`, about "
-            "the symmetry axis)."
+            "A toy top spins on a fixed tip. Its principal moments about the tip are "
+            f"$I_1 = I_2 = {I1}$ kg m² (`I1`) and $I_3 = {I3}$ kg m² (`I3`, about the symmetry "
+            "axis)."
         )
     return (
-        f"A {params['box']} is tossed in the air, tumbling about its centre of mass. Its "
-        f"principal moments are $I_1 = {I1}$ kg m² (`I1`), "
-        f"$I_2 = {latex_sig(params['I2'], 3)}$ kg m² (`I2`) and $I_3 = {I3}$ kg m² (`I3`)."
+        f"A {params['box']} tumbles in the air. Its principal moments about the centre of mass "
+        f"are $I_1 = {I1}$ kg m² (`I1`), $I_2 = {latex_sig(params['I2'], 3)}$ kg m² (`I2`) and "
+        f"$I_3 = {I3}$ kg m² (`I3`)."
     )
 
 
@@ -250,9 +249,7 @@ def statement(params: Mapping[str, Any]) -> str:
     shown = ", ".join(f"${s} = {latex_sig(params[n], 3)}$ {PARAMETERS[n].unit} (`{n}`)"
                       for s, n in zip(symbols, _NAMES, strict=True))
     return (
-        f"{_body_text(params)} At one instant its Euler angles and their rates are {shown}; its "
-        "body axes $\\hat e_1, \\hat e_2, \\hat e_3$ are the principal axes of "
-        "$I_1, I_2, I_3$.\n\n"
-        "1. Find its rotational kinetic energy $T$ at that instant.\n"
+        f"{_body_text(params)} At one instant its Euler angles and rates are {shown}.\n\n"
+        "1. `T`: its kinetic energy at that instant;\n"
         f"2. {_EXPRESSION_TASK}"
     )

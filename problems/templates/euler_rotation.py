@@ -101,10 +101,9 @@ def _vector_answer(params: Mapping[str, Any]) -> tuple[Answer | None, str]:
             ("transpose", to_body(R, r_body), _TRANSPOSE),
             ("degree_mode", to_inertial(R_deg, r_body), _DEGREE_MODE),
         ], "m", "lab components of the marker's position")
-        text = ("A marker painted on the body sits at body coordinates "
+        text = ("`r_lab`: the lab coordinates of a marker at the body coordinates "
                 f"$\\mathbf r' = ({', '.join(format_sig(x, 2) for x in r_body)})$ m (`r_body`) "
-                "relative to the origin (the fixed tip or centre). Find its lab coordinates "
-                "$\\mathbf r$.")
+                "from the fixed point;")
         return answer, text
     F_lab = np.array(params["F_lab"])
     F_body = to_body(R, F_lab)
@@ -112,9 +111,8 @@ def _vector_answer(params: Mapping[str, Any]) -> tuple[Answer | None, str]:
         ("transpose", to_inertial(R, F_lab), _TRANSPOSE),
         ("degree_mode", to_body(R_deg, F_lab), _DEGREE_MODE),
     ], "N", "body components of the force")
-    text = ("A force with lab components "
-            f"$\\mathbf F = ({', '.join(format_sig(x, 3) for x in F_lab)})$ N (`F_lab`) acts on "
-            "the body. Find its body components $\\mathbf F'$.")
+    text = ("`F_body`: the body components of a force with the lab components "
+            f"$\\mathbf F = ({', '.join(format_sig(x, 3) for x in F_lab)})$ N (`F_lab`);")
     return answer, text
 
 
@@ -200,11 +198,9 @@ def statement(params: Mapping[str, Any]) -> str:
         for s, n in zip(symbols, (*_ANGLES, *_RATES), strict=True)
     )
     return (
-        f"The orientation of {BODIES[params['body']][0]} is described by Euler angles. At one "
-        f"instant: {shown}.\n\n"
-        "1. Find the rotation matrix $R$; give its nine entries row by row, "
-        "$[R_{11}, R_{12}, R_{13}, R_{21}, \\dots, R_{33}]$ (e.g. `R.ravel()`).\n"
+        f"At one instant, the Euler angles of {BODIES[params['body']][0]} and their rates are "
+        f"{shown}.\n\n"
+        "1. `R`: the rotation matrix, its nine entries row by row (e.g. `R.ravel()`);\n"
         f"2. {_vector_answer(params)[1]}\n"
-        "3. Find the body components $(\\omega_1, \\omega_2, \\omega_3)$ of the angular "
-        "velocity."
+        "3. `omega_body`: the body components of the angular velocity."
     )

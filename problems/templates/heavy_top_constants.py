@@ -218,11 +218,9 @@ def _toy_top(p: Mapping[str, Any]) -> Top:
     I1, I3, Mgl, I1_cm = _disc_moments(p)
     touch = math.atan2(p["l"], p["R"])  # the rim reaches the table
     text = (
-        f"A toy top is a thin brass disc of mass {_shown(p, 'M', 'M', 'kg')} and radius "
-        f"{_shown(p, 'R', 'R', 'm')}, fixed at its centre on a light axle perpendicular to "
-        f"it. The disc's centre is {_shown(p, 'l', 'l', 'm')} from the axle's lower tip, "
-        "which spins in a small dimple in the table: a fixed point. Treat the disc as thin and "
-        f"the axle as massless; {_shown(p, 'g', 'g', 'm/s²')}."
+        f"A toy top: a thin brass disc of mass {_shown(p, 'M', 'M', 'kg')} and radius "
+        f"{_shown(p, 'R', 'R', 'm')} on a massless axle whose tip, {_shown(p, 'l', 'l', 'm')} "
+        f"from the disc's centre, rests in a dimple of the table; {_shown(p, 'g', 'g', 'm/s²')}."
     )
     return Top("toy_top", "A toy top on a table", text, dict(p), I1, I3, Mgl, I1_cm,
                (0.15, touch - 0.1), (POLE_MARGIN, touch - TABLE_MARGIN), (100.0, 300.0))
@@ -232,11 +230,9 @@ def _hanging(p: Mapping[str, Any]) -> Top:
     I1, I3, Mgl, I1_cm = _disc_moments(p)
     text = (
         f"A thin brass disc of mass {_shown(p, 'M', 'M', 'kg')} and radius "
-        f"{_shown(p, 'R', 'R', 'm')} is fixed at its centre on a light rod perpendicular "
-        "to it. The rod's upper end hangs from a ball joint (a fixed point), the disc's centre "
-        f"{_shown(p, 'l', 'l', 'm')} below it along the rod, so that the symmetry axis "
-        "from the joint to the disc points below the horizontal ($\\beta > \\pi/2$). Treat the "
-        f"disc as thin and the rod as massless; {_shown(p, 'g', 'g', 'm/s²')}."
+        f"{_shown(p, 'R', 'R', 'm')} hangs on a massless rod from a ball joint, its centre "
+        f"{_shown(p, 'l', 'l', 'm')} from the joint: the symmetry axis points below the "
+        f"horizontal ($\\beta > \\pi/2$); {_shown(p, 'g', 'g', 'm/s²')}."
     )
     return Top("hanging", "A spinning disc hanging from a ball joint", text, dict(p),
                I1, I3, Mgl, I1_cm, (1.9, 2.85), (math.pi / 2, math.pi - POLE_MARGIN),
@@ -261,13 +257,10 @@ def _gyroscope_body(rng: np.random.Generator) -> dict[str, float]:
 
 def _gyroscope(p: Mapping[str, Any]) -> Top:
     text = (
-        "A gyroscope (a brass rotor on a steel axle) spins with the lower end of its axle "
-        "resting in a cup on top of a tall post: a fixed point. Its mass is "
-        f"{_shown(p, 'M', 'M', 'kg')}, its centre of mass lies on the axle "
-        f"{_shown(p, 'l', 'l', 'm')} from the pivot, and its moments of inertia are "
-        f"{_shown(p, 'I1', 'I_1', 'kg m²')} about any axis through the pivot "
-        f"perpendicular to the axle and {_shown(p, 'I3', 'I_3', 'kg m²')} about the axle; "
-        f"{_shown(p, 'g', 'g', 'm/s²')}."
+        "A gyroscope rests on a post at the end of its axle (the pivot): mass "
+        f"{_shown(p, 'M', 'M', 'kg')}, centre of mass {_shown(p, 'l', 'l', 'm')} from the "
+        f"pivot, moments {_shown(p, 'I1', 'I_1', 'kg m²')} about the pivot and "
+        f"{_shown(p, 'I3', 'I_3', 'kg m²')} about the axle; {_shown(p, 'g', 'g', 'm/s²')}."
     )
     return Top("gyroscope", "A gyroscope on a post", text, dict(p), p["I1"], p["I3"],
                p["M"] * p["g"] * p["l"], None, (0.2, 1.6), (POLE_MARGIN, math.pi / 2 + 0.4),
@@ -336,7 +329,7 @@ def state_text(state: State) -> str:
         f"${s} = {latex_sig(v, SIG)}$ {STATE_UNITS[n]} (`{n}`)"
         for s, n, v in zip(_STATE_SYMBOLS, STATE_NAMES, astuple(state), strict=True)
     )
-    return f"At $t = 0$ the Euler angles' values and rates are {shown}."
+    return f"At $t = 0$: {shown}."
 
 
 def variant_params(top: Top, state: State, **extra: float) -> dict[str, Any]:
@@ -472,11 +465,9 @@ def _answers(top: Top, state: State) -> tuple[Answer, ...] | None:
 
 def _statement(top: Top, state: State) -> str:
     return (
-        f"{top.text}\n\n{state_text(state)}\n\n"
-        "Find the constants of the motion:\n\n"
-        "1. `p_gamma`: the momentum $p_\\gamma$ conjugate to $\\gamma$, in kg m²/s;\n"
-        "2. `p_alpha`: the momentum $p_\\alpha$ conjugate to $\\alpha$, in kg m²/s;\n"
-        "3. `E_prime`: the reduced energy $E' = E - p_\\gamma^2/(2 I_3)$, in J."
+        f"{top.text} {state_text(state)}\n\n"
+        "1. `p_gamma`, `p_alpha`: the momenta conjugate to $\\gamma$ and $\\alpha$;\n"
+        "2. `E_prime`: the reduced energy $E' = E - p_\\gamma^2/(2 I_3)$."
     )
 
 

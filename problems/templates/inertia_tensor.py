@@ -56,11 +56,13 @@ BOXES = {
     "solar panel": ((1.5, 2.5), (0.8, 1.2), (0.02, 0.04), (8.0, 20.0)),
 }
 
-_AXIS_NOTE = (
-    "An eigenvector is defined only up to its sign: give the **unit** vector with a **positive "
-    "$z$ component**."
+_ASK = (
+    "Find the inertia tensor about $O$: its diagonal $(I_{xx}, I_{yy}, I_{zz})$ and its products "
+    "of inertia $(I_{xy}, I_{xz}, I_{yz})$, with their minus sign, $I_{xy} = -\\sum m\\,x y$. "
+    "Then the principal moments, ascending, and the **unit** axis of the largest, with a "
+    "**positive $z$ component**."
 )
-_SIGN_NOTE = "with their minus sign, $I_{xy} = -\\sum m\\,x y$"
+"""What is asked, for either scene."""
 
 
 def _positive_z(v: np.ndarray) -> np.ndarray:
@@ -181,16 +183,10 @@ def _point_mass_statement(params: Mapping[str, Any]) -> str:
         for k, (m, r) in enumerate(zip(masses, positions, strict=True), 1)
     )
     return (
-        f"{len(masses)} small weights, which may be treated as point masses, are fixed on a "
-        "light rigid frame that turns about a pivot $O$. Their masses and their positions "
-        "relative to $O$ (components along the frame's axes $x, y, z$) are:\n\n"
-        "| weight | mass | position |\n| --- | --- | --- |\n"
-        f"{rows}\n\n"
-        "Find the inertia tensor of the weights about $O$ in the frame's axes: its diagonal "
-        "$(I_{xx}, I_{yy}, I_{zz})$ and its products of inertia $(I_{xy}, I_{xz}, I_{yz})$, "
-        f"{_SIGN_NOTE}. "
-        "Then find the principal moments about $O$, in ascending order, and the principal axis "
-        f"of the largest one. {_AXIS_NOTE}"
+        f"{len(masses)} point masses on a light rigid frame turn about a pivot $O$. Their "
+        "masses, and positions from $O$ along the frame's axes $x, y, z$:\n\n"
+        "| | mass | position |\n| --- | --- | --- |\n"
+        f"{rows}\n\n{_ASK}"
     )
 
 
@@ -221,17 +217,11 @@ def _box_tensor(params: Mapping[str, Any]) -> tuple[np.ndarray, dict]:
 def _box_statement(params: Mapping[str, Any]) -> str:
     M, a, b, c = (params[n] for n in ("M", "a", "b", "c"))
     return (
-        f"A {params['box']} is modelled as a uniform rectangular box of mass "
-        f"$M = {latex_sig(M, 3)}$ kg (`M`) with edges $a = {latex_sig(a, 3)}$ m (`a`), "
-        f"$b = {latex_sig(b, 3)}$ m (`b`) and "
-        f"$c = {latex_sig(c, 3)}$ m (`c`). It turns about one of its corners, $O$. Take axes "
-        "$x, y, z$ from $O$ along the edges $a, b, c$, so that the box fills "
-        "$0 \\le x \\le a$, $0 \\le y \\le b$, $0 \\le z \\le c$.\n\n"
-        "Find the inertia tensor of the box about $O$ in these axes: its diagonal "
-        "$(I_{xx}, I_{yy}, I_{zz})$ and its products of inertia $(I_{xy}, I_{xz}, I_{yz})$, "
-        f"{_SIGN_NOTE}. "
-        "Then find the principal moments about $O$, in ascending order, and the principal axis "
-        f"of the largest one. {_AXIS_NOTE}"
+        f"A {params['box']}, a uniform box of mass $M = {latex_sig(M, 3)}$ kg (`M`) with edges "
+        f"$a = {latex_sig(a, 3)}$ m (`a`), $b = {latex_sig(b, 3)}$ m (`b`) and "
+        f"$c = {latex_sig(c, 3)}$ m (`c`), turns about a corner $O$. Axes $x, y, z$ run from "
+        "$O$ along $a, b, c$: the box fills $0 \\le x \\le a$, $0 \\le y \\le b$, "
+        f"$0 \\le z \\le c$.\n\n{_ASK}"
     )
 
 

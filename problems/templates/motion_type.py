@@ -170,16 +170,12 @@ def _figure_answer(figure: str) -> Answer:
 
 def _statement(top: Top, state: State) -> str:
     return (
-        f"{top.text}\n\n{state_text(state)}\n\n"
-        "The axis nods (nutates) between the turning points $\\beta_1 \\le \\beta_2$ while it "
-        "precesses. Find:\n\n"
-        "1. `alpha_dot1`, `alpha_dot2`: the precession rate $\\dot\\alpha$, in rad/s, at the "
-        "instants when the tilt is $\\beta_1$ and $\\beta_2$ respectively;\n"
-        "2. `motion`: the figure that the symmetry axis traces on a sphere centred on the "
-        'fixed point, one of `"waves"`, `"loops"` or `"cusps"`.'
+        f"{top.text} {state_text(state)}\n\n"
+        "1. `alpha_dot1`, `alpha_dot2`: the precession rate $\\dot\\alpha$ when the tilt is at "
+        "the turning points $\\beta_1 \\le \\beta_2$ of the nutation;\n"
+        "2. `motion`: the figure the symmetry axis traces on a sphere about the fixed point: "
+        '`"waves"`, `"loops"` or `"cusps"`.'
     )
-
-
 
 
 def draw(rng: np.random.Generator) -> dict[str, Any]:

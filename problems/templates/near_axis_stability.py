@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -66,7 +66,6 @@ class Body:
     parameters, which hold the rounded moments instead)."""
 
     label: str  # its parameter value: a key of KINDS
-    dims: dict[str, float]  # the dimensions the statement shows (parameters)
     moments: tuple[float, float, float] | None = None
 
     @property
@@ -84,8 +83,8 @@ class Body:
 
     @property
     def description(self) -> str:
-        """The body in words, with its dimensions."""
-        return KINDS[self.label].describe(self.dims)
+        """The body in words."""
+        return KINDS[self.label].description
 
 
 def _u(rng: np.random.Generator, low: float, high: float) -> float:
@@ -98,13 +97,7 @@ def _box(rng: np.random.Generator, label: str, mass: tuple[float, float],
     m = _u(rng, *mass)
     a, b, c = (_u(rng, *e) for e in edges)
     tensor = shape_tensor("box", m, a=a, b=b, c=c)
-    return Body(label, {"m": m, "a": a, "b": b, "c": c}, tuple(np.diag(tensor).tolist()))
-
-
-def _describe_box(d: Mapping[str, float]) -> str:
-    return (f"a uniform box of mass ${latex_sig(d['m'], SIG)}$ kg, "
-            f"${latex_sig(d['a'], SIG)} \\times {latex_sig(d['b'], SIG)} \\times "
-            f"{latex_sig(d['c'], SIG)}$ m")
+    return Body(label, tuple(np.diag(tensor).tolist()))
 
 
 def _racket(rng: np.random.Generator) -> Body:
@@ -119,14 +112,7 @@ def _racket(rng: np.random.Generator) -> Body:
     x_cm = (m_h * x_h + m_d * x_d) / (m_h + m_d)
     tensor = (parallel_axis(handle, m_h, [x_h - x_cm, 0.0, 0.0])
               + parallel_axis(head, m_d, [x_d - x_cm, 0.0, 0.0]))
-    dims = {"m_handle": m_h, "l_handle": l_h, "m_head": m_d, "r_head": r_d}
-    return Body("racket", dims, tuple(np.diag(tensor).tolist()))
-
-
-def _describe_racket(d: Mapping[str, float]) -> str:
-    return (f"a handle of mass ${latex_sig(d['m_handle'], SIG)}$ kg and length "
-            f"${latex_sig(d['l_handle'], SIG)}$ m ending in a round head of mass "
-            f"${latex_sig(d['m_head'], SIG)}$ kg and radius ${latex_sig(d['r_head'], SIG)}$ m")
+    return Body("racket", tuple(np.diag(tensor).tolist()))
 
 
 def _t_handle(rng: np.random.Generator) -> Body:
@@ -142,17 +128,7 @@ def _t_handle(rng: np.random.Generator) -> Body:
     y_cm = m_s * y_s / (m_c + m_s)
     tensor = (parallel_axis(bar, m_c, [0.0, -y_cm, 0.0])
               + parallel_axis(stem, m_s, [0.0, y_s - y_cm, 0.0]))
-    dims = {"m_bar": m_c, "l_bar": l_c, "r_bar": r_c, "m_stem": m_s, "l_stem": l_s,
-            "r_stem": r_s}
-    return Body("t_handle", dims, tuple(np.diag(tensor).tolist()))
-
-
-def _describe_t_handle(d: Mapping[str, float]) -> str:
-    return (f"a crossbar of mass ${latex_sig(d['m_bar'], SIG)}$ kg, length "
-            f"${latex_sig(d['l_bar'], SIG)}$ m and radius ${latex_sig(d['r_bar'], SIG)}$ m "
-            f"with a stem of mass ${latex_sig(d['m_stem'], SIG)}$ kg, length "
-            f"${latex_sig(d['l_stem'], SIG)}$ m and radius ${latex_sig(d['r_stem'], SIG)}$ m "
-            "fixed to its middle")
+    return Body("t_handle", tuple(np.diag(tensor).tolist()))
 
 
 @dataclass(frozen=True)
@@ -160,21 +136,22 @@ class Kind:
     """What the statement says about a kind of body, and its range of spins (rad/s)."""
 
     noun: str
+    description: str
     axes: tuple[str, str, str]
     spin: tuple[float, float]
-    describe: Callable[[Mapping[str, float]], str]
 
 
 _BOX_AXES = ("along its length", "along its width", "perpendicular to its largest face")
 KINDS: dict[str, Kind] = {
-    "smartphone": Kind("a smartphone", _BOX_AXES, (5.0, 20.0), _describe_box),
-    "book": Kind("a book", _BOX_AXES, (3.0, 12.0), _describe_box),
-    "brick": Kind("a brick", _BOX_AXES, (3.0, 10.0), _describe_box),
-    "racket": Kind("a tennis racket", ("along the handle", "in the plane of the strings, "
-                   "across the handle", "perpendicular to the strings"), (4.0, 12.0),
-                   _describe_racket),
-    "t_handle": Kind("a T-handle", ("along the crossbar", "along the stem",
-                     "perpendicular to crossbar and stem"), (5.0, 20.0), _describe_t_handle),
+    "smartphone": Kind("a smartphone", "a uniform box", _BOX_AXES, (5.0, 20.0)),
+    "book": Kind("a book", "a uniform box", _BOX_AXES, (3.0, 12.0)),
+    "brick": Kind("a brick", "a uniform box", _BOX_AXES, (3.0, 10.0)),
+    "racket": Kind("a tennis racket", "a handle ending in a round head",
+                   ("along the handle", "in the plane of the strings, across the handle",
+                    "perpendicular to the strings"), (4.0, 12.0)),
+    "t_handle": Kind("a T-handle", "a crossbar with a stem fixed to its middle",
+                     ("along the crossbar", "along the stem",
+                      "perpendicular to crossbar and stem"), (5.0, 20.0)),
 }
 """Label → kind of body (the bodies of :func:`draw_body`)."""
 
@@ -183,19 +160,11 @@ ORDERS = tuple("".join(map(str, p)) for p in itertools.permutations(range(3)))
 
 
 def body_parameters() -> dict[str, Parameter]:
-    """The parameters of a body and its spin (shared with asymmetric_free_top): its kind, its
-    shown dimensions (statement only), which body axis is each ê_i, the rounded moments, the
-    axis spun about and ω(0)."""
-    dims = {"m": ("kg", "mass"), "a": ("m", "length"), "b": ("m", "width"),
-            "c": ("m", "thickness"), "m_handle": ("kg", "handle mass"),
-            "l_handle": ("m", "handle length"), "m_head": ("kg", "head mass"),
-            "r_head": ("m", "head radius"), "m_bar": ("kg", "crossbar mass"),
-            "l_bar": ("m", "crossbar length"), "r_bar": ("m", "crossbar radius"),
-            "m_stem": ("kg", "stem mass"), "l_stem": ("m", "stem length"),
-            "r_stem": ("m", "stem radius")}
+    """The parameters of a body and its spin (shared with asymmetric_free_top): its kind,
+    which body axis is each ê_i, the rounded moments (computed from dimensions the student is
+    not shown), the axis spun about and ω(0)."""
     return {
         "body": Parameter(choices=tuple(KINDS), description="the body tossed"),
-        **{n: Parameter(unit=u, cell=False, description=d) for n, (u, d) in dims.items()},
         "order": Parameter(choices=ORDERS, description="body axis of ê1, ê2, ê3"),
         **{f"I{i}": Parameter(unit="kg m^2", figures=SIG_MOMENTS, description=f"moment I{i}")
            for i in (1, 2, 3)},
@@ -241,25 +210,16 @@ class Draw:
     def params(self) -> dict[str, Any]:
         """The recorded parameters."""
         I1, I2, I3 = self.moments
-        return {"body": self.body.label, **self.body.dims,
+        return {"body": self.body.label,
                 "order": "".join(map(str, self.order)), "I1": I1, "I2": I2, "I3": I3,
                 "spin_axis": str(self.spin_axis), "omega0": list(self.omega0)}
 
     @classmethod
     def of(cls, params: Mapping[str, Any]) -> Draw:
         """The draw of recorded parameters."""
-        label = params["body"]
-        dims = {n: params[n] for n in BODY_DIMS[label]}
-        return cls(Body(label, dims), tuple(int(i) for i in params["order"]),
+        return cls(Body(params["body"]), tuple(int(i) for i in params["order"]),
                    (params["I1"], params["I2"], params["I3"]), int(params["spin_axis"]),
                    tuple(params["omega0"]))
-
-
-BODY_DIMS = {"smartphone": ("m", "a", "b", "c"), "book": ("m", "a", "b", "c"),
-             "brick": ("m", "a", "b", "c"),
-             "racket": ("m_handle", "l_handle", "m_head", "r_head"),
-             "t_handle": ("m_bar", "l_bar", "r_bar", "m_stem", "l_stem", "r_stem")}
-"""The shown dimensions of each kind of body (parameter names)."""
 
 
 def _draw(rng: np.random.Generator) -> Draw:
@@ -343,26 +303,26 @@ RATE_DESCRIPTION = ("R9 rate for the spin about ê{axis}: wobble angular frequen
 """The ``rate`` answer's description: identical for a stable and an unstable spin."""
 
 
+def axes_text(d: Draw) -> str:
+    """``$\\hat e_1$ along its length, $I_1 = …$ kg m²; …`` for the shown moments."""
+    return "; ".join(f"$\\hat e_{i}$ {d.axes[i - 1]}, "
+                     f"$I_{i} = {latex_sig(d.moments[i - 1], SIG_MOMENTS)}$ kg m²"
+                     for i in (1, 2, 3))
+
+
 def _statement(d: Draw) -> str:
     b, s = d.body, d.spin_axis
-    axes = "; ".join(
-        f"$\\hat e_{i}$ {b.axes[d.order[i - 1]]}, "
-        f"$I_{i} = {latex_sig(d.moments[i - 1], SIG_MOMENTS)}$"
-        f" kg m²" for i in (1, 2, 3)
-    )
     w = ",\\ ".join(latex_sig(x, SIG) for x in d.omega0)
     return (
-        f"{b.noun[0].upper()}{b.noun[1:]} ({b.description}) is tossed into the air. Its "
-        f"principal axes and moments about the centre of mass are: {axes} (`I1`, `I2`, `I3`; "
-        "use them as given), **not** necessarily in increasing order.\n\n"
-        f"It is spun mainly about $\\hat e_{s}$: at $t = 0$ the body-frame components of the "
-        f"angular velocity are $(\\omega_1, \\omega_2, \\omega_3) = ({w})$ rad/s (`omega0`).\n\n"
-        "1. `stable1`, `stable2`, `stable3`: is a steady spin about $\\hat e_k$ stable against "
-        "small perturbations (`True`) or not (`False`)?\n"
-        f"2. `rate`: for the spin about $\\hat e_{s}$ given here, in the linear approximation "
-        "of Euler's equations (R9): if it is stable, the angular frequency at which the small "
-        "components of $\\boldsymbol\\omega$ oscillate; if not, the rate $\\gamma > 0$ at "
-        "which they grow as $e^{\\gamma t}$ (1/s, the same as rad/s)."
+        f"{b.noun[0].upper()}{b.noun[1:]} ({b.description}) is tossed into the air, spun mainly "
+        f"about $\\hat e_{s}$: $\\boldsymbol\\omega(0) = ({w})$ rad/s in body components "
+        "(`omega0`). Its principal axes and moments about the centre of mass, **not** "
+        f"necessarily in increasing order: {axes_text(d)} (`I1`, `I2`, `I3`).\n\n"
+        "1. `stable1`, `stable2`, `stable3`: is steady spin about $\\hat e_k$ stable against "
+        "small perturbations?\n"
+        f"2. `rate`: for the spin about $\\hat e_{s}$, in the linear approximation (R9): the "
+        "angular frequency of the wobble if it is stable, else its growth rate $\\gamma$ "
+        "($\\propto e^{\\gamma t}$)."
     )
 
 

@@ -78,10 +78,8 @@ MAX_BETA2 = 2.5
 MAX_ATTEMPTS = 1000
 
 _TOOLS = (
-    "You may use `numpy.roots` for the cubic $f(u)$ of $u = \\cos\\beta$, "
-    "`scipy.special.ellipk` (note: its argument is the parameter $m = k^2$) and "
-    "`scipy.integrate.quad` (the precession integrand has inverse-square-root singularities at "
-    "the turning points; the substitution $u = u_1 + (u_2 - u_1)\\sin^2\\theta$ removes them)."
+    "Tools: `numpy.roots` (the cubic in $u = \\cos\\beta$), `scipy.special.ellipk(m)` "
+    "($m = k^2$), `scipy.integrate.quad` (substitute $u = u_1 + (u_2 - u_1)\\sin^2\\theta$)."
 )
 
 
@@ -173,31 +171,22 @@ def _answers(I1, I3, Mgl, beta0, omega3, alpha_dot0) -> tuple[Answer, Answer]:
     )
 
 
-def _statement(noun: str, p: dict[str, float]) -> str:
+def _statement(noun: str, p: Mapping[str, Any]) -> str:
     def show(name: str, symbol: str, unit: str) -> str:
         return f"${symbol} = {latex_sig(p[name], SIG)}$ {unit} (`{name}`)"
 
     beta0 = show("beta0", r"\beta_0", "rad")
     omega3 = show("omega3", r"\omega_3", "rad/s")
     alpha_dot0 = show("alpha_dot0", r"\dot\alpha_0", "rad/s")
-    how = ("without any precession: " if p["alpha_dot0"] == 0.0
-           else "with a sideways push that sets the axis precessing: ")
+    how = "without precessing" if p["alpha_dot0"] == 0.0 else "pushed sideways"
     return (
-        f"A top, {noun}, spins on a fixed frictionless tip. Its moments of inertia are "
-        f"{show('I1', 'I_1', 'kg m²')} about any axis through the tip perpendicular to the "
-        f"symmetry axis and {show('I3', 'I_3', 'kg m²')} about the symmetry axis; its weight "
-        f"times the distance from the tip to its centre of mass is "
-        f"{show('Mgl', 'Mgl', 'J')}.\n\n"
-        f"The top is let go at the tilt {beta0} with $\\dot\\beta = 0$, spinning at "
-        f"{omega3} about its symmetry axis, {how}{alpha_dot0}"
-        ". The tilt then oscillates (nutates) between two turning angles $\\beta_1$ and "
-        "$\\beta_2$. Find, exactly (not in the fast-top approximation):\n\n"
-        "1. `T_nut`: the nutation period (s), the time for $\\beta$ to go from $\\beta_1$ to "
-        "$\\beta_2$ and back;\n"
+        f"A top, {noun}, spins on a fixed tip: {show('I1', 'I_1', 'kg m²')} about the tip, "
+        f"{show('I3', 'I_3', 'kg m²')} about its symmetry axis, {show('Mgl', 'Mgl', 'J')}. It "
+        f"is let go at the tilt {beta0} with $\\dot\\beta = 0$, spinning at {omega3}, {how}: "
+        f"{alpha_dot0}. Exactly (not in the fast-top approximation), find:\n\n"
+        "1. `T_nut`: the nutation period ($\\beta$ from $\\beta_1$ to $\\beta_2$ and back);\n"
         "2. `mean_rate`: the mean precession rate $\\langle\\dot\\alpha\\rangle$ over one "
-        "nutation period (rad/s), the change of $\\alpha$ during one period divided by "
-        "the period.\n\n"
-        f"{_TOOLS}"
+        f"nutation period.\n\n{_TOOLS}"
     )
 
 

@@ -228,26 +228,22 @@ def _stable_answer(top: Top, omega3: float) -> Answer:
 
 def _statement(top: Top, omega3: float) -> str:
     R, M, g = latex_sig(top.R, SIG), latex_sig(top.M, SIG), latex_sig(top.g, SIG)
-    if top.kind.shape == "disc":
-        body = (f"a thin uniform disc of mass $M = {M}$ kg (`M`) and radius $R = {R}$ m (`R`) "
-                f"whose centre is $l = {latex_sig(top.arm, SIG)}$ m (`l`) from the tip along "
-                "the massless axle")
-    elif top.kind.shape == "solid_cylinder":
-        body = (f"a uniform solid cylinder of mass $M = {M}$ kg (`M`), radius $R = {R}$ m "
-                f"(`R`) and thickness $h = {latex_sig(top.h, SIG)}$ m (`h`) whose centre is "
-                f"$l = {latex_sig(top.arm, SIG)}$ m (`l`) from the tip along the massless axle")
+    body = f"mass $M = {M}$ kg (`M`), {'base ' if top.h and top.kind.arm_range is None else ''}"
+    body += f"radius $R = {R}$ m (`R`)"
+    if top.kind.shape == "solid_cylinder":
+        body += f", thickness $h = {latex_sig(top.h, SIG)}$ m (`h`)"
+    if top.kind.arm_range is None:  # the cone: its apex is the tip
+        body += f", height $h = {latex_sig(top.h, SIG)}$ m (`h`; the centre of mass is $3h/4$ "
+        body += "from the apex)"
     else:
-        body = (f"a uniform solid cone of mass $M = {M}$ kg (`M`), base radius $R = {R}$ m "
-                f"(`R`) and height $h = {latex_sig(top.h, SIG)}$ m (`h`) spinning on its apex (its "
-                "centre of mass is $3h/4$ from the apex)")
+        body += f", centre $l = {latex_sig(top.arm, SIG)}$ m (`l`) from the tip"
     return (
-        f"A top, {top.kind.noun}, spins on a fixed frictionless tip: {body}. Take "
-        f"$g = {g}$ m/s² (`g`). At $\\beta = 0$ the top stands upright (sleeping).\n\n"
-        "1. `omega3_c`: the least spin $\\omega_3$ about the symmetry axis (rad/s) for which "
-        "the upright spinning top is stable against small tilts.\n"
-        f"2. `stable`: the top is set spinning upright at $\\omega_3 = "
-        f"{latex_sig(omega3, SIG)}$ rad/s (`omega3`). Does it keep sleeping (`True`) or does a "
-        "small disturbance make it wobble away from the vertical (`False`)?"
+        f"A top, {top.kind.noun}, spins upright (sleeping) on a fixed tip. It is uniform: "
+        f"{body}; $g = {g}$ m/s² (`g`).\n\n"
+        "1. `omega3_c`: the least spin $\\omega_3$ for which the upright top is stable against "
+        "small tilts;\n"
+        f"2. `stable`: spun upright at $\\omega_3 = {latex_sig(omega3, SIG)}$ rad/s (`omega3`), "
+        "does it keep sleeping (`True`) or wobble away from the vertical (`False`)?"
     )
 
 

@@ -141,27 +141,21 @@ def _answers(M, arm, Icm, I3, g, beta0, omega3) -> tuple[Answer, ...]:
     return tuple(answers)
 
 
-def _statement(noun: str, p: dict[str, float]) -> str:
+def _statement(noun: str, p: Mapping[str, Any]) -> str:
     def show(name: str, symbol: str, unit: str) -> str:
         return f"${symbol} = {latex_sig(p[name], SIG)}$ {unit} (`{name}`)"
 
     icm = show("Icm", r"I_\mathrm{cm}", "kg m²")
     omega3, beta0 = show("omega3", r"\omega_3", "rad/s"), show("beta0", r"\beta_0", "rad")
     return (
-        f"A top, {noun}, spins on a fixed frictionless pivot. Its data: mass "
-        f"{show('M', 'M', 'kg')}, centre of mass {show('l', 'l', 'm')} from the pivot along the "
-        f"symmetry axis, moment of inertia {icm} about any "
-        "axis through the centre of mass perpendicular to the symmetry axis, and "
-        f"{show('I3', 'I_3', 'kg m²')} about the symmetry axis; take "
-        f"{show('g', 'g', 'm/s²')}. It spins at {omega3} about its "
-        f"symmetry axis, which is tilted at {beta0} from the upward "
-        "vertical.\n\n"
-        "With the right precession rate $\\dot\\alpha$ the axis precesses steadily at the "
-        "constant tilt $\\beta_0$, without nutation. Find (rad/s unless stated):\n\n"
-        "1. `slow` and `fast`: the exact slow and fast steady precession rates at $\\beta_0$;\n"
-        "2. `slow_approx` and `fast_approx`: their fast-top approximations;\n"
-        "3. `slow_error`: the relative error of the slow approximation, "
-        "(`slow_approx` − `slow`)/`slow` (a plain number, with its sign)."
+        f"A top, {noun}, spins on a fixed pivot: mass {show('M', 'M', 'kg')}, centre of mass "
+        f"{show('l', 'l', 'm')} from the pivot, {icm} about a transverse axis through the "
+        f"centre of mass, {show('I3', 'I_3', 'kg m²')} about the symmetry axis; "
+        f"{show('g', 'g', 'm/s²')}. It spins at {omega3}, its axis tilted at {beta0}. For "
+        "steady precession at that tilt, find:\n\n"
+        "1. `slow`, `fast`: the exact slow and fast precession rates;\n"
+        "2. `slow_approx`, `fast_approx`: their fast-top approximations;\n"
+        "3. `slow_error`: (`slow_approx` − `slow`)/`slow`, with its sign."
     )
 
 

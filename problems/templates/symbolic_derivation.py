@@ -210,35 +210,33 @@ class Quantity:
 
 QUANTITIES: tuple[Quantity, ...] = (
     Quantity("p_alpha", "The momentum conjugate to α",
-             "the momentum $p_\\alpha = \\partial L/\\partial\\dot\\alpha$ conjugate to the "
-             "azimuth $\\alpha$, in terms of the Euler angles and their rates", "kg m^2/s",
+             "$p_\\alpha = \\partial L/\\partial\\dot\\alpha$ in the Euler angles and rates",
+             "kg m^2/s",
              ("I1", "I3", "beta", "alpha_dot", "gamma_dot"),
              lambda: conjugate_momenta()["p_alpha"], _p_alpha_mistakes),
     Quantity("p_gamma", "The momentum conjugate to γ",
-             "the momentum $p_\\gamma = \\partial L/\\partial\\dot\\gamma$ conjugate to the spin "
-             "angle $\\gamma$, in terms of the Euler angles and their rates", "kg m^2/s",
+             "$p_\\gamma = \\partial L/\\partial\\dot\\gamma$ in the Euler angles and rates",
+             "kg m^2/s",
              ("I1", "I3", "beta", "alpha_dot", "gamma_dot"),
              lambda: conjugate_momenta()["p_gamma"], _p_gamma_mistakes),
     Quantity("E_prime", "The reduced energy E'",
-             "the reduced energy $E' = E - p_\\gamma^2/(2 I_3)$, in terms of the Euler angles "
-             "and their rates (not of the momenta)", "J",
+             "$E' = E - p_\\gamma^2/(2 I_3)$ in the Euler angles and rates (not the momenta)",
+             "J",
              ("I1", "I3", "Mgl", "beta", "alpha_dot", "beta_dot", "gamma_dot"),
              _reduced_energy, _energy_mistakes),
     Quantity("V_eff", "The effective potential",
-             "the effective potential $V_\\mathrm{eff}(\\beta)$, defined by "
-             "$E' = \\tfrac12 I_1 \\dot\\beta^2 + V_\\mathrm{eff}(\\beta)$, in terms of the "
-             "conserved momenta $p_\\alpha$, $p_\\gamma$", "J",
+             "$V_\\mathrm{eff}(\\beta)$, defined by "
+             "$E' = \\tfrac12 I_1 \\dot\\beta^2 + V_\\mathrm{eff}(\\beta)$, in the momenta "
+             "$p_\\alpha$, $p_\\gamma$", "J",
              ("I1", "Mgl", "beta", "p_alpha", "p_gamma"),
              effective_potential_expr, _potential_mistakes),
     Quantity("alpha_dot", "The precession rate from the momenta",
-             "the precession rate $\\dot\\alpha$ as a function of $\\beta$, in terms of the "
-             "conserved momenta $p_\\alpha$, $p_\\gamma$", "rad/s",
+             "the precession rate $\\dot\\alpha(\\beta)$ in the momenta $p_\\alpha$, "
+             "$p_\\gamma$", "rad/s",
              ("I1", "beta", "p_alpha", "p_gamma"), _precession_rate, _rate_mistakes),
     Quantity("c2", "The sleeping top's β² coefficient",
-             "for a top with $p_\\alpha = p_\\gamma$ (its axis passes through the vertical), "
-             "the coefficient $c_2$ of $\\beta^2$ in the expansion "
-             "$V_\\mathrm{eff}(\\beta) = c_0 + c_2 \\beta^2 + O(\\beta^4)$ about "
-             "$\\beta = 0$ (the sleeping top is stable where $c_2 \\ge 0$)", "J",
+             "for $p_\\alpha = p_\\gamma$ (an axis through the vertical), $c_2$ in "
+             "$V_\\mathrm{eff}(\\beta) = c_0 + c_2 \\beta^2 + O(\\beta^4)$", "J",
              ("I1", "Mgl", "p_gamma"), lambda: sleeping_top_expansion()[1], _c2_mistakes),
 )
 
@@ -304,17 +302,16 @@ def _number_answer(q: Quantity, c: _Compiled, values: list[float]) -> Answer:
 
 def _statement(q: Quantity, params: dict[str, float]) -> str:
     names = ", ".join(f"`{n}`" for n in q.symbols)
-    mgl = " (`Mgl` is one symbol, the product $Mgl$)" if "Mgl" in q.symbols else ""
+    mgl = "; `Mgl` is one symbol" if "Mgl" in q.symbols else ""
     shown = ", ".join(f"${_PARAM[n][0]} = {latex_sig(v, SIG)}$ {_PARAM[n][1]} (`{n}`)"
                       for n, v in params.items())
     return (
-        "A heavy symmetric top spins on a fixed tip. Its Lagrangian (R14) is\n\n"
+        "A heavy symmetric top spins on a fixed tip; its Lagrangian (R14) is\n\n"
         "$$L = \\tfrac12 I_1 (\\dot\\alpha^2 \\sin^2\\beta + \\dot\\beta^2) + \\tfrac12 I_3 "
         "(\\dot\\alpha\\cos\\beta + \\dot\\gamma)^2 - Mgl\\cos\\beta .$$\n\n"
-        f"1. `{q.name}_expr`: derive {q.task}. Give a sympy expression or a string in the "
-        f"symbols {names}{mgl}; the functions `sin`, `cos`, `sqrt` and the constant `pi` "
-        "may appear, e.g. `\"I1*sin(beta)**2\"`.\n"
-        f"2. `{q.name}`: its value ({q.unit.replace('^2', '²')}) for a top with {shown}."
+        f"1. `{q.name}_expr`: derive {q.task}, as a sympy expression or a string in {names} "
+        f"(and `sin`, `cos`, `sqrt`, `pi`{mgl});\n"
+        f"2. `{q.name}`: its value for {shown}."
     )
 
 

@@ -93,9 +93,6 @@ class Draw:
     """Displayed (rounded) values of one variant, SI."""
 
     body: Body
-    mass: float
-    radius: float
-    height: float
     I1: float
     I3: float
     omega0: tuple[float, float, float]
@@ -118,21 +115,16 @@ def draw(rng: np.random.Generator) -> dict[str, Any] | None:
     omega0 = round_sig([wobble * math.cos(phi), wobble * math.sin(phi), omega3], SIG).tolist()
     period = 2.0 * math.pi / abs(float(body_precession_rate(I1, I3, omega0[2])))
     t = round_sig(rng.uniform(*PHASE_TIME) * period, SIG)
-    return {"body": body.label, "mass": mass, "radius": radius, "height": height,
-            "I1": I1, "I3": I3, "omega0": omega0, "t": t}
+    return {"body": body.label, "I1": I1, "I3": I3, "omega0": omega0, "t": t}
 
 
 def _draw_of(params: Mapping[str, Any]) -> Draw:
     body = next(b for b in BODIES if b.label == params["body"])
-    return Draw(body, params["mass"], params["radius"], params["height"], params["I1"],
-                params["I3"], tuple(params["omega0"]), params["t"])
+    return Draw(body, params["I1"], params["I3"], tuple(params["omega0"]), params["t"])
 
 
 PARAMETERS: dict[str, Parameter] = {
     "body": Parameter(choices=tuple(b.label for b in BODIES), description="the body thrown"),
-    "mass": Parameter(unit="kg", cell=False, description="mass"),
-    "radius": Parameter(unit="m", cell=False, description="radius"),
-    "height": Parameter(unit="m", cell=False, description="length along the axis"),
     "I1": Parameter(unit="kg m^2", figures=SIG_MOMENTS, description="transverse moment"),
     "I3": Parameter(unit="kg m^2", figures=SIG_MOMENTS, description="axial moment"),
     "omega0": Parameter(unit="rad/s", shape=(3,), description="ω(0), body frame"),
@@ -228,29 +220,22 @@ def _statement(d: Draw) -> str:
     b = d.body
     w1, w2, w3 = (latex_sig(w, SIG) for w in d.omega0)
     return (
-        f"{b.noun[0].upper()}{b.noun[1:]} (a uniform cylinder of mass "
-        f"${latex_sig(d.mass, SIG)}$ kg, "
-        f"radius ${latex_sig(d.radius, SIG)}$ m and height (along its axis) "
-        f"${latex_sig(d.height, SIG)}$ m) {b.story}. It is a symmetric top: its principal "
-        "moments about the centre of mass are "
-        f"$I_1 = I_2 = {latex_sig(d.I1, SIG_MOMENTS)}$ kg m² (any axis perpendicular to the "
-        f"symmetry axis) and $I_3 = {latex_sig(d.I3, SIG_MOMENTS)}$ kg m² (the symmetry axis "
-        "$\\hat e_3$) (`I1`, `I3`; use them as given).\n\n"
-        "At $t = 0$ the body-frame components of the angular velocity are "
-        "$\\boldsymbol\\omega(0) = "
-        f"(\\omega_1, \\omega_2, \\omega_3) = ({w1},\\ {w2},\\ {w3})$ rad/s (`omega0`).\n\n"
-        "1. `Omega`: the rate $\\Omega$ (rad/s) at which $\\boldsymbol\\omega$ precesses about "
-        "$\\hat e_3$ *in the body frame*, with its sign: $\\Omega > 0$ when "
-        "$(\\omega_1, \\omega_2)$ turns from $\\hat e_1$ towards $\\hat e_2$ (counter-clockwise "
-        "seen from the tip of $\\hat e_3$).\n"
-        "2. `T_body`: the period (s) of this body-frame precession.\n"
-        f"3. `omega_t`: the body-frame components $[\\omega_1, \\omega_2, \\omega_3]$ (rad/s) "
-        f"at $t = {latex_sig(d.t, SIG)}$ s (`t`).\n"
-        "4. `alpha_dot`: the rate (rad/s, positive) at which the symmetry axis $\\hat e_3$ "
-        "precesses about the fixed angular momentum $\\mathbf L$, *seen from the inertial "
-        "frame*.\n"
-        "5. `theta`: the angle $\\theta$ (rad) between $\\hat e_3$ and $\\mathbf L$, the "
-        "half-angle of the cone that $\\hat e_3$ sweeps."
+        f"{b.noun[0].upper()}{b.noun[1:]} (a uniform cylinder) {b.story}. Its principal "
+        f"moments about the centre of mass are $I_1 = I_2 = {latex_sig(d.I1, SIG_MOMENTS)}$ kg "
+        "m² (`I1`) and "
+        f"$I_3 = {latex_sig(d.I3, SIG_MOMENTS)}$ kg m² (`I3`, about the symmetry axis "
+        "$\\hat e_3$). At $t = 0$ its angular velocity is "
+        f"$\\boldsymbol\\omega = ({w1},\\ {w2},\\ {w3})$ rad/s in body components "
+        "(`omega0`).\n\n"
+        "1. `Omega`: the rate $\\Omega$ at which $\\boldsymbol\\omega$ precesses about "
+        "$\\hat e_3$ in the body frame, positive when $(\\omega_1, \\omega_2)$ turns from "
+        "$\\hat e_1$ towards $\\hat e_2$;\n"
+        "2. `T_body`: the period of that precession;\n"
+        f"3. `omega_t`: $\\boldsymbol\\omega$ in body components at $t = {latex_sig(d.t, SIG)}$ s "
+        "(`t`);\n"
+        "4. `alpha_dot`: the rate at which $\\hat e_3$ precesses about $\\mathbf L$, seen from "
+        "the inertial frame;\n"
+        "5. `theta`: the angle between $\\hat e_3$ and $\\mathbf L$."
     )
 
 

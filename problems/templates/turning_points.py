@@ -149,13 +149,11 @@ def _turning_point_answers(names: tuple[str, ...], low: np.ndarray, high: np.nda
 
 def _statement(top: Top, state: State, beta: float) -> str:
     return (
-        f"{top.text}\n\n{state_text(state)}\n\n"
-        "The axis nods (nutates) between two turning points. Find:\n\n"
-        "1. `V_eff`: the effective potential $V_{\\mathrm{eff}}(\\beta)$, in J, whose value at "
-        "the turning points equals $E' = E - p_\\gamma^2/(2 I_3)$, evaluated at "
+        f"{top.text} {state_text(state)}\n\n"
+        "1. `V_eff`: the effective potential $V_{\\mathrm{eff}}(\\beta)$ (which equals "
+        "$E' = E - p_\\gamma^2/(2 I_3)$ at the turning points) at "
         f"$\\beta = {latex_sig(beta, SIG)}$ rad (`beta`);\n"
-        "2. `beta1`, `beta2`: the turning points $\\beta_1 \\le \\beta_2$ of the nutation, in "
-        "rad."
+        "2. `beta1`, `beta2`: the turning points $\\beta_1 \\le \\beta_2$ of the nutation."
     )
 
 
