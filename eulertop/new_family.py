@@ -31,7 +31,7 @@ def example_text(name: str) -> str:
     source = Path(__file__).with_name("family_example.py").read_text(encoding="utf-8")
     if source.count(EXAMPLE_NAME) != 1:  # pragma: no cover - guards the example's edits
         raise RuntimeError("family_example.py must name itself exactly once")
-    return source.replace(EXAMPLE_NAME, f"NAME = {name!r}")
+    return source.replace(EXAMPLE_NAME, f'NAME = "{name}"')
 
 
 def run_new_family(args: argparse.Namespace) -> int:
