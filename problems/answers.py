@@ -427,39 +427,40 @@ def comparison_rule(answer: Answer) -> str:
     """How ``answer`` is compared, in words for the student, from its own kind and tolerances.
 
     Nothing of the key is in it (only ``rtol``, ``atol``, ``unit``, ``period`` and the kind).
+    A percentage is relative (the notebook's conventions say so once), an amount with a unit
+    absolute.
 
     Examples
     --------
     >>> comparison_rule(Answer("T", "scalar", 2.0, unit="J"))
-    'within 0.1 % (relative)'
+    'within 0.1 %'
     >>> comparison_rule(Answer("w", "scalar", 2.0, unit="rad/s", atol=0.005))
-    'within 0.1 % (relative) + 0.005 rad/s (absolute, for values near zero)'
+    'within 0.1 % + 0.005 rad/s'
     >>> comparison_rule(Answer("L", "vector", [1.0, 2.0]))
-    'within 0.1 % of its length (on the length of the difference)'
+    'within 0.1 % of its length'
     >>> comparison_rule(Answer("b", "angle", 1.0, unit="rad"))
-    'in radians, within 0.1 % (relative); not taken modulo 2π'
+    'in radians, within 0.1 %, not modulo 2π'
     >>> comparison_rule(Answer("b", "angle", 1.0, unit="rad", period=2 * math.pi))
-    'in radians, within 0.1 % (relative), modulo 2π'
+    'in radians, within 0.1 %, modulo 2π'
     """
     kind = answer.kind
     if kind == "boolean":
         return "True or False, exactly"
     if kind == "choice":
-        return "one of the options, exactly (case ignored)"
-    relative = f"{_percent(answer.rtol)} (relative)" if answer.rtol else ""
+        return "one of the options, exactly"
+    relative = _percent(answer.rtol) if answer.rtol else ""
     absolute = ""
     if answer.atol:
-        unit = f" {answer.unit}" if answer.unit else ""
-        absolute = f"{answer.atol:.3g}{unit} (absolute, for values near zero)"
+        unit = f" {answer.unit}" if answer.unit else " (absolute)"
+        absolute = f"{answer.atol:.3g}{unit}"
     within = "within " + " + ".join(part for part in (relative, absolute) if part)
     if kind == "vector":
-        within = within.replace(" (relative)", " of its length")
-        return f"{within} (on the length of the difference)"
+        return within.replace(" %", " % of its length", 1) if relative else f"{within} in length"
     if kind == "expression":
-        return f"by its values at random points of its symbols, each {within}"
+        return f"at random values of its symbols, {within}"
     if kind == "angle":
         if answer.period is None:
-            return f"in radians, {within}; not taken modulo 2π"
+            return f"in radians, {within}, not modulo 2π"
         period = "2π" if math.isclose(answer.period, 2 * math.pi) else f"{answer.period:.6g}"
         return f"in radians, {within}, modulo {period}"
     return within

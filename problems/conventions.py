@@ -15,34 +15,26 @@ from collections.abc import Iterable
 GENERAL = """\
 **Conventions for every question**
 
-- **Units**: SI throughout (kg, m, s, N, J); angles in **radians**, rates in rad/s.
-- **Answers** go into the variables `q{k}_{name}` of question k's answer cell, where each \
-line's comment gives its unit and what it is. Vectors are lists or arrays in the stated \
-order. Each answer is worth 1 point unless its line says otherwise.
-- **How answers are compared** (each question states its tolerances): a number is correct \
-within a *relative* tolerance, |yours − key| ≤ rtol·|key|; where a question also gives an \
-*absolute* tolerance (for values that may be near zero) the two add. A vector is compared \
-on the length of the difference, ‖yours − key‖ ≤ rtol·‖key‖. An angle is compared as a \
-number in radians, in the range the question asks for; it is taken modulo 2π only where its \
-question says so. True/False and named options must match exactly (case is ignored). \
-Keep at least five significant figures: an answer rounded to fewer can fall outside \
-a 0.1 % tolerance.\
+- **Units**: SI; angles in **radians**, rates in rad/s.
+- **Answers**: numbers, lists or arrays (vectors, in the stated order), sympy expressions or \
+strings; 1 point each unless the line says otherwise.
+- **Comparison**: a percentage is a *relative* tolerance, |yours − key| ≤ rtol·|key|, an amount \
+with a unit an *absolute* one (the two add); a vector is compared by the length of the \
+difference, an angle in radians (modulo 2π only where stated). Keep five significant figures.\
 """
 
 TOPICS: dict[str, str] = {
     "inertia": """\
 **Inertia tensor.** $I_{xx} = \\sum m (y^2 + z^2)$ and cyclically; the **products of \
-inertia** are the off-diagonal entries with their minus sign, \
-$I_{xy} = -\\sum m\\,x y$, $I_{xz} = -\\sum m\\,x z$, $I_{yz} = -\\sum m\\,y z$ (integrals for \
-a continuous body), so that $\\mathbf L = \\mathsf I\\,\\boldsymbol\\omega$ and \
+inertia** carry a minus sign, $I_{xy} = -\\sum m\\,x y$ (integrals for a continuous body), \
+so that $\\mathbf L = \\mathsf I\\,\\boldsymbol\\omega$ and \
 $T = \\tfrac12 \\boldsymbol\\omega\\cdot\\mathsf I\\,\\boldsymbol\\omega$.\
 """,
     "euler_angles": """\
-**Euler angles** (as in the lecture). The body frame is reached from the lab frame by turning \
-through $\\alpha$ about the lab $z$ axis, then through $\\beta$ about the new $y'$ axis, then \
-through $\\gamma$ about the body axis $\\hat e_3$; $\\beta$ is the tilt of $\\hat e_3$ from the \
-**upward** vertical. A vector with lab components $V$ has body components $V' = R\\,V$ with \
-$R = R_\\gamma R_\\beta R_\\alpha$,
+**Euler angles** (as in the lecture): the body frame is the lab frame turned by $\\alpha$ about \
+the lab $z$ axis, then by $\\beta$ about the new $y'$ axis, then by $\\gamma$ about the body \
+axis $\\hat e_3$; $\\beta$ is the tilt of $\\hat e_3$ from the **upward** vertical. Lab \
+components $V$ become body components $V' = R\\,V$, $R = R_\\gamma R_\\beta R_\\alpha$,
 
 $$R_\\alpha = \\begin{pmatrix} \\cos\\alpha & \\sin\\alpha & 0 \\\\ -\\sin\\alpha & \\cos\\alpha \
 & 0 \\\\ 0 & 0 & 1 \\end{pmatrix},\\quad
@@ -51,22 +43,19 @@ R_\\beta = \\begin{pmatrix} \\cos\\beta & 0 & -\\sin\\beta \\\\ 0 & 1 & 0 \\\\
 R_\\gamma = \\begin{pmatrix} \\cos\\gamma & \\sin\\gamma & 0 \\\\ -\\sin\\gamma & \\cos\\gamma \
 & 0 \\\\ 0 & 0 & 1 \\end{pmatrix}.$$
 
-The spin about the symmetry axis is $\\omega_3 = \\dot\\gamma + \\dot\\alpha\\cos\\beta$, not \
-$\\dot\\gamma$ alone.\
+The spin about the symmetry axis is $\\omega_3 = \\dot\\gamma + \\dot\\alpha\\cos\\beta$.\
 """,
     "heavy_top": """\
-**Heavy symmetric top.** The symmetry axis $\\hat e_3$ points from the fixed point (tip, \
-pivot) to the centre of mass, a distance $l$ from it; $\\alpha$ is the azimuth of the axis \
-about the vertical (precession, positive counter-clockwise seen from above), $\\beta$ its tilt \
-from the **upward** vertical, $\\gamma$ the spin angle about $\\hat e_3$ (right-handed). \
-$I_1$ is the moment of inertia about an axis through the **fixed point** perpendicular to the \
-symmetry axis (unless a question says otherwise), $I_3$ the moment about the symmetry axis; \
-the potential energy is $Mgl\\cos\\beta$ (zero at the height of the fixed point).\
+**Heavy symmetric top.** $\\hat e_3$ points from the fixed point to the centre of mass, $l$ \
+away; $\\alpha$ is its azimuth (counter-clockwise seen from above), $\\beta$ its tilt from the \
+**upward** vertical. $I_1$ is the moment about a transverse axis through the **fixed point** \
+(unless a question says otherwise), $I_3$ about $\\hat e_3$; the potential energy is \
+$Mgl\\cos\\beta$.\
 """,
     "free_body": """\
-**Free rigid body.** No torque acts about the centre of mass (ignore air). Principal axes \
-$\\hat e_1, \\hat e_2, \\hat e_3$ form a right-handed body frame; "body-frame components" are \
-components along them.\
+**Free rigid body.** No torque acts about the centre of mass; the principal axes \
+$\\hat e_1, \\hat e_2, \\hat e_3$ form a right-handed body frame ("body components" are \
+along them).\
 """,
 }
 

@@ -55,14 +55,15 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
-from types import ModuleType
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from problems.answers import Answer
+from problems.family import Family, FamilyError
 from problems.notebook import build_notebooks, notebook_text
 from problems.roster import Roster
+from problems.settings import QuestionSettings
 from problems.variant import Variant, variable_name
 
 FORMAT_VERSION = 1
@@ -70,7 +71,8 @@ ASSIGNMENT = "assignment.json"
 KEY = "key.json"
 RELEASE = "release"
 SOLUTIONS = "solutions"
-OWNED = frozenset({ASSIGNMENT, KEY, RELEASE, SOLUTIONS})
+SPEC_COPY = "assignment.toml"
+OWNED = frozenset({ASSIGNMENT, KEY, RELEASE, SOLUTIONS, SPEC_COPY})
 
 Progress = Callable[[int, int], None]
 
@@ -81,6 +83,35 @@ class GenerateError(ValueError):
 
 class TemplateError(RuntimeError):
     """A template failed or returned something that is not a valid Variant; nothing was written."""
+
+
+class Question(NamedTuple):
+    """One question of an assignment: its family, or the pool each student gets one family
+    of, and what a spec changes in it.
+
+    ``label`` is what the manifest's ``problems`` lists: the family's name, or the pool's
+    names joined by ``|``.
+    """
+
+    label: str
+    pool: tuple[str, ...]
+    settings: QuestionSettings | None = None
+
+    @classmethod
+    def of(cls, family: str) -> Question:
+        """The plain question of one family (``--problems``)."""
+        return cls(family, (family,))
+
+    def record(self) -> dict:
+        """Plain JSON for the manifest (:meth:`from_record` reads it back)."""
+        settings = None if self.settings is None else self.settings.to_dict()
+        return {"label": self.label, "pool": list(self.pool), "settings": settings}
+
+    @classmethod
+    def from_record(cls, d: Mapping) -> Question:
+        settings = d.get("settings")
+        return cls(d["label"], tuple(d["pool"]),
+                   None if settings is None else QuestionSettings.from_dict(settings))
 
 
 @dataclass(frozen=True)
@@ -127,8 +158,28 @@ def variant_rng(
     return np.random.default_rng(variant_seed(seed, student_id, question, family, reroll))
 
 
+def pool_member(pool: Sequence[str], seed: int, student_id: str, question: int,
+                reroll: int = 0) -> str:
+    """The family of ``pool`` that student ``student_id`` gets as question ``question``: from
+    SHA-256 of ``(seed, id, question, pool, reroll)``, like :func:`variant_seed`.
+
+    Examples
+    --------
+    >>> pool_member(["a", "b"], 1, "alice", 2) == pool_member(["a", "b"], 1, "alice", 2)
+    True
+    >>> pool_member(["only"], 1, "alice", 2)
+    'only'
+    """
+    payload = json.dumps(
+        ["eulertop-pool", 1, int(seed), student_id, int(question), list(pool), int(reroll)],
+        ensure_ascii=False, separators=(",", ":"),
+    )
+    digest = int.from_bytes(hashlib.sha256(payload.encode("utf-8")).digest(), "big")
+    return pool[digest % len(pool)]
+
+
 def resolve_problems(
-    names: Sequence[str] | None, families: Mapping[str, ModuleType]
+    names: Sequence[str] | None, families: Mapping[str, Family]
 ) -> tuple[str, ...]:
     """The problem list: ``names`` checked against ``families``, or all of them in order.
 
@@ -152,18 +203,23 @@ def resolve_problems(
 
 
 def student_variants(
-    families: Mapping[str, ModuleType],
-    problems: Sequence[str],
+    families: Mapping[str, Family],
+    questions: Sequence[Question | str],
     seed: int,
     student_id: str,
     reroll: int = 0,
 ) -> tuple[Variant, ...]:
-    """Draw one student's questions; a failing or misbehaving template raises TemplateError."""
+    """Draw one student's questions (a plain family name stands for its :class:`Question`);
+    a failing or misbehaving family raises TemplateError."""
     variants = []
-    for k, name in enumerate(problems, start=1):
+    for k, question in enumerate(questions, start=1):
+        if isinstance(question, str):
+            question = Question.of(question)
+        name = pool_member(question.pool, seed, student_id, k, reroll)
         where = f"template {name!r}, student {student_id!r}, question {k}"
         try:
-            variant = families[name].generate(variant_rng(seed, student_id, k, name, reroll))
+            rng = variant_rng(seed, student_id, k, name, reroll)
+            variant = families[name].generate(rng, question.settings)
         except Exception as e:
             raise TemplateError(f"{where} failed: {type(e).__name__}: {e}") from e
         if not isinstance(variant, Variant) or variant.family != name:
@@ -252,11 +308,11 @@ def student_answers(key: Mapping, student_id: str) -> dict[str, Answer]:
 
 def _write_student(
     folder: Path, title: str, row: Mapping[str, str], variants: Sequence[Variant],
-    validate: bool = True,
+    validate: bool = True, families: Mapping[str, Family] | None = None,
 ) -> None:
     """Write a student's release and solutions notebooks; ``validate`` checks them against the
     nbformat schema (:func:`problems.notebook.notebook_text`)."""
-    notebooks = build_notebooks(title, row, variants)  # sharing their common cells
+    notebooks = build_notebooks(title, row, variants, families)  # sharing their common cells
     memo: dict = {}  # so that notebook_text encodes each shared cell once
     for sub, nb in zip((RELEASE, SOLUTIONS), notebooks, strict=True):
         text = notebook_text(nb, validate=validate, memo=memo)
@@ -280,15 +336,15 @@ def _student_files(
     staging folder (schema-checked when the task says so: the first student's), and return
     their manifest and key entries, encoded."""
     tmp, title, row, reroll, validate = task
-    families, problems, seed = _FORKED["families"], _FORKED["problems"], _FORKED["seed"]
-    variants = student_variants(families, problems, seed, row["id"], reroll)
-    _write_student(tmp, title, row, variants, validate)
+    families, questions, seed = _FORKED["families"], _FORKED["questions"], _FORKED["seed"]
+    variants = student_variants(families, questions, seed, row["id"], reroll)
+    _write_student(tmp, title, row, variants, validate, families)
     return CompactJSON.of(manifest_entry(variants, reroll)), CompactJSON.of(key_entry(variants))
 
 
 def _students_in_parallel(
     tmp: Path, title: str, rows: Sequence[Mapping[str, str]], rerolls: Mapping[str, int],
-    families: Mapping[str, ModuleType], problems: Sequence[str], seed: int, jobs: int,
+    families: Mapping[str, Family], questions: Sequence[Question], seed: int, jobs: int,
 ) -> Iterator[tuple[CompactJSON, CompactJSON]]:
     """``(manifest entry, key entry)`` of each row, in roster order, computed by ``jobs``
     forked processes that each write their students' notebooks (:func:`_student_files`).
@@ -299,8 +355,8 @@ def _students_in_parallel(
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
-    prepare_families(families, problems)  # once here, inherited by every worker
-    _FORKED.update(families=families, problems=tuple(problems), seed=seed)
+    prepare_families(families, questions)  # once here, inherited by every worker
+    _FORKED.update(families=families, questions=tuple(questions), seed=seed)
     tasks = [(tmp, title, row, rerolls.get(row["id"], 0), i == 0) for i, row in enumerate(rows)]
     try:
         with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("fork")) as pool:
@@ -309,17 +365,18 @@ def _students_in_parallel(
         _FORKED.clear()
 
 
-def prepare_families(families: Mapping[str, ModuleType], problems: Sequence[str]) -> None:
-    """Call the optional ``prepare()`` of each family in ``problems`` (its one-time work, such as
-    sympy derivations, which ``generate`` would otherwise do on first use in every worker)."""
-    for name in dict.fromkeys(problems):
-        prepare = getattr(families[name], "prepare", None)
-        if prepare is not None:
-            try:
-                prepare()
-            except Exception as e:
-                raise TemplateError(f"template {name!r}: prepare() failed: "
-                                    f"{type(e).__name__}: {e}") from e
+def prepare_families(families: Mapping[str, Family],
+                     questions: Sequence[Question | str]) -> None:
+    """Call the optional ``prepare()`` of each family the questions may draw (its one-time
+    work, such as sympy derivations, which drawing would otherwise do on first use in every
+    worker)."""
+    names = [n for q in questions for n in ((q,) if isinstance(q, str) else q.pool)]
+    for name in dict.fromkeys(names):
+        try:
+            families[name].prepare()
+        except Exception as e:
+            raise TemplateError(f"template {name!r}: prepare() failed: "
+                                f"{type(e).__name__}: {e}") from e
 
 
 def _parallel_jobs(jobs: int | None, students: int) -> int:
@@ -415,9 +472,11 @@ class _Staging:
 def generate_assignment(
     roster: Roster,
     out: Path,
-    families: Mapping[str, ModuleType],
+    families: Mapping[str, Family],
     *,
     problems: Sequence[str] | None = None,
+    questions: Sequence[Question] | None = None,
+    spec_file: Path | None = None,
     seed: int | None = None,
     title: str | None = None,
     force: bool = False,
@@ -425,6 +484,10 @@ def generate_assignment(
     jobs: int | None = None,
 ) -> Summary:
     """Generate an assignment folder ``out`` (layout, seeding, ``force``: module docstring).
+
+    The questions are ``problems`` (family names; default: every family), or ``questions``
+    (from an assignment spec, :mod:`problems.spec`: pools, parameters, points, tolerances),
+    whose file ``spec_file`` is copied into ``out`` as :data:`SPEC_COPY`.
 
     ``jobs`` processes draw the students' questions and write their notebooks (default: one
     per usable core, from :data:`PARALLEL_MIN` students on); the files are byte-identical to
@@ -442,15 +505,20 @@ def generate_assignment(
         A template failed; nothing is written (the temporary folder is removed).
     """
     out = Path(out)
-    problems = resolve_problems(problems, families)
+    if questions is None:
+        questions = tuple(Question.of(n) for n in resolve_problems(problems, families))
+    questions = tuple(questions)
+    problems = tuple(q.label for q in questions)
     old = _existing_assignment(out, force)
     notes = []
     if seed is None:
         seed = old["seed"] if old else secrets.randbelow(2**32)
         notes.append(f"seed {seed} ({'kept from the replaced assignment' if old else 'drawn'}; "
                      f"pass --seed {seed} to reproduce)")
+    planned = _questions_record(questions)
     rerolls: dict[str, int] = {}
-    if old and old.get("seed") == seed and tuple(old.get("problems", ())) == problems:
+    if old and old.get("seed") == seed and tuple(old.get("problems", ())) == problems \
+            and old.get("questions") == planned:
         rerolls = {sid: s["reroll"] for sid, s in old["students"].items() if s["reroll"]}
         kept = sorted(set(rerolls) & set(roster.ids))
         if kept:
@@ -466,17 +534,26 @@ def generate_assignment(
         "roster": roster.to_dict(),
         "students": {},
     }
+    if planned is not None:
+        manifest["questions"] = planned
+    outside = _outside_families(families, questions, out)
+    if outside:
+        manifest["families"] = outside
     key = {"format": "eulertop-key", "format_version": FORMAT_VERSION, "title": title,
            "seed": seed, "students": {}}
     with _Staging(out) as tmp:
+        if spec_file is not None:
+            data = Path(spec_file).read_bytes()
+            (tmp / SPEC_COPY).write_bytes(data)
+            manifest["spec"] = {"file": SPEC_COPY, "sha256": hashlib.sha256(data).hexdigest()}
         (tmp / RELEASE).mkdir()
         (tmp / SOLUTIONS).mkdir()
         workers = _parallel_jobs(jobs, len(roster.rows))
         if workers > 1:
             entries = _students_in_parallel(tmp, title, roster.rows, rerolls, families,
-                                            problems, seed, workers)
+                                            questions, seed, workers)
         else:
-            _FORKED.update(families=families, problems=tuple(problems), seed=seed)
+            _FORKED.update(families=families, questions=questions, seed=seed)
             entries = (_student_files((tmp, title, row, rerolls.get(row["id"], 0), i == 0))
                        for i, row in enumerate(roster.rows))
         for done, (row, (entry, answers)) in enumerate(zip(roster.rows, entries, strict=True),
@@ -490,14 +567,64 @@ def generate_assignment(
     return Summary(out, seed, problems, roster.ids, tuple(notes))
 
 
+def _questions_record(questions: Sequence[Question]) -> list[dict] | None:
+    """The manifest's record of the questions when a spec shaped them (a pool, or settings),
+    so that a reroll draws with the same; None for plain ``--problems`` questions."""
+    if all(len(q.pool) == 1 and q.settings is None for q in questions):
+        return None
+    return [q.record() for q in questions]
+
+
+def _outside_families(families: Mapping[str, Family], questions: Sequence[Question],
+                      out: Path) -> dict[str, dict]:
+    """The manifest's record of the families from outside the package that the questions
+    use: a family from a file, that file (relative to ``out``, so that a reroll finds it where
+    the assignment was generated); one from an installed package, its entry point; and the
+    SHA-256 of its file."""
+    used = dict.fromkeys(n for q in questions for n in q.pool)
+    record = {}
+    for name in used:
+        family = families[name]
+        if family.origin == "built-in" or family.path is None:
+            continue
+        path = Path(family.path)
+        where = ({"origin": family.origin} if family.origin.startswith("entry point") else
+                 {"file": os.path.relpath(path.resolve(), out.resolve())})
+        record[name] = {**where, "sha256": hashlib.sha256(path.read_bytes()).hexdigest()}
+    return record
+
+
+def recorded_families(manifest: Mapping, out: Path,
+                      families: Mapping[str, Family]) -> dict[str, Family]:
+    """``families`` with those from outside the package that ``manifest`` records, loaded from
+    their files (relative to ``out``), for a reroll. GenerateError if one cannot be loaded."""
+    from problems.family_files import load_family_file
+
+    found = dict(families)
+    for name, where in manifest.get("families", {}).items():
+        if name in found:
+            continue
+        if "file" not in where:
+            raise GenerateError(f"--reroll: family {name!r} ({where.get('origin')}) is not "
+                                "installed here")
+        path = Path(out) / where["file"]
+        try:
+            found[name] = load_family_file(path.parent if path.name == "__init__.py" else path)
+        except FamilyError as e:
+            raise GenerateError(f"--reroll: family {name!r} of {out / ASSIGNMENT}: {e}") from None
+    return found
+
+
 def reroll_students(
     out: Path,
     student_ids: Sequence[str],
-    families: Mapping[str, ModuleType],
+    families: Mapping[str, Family],
     *,
     progress: Progress | None = None,
 ) -> Summary:
-    """Give each of ``student_ids`` a fresh variant in the existing assignment ``out``.
+    """Give each of ``student_ids`` a fresh variant in the existing assignment ``out``, drawn
+    with the assignment's own questions (and spec settings, and families from outside the
+    package, loaded again from the files the manifest records).
 
     Everything else in ``out`` is kept byte for byte (module docstring, "Rerolls").
     """
@@ -510,15 +637,24 @@ def reroll_students(
     unknown = [sid for sid in student_ids if sid not in rows]
     if unknown:
         raise GenerateError(f"--reroll: not in the assignment's roster: {', '.join(unknown)}")
-    problems = resolve_problems(manifest["problems"], families)
+    families = recorded_families(manifest, out, families)
+    if "questions" in manifest:
+        questions = tuple(Question.from_record(q) for q in manifest["questions"])
+        missing = [n for q in questions for n in q.pool if n not in families]
+        if missing:
+            raise GenerateError(f"--reroll: unknown problem {', '.join(map(repr, missing))}")
+    else:
+        questions = tuple(Question.of(n) for n in resolve_problems(manifest["problems"],
+                                                                     families))
+    problems = tuple(q.label for q in questions)
     seed, title = manifest["seed"], manifest["title"]
     ids = tuple(dict.fromkeys(student_ids))  # once each, in the order given
     with _Staging(out) as tmp:
         shutil.copytree(out, tmp, dirs_exist_ok=True)
         for done, sid in enumerate(ids, start=1):
             reroll = manifest["students"][sid]["reroll"] + 1
-            variants = student_variants(families, problems, seed, sid, reroll)
-            _write_student(tmp, title, rows[sid], variants)
+            variants = student_variants(families, questions, seed, sid, reroll)
+            _write_student(tmp, title, rows[sid], variants, families=families)
             manifest["students"][sid] = manifest_entry(variants, reroll)
             key["students"][sid] = key_entry(variants)
             if progress:

@@ -57,24 +57,18 @@ _KIND_HINTS = {
 TITLE_CELL = """\
 # {title}
 
-**Check your notebook before you submit.** On JupyterHub or Colab, run in a new cell, once: \
-`%pip install eulertop` (or the address your instructor gives), then \
-`!eulertop check {file}` — save the notebook first. In a terminal: `eulertop check {file}`. \
-It runs the notebook top to bottom as the grader will and lists each answer as ok, missing or \
-malformed; it never says whether an answer is right.\
+**Before you submit**, save and check the notebook: on JupyterHub or Colab run \
+`%pip install eulertop` (or the address your instructor gives) once, then \
+`!eulertop check {file}`; in a terminal, `eulertop check {file}`. It says which answers are \
+missing or malformed, never whether they are right.\
 """
 
 RULES = """\
 **Student:** {who}
 
-Your numbers differ from your classmates': this notebook is yours alone.
-
-- Use the parameters in the cell below as given: the key is computed from exactly these values.
-- Write each answer into its variable in the question's answer cell (leave `None` to skip it); \
-add cells for your working anywhere. Only these variables are graded, after the whole \
-notebook runs top to bottom in a fresh kernel; what you print or plot does not count.
-- Numbers may be Python or numpy numbers, vectors lists or arrays, expressions sympy \
-expressions (or strings) in the named symbols.
+Your numbers are yours alone: use them as given (the key is computed from exactly these \
+values). Write each answer into its variable in the answer cell (leave `None` to skip it); only \
+these variables are graded, after the whole notebook runs in a fresh kernel.
 
 {conventions}
 """
@@ -148,7 +142,7 @@ def _parameter_cell(variants: Sequence[Variant]) -> str:
 
 def comparison_line(variants_answers: Sequence[Any], question: int) -> str:
     """The line under a question saying how each of its answers is compared, e.g.
-    ``*Compared:* `q1_T`, `q1_L`: within 0.1 % (relative).``; answers compared alike share
+    ``*Compared:* `q1_T`, `q1_L`: within 0.1 %.``; answers compared alike share
     one entry. Derived from each answer's own kind and tolerances
     (:func:`problems.answers.comparison_rule`), never typed into a template."""
     groups: dict[str, list[str]] = {}
@@ -159,12 +153,15 @@ def comparison_line(variants_answers: Sequence[Any], question: int) -> str:
     return "*Compared:* " + "; ".join(parts) + "."
 
 
-def notebook_conventions(variants: Sequence[Variant]) -> str:
+def notebook_conventions(variants: Sequence[Variant],
+                         families: Mapping[str, Any] | None = None) -> str:
     """The conventions paragraph of a notebook: the general rules and the topics its questions'
-    families list in their ``CONVENTIONS`` (:mod:`problems.conventions`)."""
-    from problems.templates import FAMILIES
-
-    topics = [t for v in variants for t in getattr(FAMILIES.get(v.family), "CONVENTIONS", ())]
+    families list in their ``CONVENTIONS`` (:mod:`problems.conventions`). ``families``: the
+    :class:`~problems.family.Family` objects by name (default: the built-in ones)."""
+    if families is None:
+        from problems.templates import FAMILIES as families
+    topics = [t for v in variants if v.family in families
+              for t in families[v.family].conventions]
     return conventions_text(topics)
 
 
@@ -181,6 +178,7 @@ def build_notebook(
     variants: Sequence[Variant],
     *,
     solutions: bool = False,
+    families: Mapping[str, Any] | None = None,
 ) -> dict:
     """The release notebook of one student, or (``solutions=True``) its solutions version.
 
@@ -197,24 +195,27 @@ def build_notebook(
         The student's questions, in order (question ``k`` is ``variants[k - 1]``).
     solutions : bool
         Fill the answer variables with the key's values instead of ``None``.
+    families : mapping, optional
+        The families by name, for their convention topics (default: the built-in ones).
     """
-    (notebook,) = _notebooks(title, student, variants, (solutions,))
+    (notebook,) = _notebooks(title, student, variants, (solutions,), families)
     return notebook
 
 
 def build_notebooks(
-    title: str, student: Mapping[str, str], variants: Sequence[Variant]
+    title: str, student: Mapping[str, str], variants: Sequence[Variant],
+    families: Mapping[str, Any] | None = None,
 ) -> tuple[dict, dict]:
     """The release and the solutions notebook of one student (:func:`build_notebook`), built
     together: every cell and metadata entry the two have in common is one shared object, so
     :func:`notebook_text` with one ``memo`` for both encodes it once."""
-    release, solutions = _notebooks(title, student, variants, (False, True))
+    release, solutions = _notebooks(title, student, variants, (False, True), families)
     return release, solutions
 
 
 def _notebooks(
     title: str, student: Mapping[str, str], variants: Sequence[Variant],
-    kinds: Sequence[bool],
+    kinds: Sequence[bool], families: Mapping[str, Any] | None = None,
 ) -> list[dict]:
     """One notebook per entry of ``kinds`` (True: solutions), sharing what they have in common."""
     questions = [
@@ -223,7 +224,7 @@ def _notebooks(
         for k, v in enumerate(variants, start=1)
     ]
     heading = TITLE_CELL.format(title=_one_line(title), file=f"{student['id']}.ipynb")
-    rules = _rules_cell(student, notebook_conventions(variants))
+    rules = _rules_cell(student, notebook_conventions(variants, families))
     shared = [
         _cell("markdown", "title", heading, _READ_ONLY),
         _cell("markdown", "rules", rules, _READ_ONLY),

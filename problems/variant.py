@@ -1,8 +1,9 @@
 """One student's instance of one question: displayed parameters, statement and answers.
 
-A template's ``generate(rng)`` returns a :class:`Variant`. The generator turns it into the
-student's notebook cells, the key's entries, and the *public* answer spec (names, kinds, units,
-shapes — never values, never mistakes) that goes into the manifest and the notebook metadata.
+A family (:class:`problems.family.Family`) returns a :class:`Variant`. The generator turns it
+into the student's notebook cells, the key's entries, and the *public* answer spec (names,
+kinds, units, shapes — never values, never mistakes) that goes into the manifest and the
+notebook metadata.
 The answer variable of answer ``name`` in question ``k`` (1-based) is ``q{k}_{name}``.
 """
 
@@ -10,8 +11,7 @@ from __future__ import annotations
 
 import keyword
 import math
-from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -72,6 +72,11 @@ class Variant:
         Markdown with LaTeX; refers to the parameters by symbol.
     answers : tuple of Answer
         In the order the question asks for them; names unique within the question.
+    parameters : dict of str to float, list or str
+        Every parameter the family drew (:class:`problems.family.Family`): those of the cell,
+        labels (a scene, a body) and numbers written only into the statement. The family
+        recomputes ``statement`` and ``answers`` from them alone. Empty for a variant built
+        without a family.
 
     Raises
     ------
@@ -86,6 +91,7 @@ class Variant:
     param_units: dict[str, str]
     statement: str
     answers: tuple[Answer, ...]
+    parameters: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         where = f"variant of {self.family!r}"
@@ -100,6 +106,9 @@ class Variant:
         object.__setattr__(self, "params", plain)
         object.__setattr__(self, "param_units", dict(self.param_units))
         object.__setattr__(self, "answers", tuple(self.answers))
+        object.__setattr__(self, "parameters", {
+            k: v if isinstance(v, str) else plain_number_tree(v, f"{where}, parameter {k!r}")
+            for k, v in self.parameters.items()})
         names = [a.name for a in self.answers]
         if not names:
             raise ValueError(f"{where}: no answers")
@@ -125,6 +134,7 @@ class Variant:
             "param_units": dict(self.param_units),
             "statement": self.statement,
             "answers": [a.to_dict() for a in self.answers],
+            **({"parameters": dict(self.parameters)} if self.parameters else {}),
         }
 
     @classmethod
@@ -137,6 +147,7 @@ class Variant:
             param_units=dict(d["param_units"]),
             statement=d["statement"],
             answers=tuple(Answer.from_dict(a) for a in d["answers"]),
+            parameters=dict(d.get("parameters", {})),
         )
 
     def public_dict(self, question: int) -> dict:
@@ -153,6 +164,7 @@ class Variant:
             "param_units": dict(self.param_units),
             "statement": self.statement,
             "answers": [answer_spec(a, question) for a in self.answers],
+            **({"parameters": dict(self.parameters)} if self.parameters else {}),
         }
 
 
@@ -175,27 +187,3 @@ def answer_spec(answer: Answer, question: int) -> dict:
         "points": answer.points,
         "description": answer.description,
     }
-
-
-def first_acceptable(
-    attempt: Callable[[np.random.Generator], Variant | None],
-    rng: np.random.Generator,
-    family: str,
-    attempts: int,
-) -> Variant:
-    """Call ``attempt(rng)`` until it returns a variant (a template's rejection sampling).
-
-    A template's ``attempt`` draws parameters and returns ``None`` for an ill-posed draw (a
-    separatrix, turning points that nearly coincide, a known mistake too close to the key).
-
-    Raises
-    ------
-    RuntimeError
-        No acceptable draw in ``attempts`` tries: a template bug, since templates are written so
-        that most draws are accepted.
-    """
-    for _ in range(attempts):
-        variant = attempt(rng)
-        if variant is not None:
-            return variant
-    raise RuntimeError(f"{family}: no acceptable draw in {attempts} attempts")

@@ -1,16 +1,19 @@
-"""The catalogue of problem families: ``FAMILIES[name]`` is the template module ``name``.
+"""The built-in problem families: ``FAMILIES[name]`` is the :class:`~problems.family.Family` of
+the module ``problems/templates/<name>.py``.
 
-Each template is a module ``problems/templates/<name>.py`` defining ``NAME`` (equal to the module
-name), ``TITLE``, ``SUMMARY``, ``RESULTS`` (R-ids of ``physics.md``) and a pure
-``generate(rng: numpy.random.Generator) -> Variant`` (contract: ``problems/API.md``).
-To add a family, write the module and append its name to :data:`CATALOGUE`; the catalogue's
-order is the order of ``eulertop problems`` and of the default ``--problems`` list.
+Each module keeps the family contract (``problems/API.md``, :mod:`problems.family`): ``NAME``
+(equal to the module name), ``TITLE``, ``SUMMARY``, ``RESULTS`` (R-ids of ``physics.md``),
+``PARAMETERS``, ``draw``, ``answers`` and ``statement``. To add one, write the module and append
+its name to :data:`CATALOGUE`; the catalogue's order is the order of ``eulertop problems`` and
+of the default ``--problems`` list. Families from outside the package are found by
+:mod:`problems.family_files`.
 """
 
 from __future__ import annotations
 
 from importlib import import_module
-from types import ModuleType
+
+from problems.family import Family, FamilyError
 
 # Module names, in catalogue order (the lecture's order: inertia, Euler equations, Euler angles,
 # heavy top).
@@ -31,17 +34,14 @@ CATALOGUE: tuple[str, ...] = (
     "symbolic_derivation",
 )
 
-_REQUIRED = ("NAME", "TITLE", "SUMMARY", "RESULTS", "generate")
+
+def _load(name: str) -> Family:
+    family = Family(import_module(f"{__name__}.{name}"), origin="built-in")
+    if family.name != name:
+        raise FamilyError(f"{family.where}: NAME is {family.name!r}, expected {name!r}")
+    if not family.results:
+        raise FamilyError(f"{family.where}: a built-in family lists its RESULTS (R-ids)")
+    return family
 
 
-def _load(name: str) -> ModuleType:
-    module = import_module(f"{__name__}.{name}")
-    missing = [attr for attr in _REQUIRED if not hasattr(module, attr)]
-    if missing:
-        raise ImportError(f"template {module.__name__} lacks {', '.join(missing)}")
-    if module.NAME != name:
-        raise ImportError(f"template {module.__name__} has NAME {module.NAME!r}, expected {name!r}")
-    return module
-
-
-FAMILIES: dict[str, ModuleType] = {name: _load(name) for name in CATALOGUE}
+FAMILIES: dict[str, Family] = {name: _load(name) for name in CATALOGUE}

@@ -27,15 +27,17 @@ one another (e.g. a small-amplitude R9 period indistinguishable from the exact o
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 from scipy.special import ellipk
 
-from problems.answers import Answer, Mistake, distinguishable_answers
+from problems.answers import Answer, Mistake
+from problems.family import distinguishable, reject_unless
 from problems.rounding import latex_sig, round_sig
-from problems.templates.near_axis_stability import Body, draw_body
-from problems.variant import Variant, first_acceptable
+from problems.templates import near_axis_stability as near_axis
+from problems.templates.near_axis_stability import Draw, draw_body
 from solver.asymmetric_top import asymmetric_top_period, flip_time
 from solver.torque_free import invariants, near_axis_stability
 
@@ -68,17 +70,6 @@ WOBBLE = (0.15, 0.7)
 MAX_ATTEMPTS = 1000
 
 
-@dataclass(frozen=True)
-class Draw:
-    """Displayed values: ``axes[i]`` names principal axis ``i + 1`` of the body."""
-
-    body: Body
-    axes: tuple[str, str, str]
-    moments: tuple[float, float, float]  # I1 < I2 < I3
-    spin_axis: int  # the axis spun mainly about
-    omega0: tuple[float, float, float]
-
-
 def _draw(rng: np.random.Generator) -> Draw:
     body = draw_body(rng)
     order = np.argsort(body.moments)
@@ -88,8 +79,8 @@ def _draw(rng: np.random.Generator) -> Draw:
     omega = rng.uniform(*fractions, size=3) * rng.choice([-1.0, 1.0], size=3)
     omega[spin_axis - 1] = 1.0
     omega *= rng.uniform(*body.spin)
-    axes = tuple(body.axes[i] for i in order)
-    return Draw(body, axes, moments, spin_axis, tuple(round_sig(omega, SIG).tolist()))
+    return Draw(body, tuple(int(i) for i in order), moments, spin_axis,
+                tuple(round_sig(omega, SIG).tolist()))
 
 
 def _well_posed(d: Draw) -> bool:
@@ -162,70 +153,44 @@ def _answers(d: Draw) -> tuple[Answer, ...]:
 
 def _statement(d: Draw) -> str:
     b, s = d.body, d.spin_axis
-    axes = "; ".join(
-        f"$\\hat e_{i}$ {d.axes[i - 1]}, $I_{i} = {latex_sig(d.moments[i - 1], SIG_MOMENTS)}$ kg m²"
-        for i in (1, 2, 3)
-    )
     w = ",\\ ".join(latex_sig(x, SIG) for x in d.omega0)
     how = ("mainly about its intermediate axis $\\hat e_2$, with a small perturbation"
            if s == 2 else f"mainly about $\\hat e_{s}$, with a large wobble")
     return (
-        f"{b.noun[0].upper()}{b.noun[1:]} ({b.description}) is tossed into the air spinning "
-        f"{how}. Its principal axes and moments about the centre of mass, **ordered** "
-        f"$I_1 < I_2 < I_3$, are: {axes} (`I1`, `I2`, `I3`; use them as given).\n\n"
-        "At $t = 0$ the body-frame components of the angular velocity are "
-        f"$(\\omega_1, \\omega_2, \\omega_3) = ({w})$ rad/s (`omega0`). Solve Euler's "
-        "equations exactly (Jacobi elliptic functions), not in the small-amplitude "
-        "approximation.\n\n"
-        "1. `period`: the period $P$ (s) of $\\boldsymbol\\omega(t)$ in the body frame: the "
-        "smallest $P > 0$ with $\\boldsymbol\\omega(t + P) = \\boldsymbol\\omega(t)$ for all "
-        "three components.\n"
-        "2. `t_flip`: the flip time (s): the time $\\omega_2$ takes to go from one of its "
-        "maxima to the next minimum (for a body spun near $\\hat e_2$, the time it takes to "
-        "turn over).\n"
+        f"{b.noun[0].upper()}{b.noun[1:]} ({b.description}) is tossed spinning {how}. Its "
+        "principal axes and moments about the centre of mass, **ordered** $I_1 < I_2 < I_3$, "
+        f"are: {near_axis.axes_text(d)} (`I1`, `I2`, `I3`). At $t = 0$, "
+        f"$\\boldsymbol\\omega = ({w})$ rad/s in body components (`omega0`). Solve Euler's "
+        "equations exactly (Jacobi elliptic functions).\n\n"
+        "1. `period`: the least $P > 0$ with $\\boldsymbol\\omega(t + P) = "
+        "\\boldsymbol\\omega(t)$, all three components;\n"
+        "2. `t_flip`: the time $\\omega_2$ takes from a maximum to the next minimum;\n"
         "3. `circled_axis`: the principal axis that $\\boldsymbol\\omega$ circles in the body "
-        "frame (the one whose component of $\\boldsymbol\\omega$ never changes sign): "
-        '`"1"`, `"2"` or `"3"`.'
+        'frame (its component never changes sign): `"1"`, `"2"` or `"3"`.'
     )
 
 
-def _variant(d: Draw) -> Variant | None:
-    if not _well_posed(d):
-        return None
-    answers = distinguishable_answers(lambda: _answers(d), MARGIN)
-    if answers is None:
-        return None
-    I1, I2, I3 = d.moments
-    return Variant(
-        family=NAME,
-        title=TITLE,
-        params={"I1": I1, "I2": I2, "I3": I3, "omega0": list(d.omega0)},
-        param_units={"I1": "kg m^2", "I2": "kg m^2", "I3": "kg m^2", "omega0": "rad/s"},
-        statement=_statement(d),
-        answers=answers,
-    )
+PARAMETERS = near_axis.body_parameters()
 
 
-def generate(rng: np.random.Generator) -> Variant:
-    """One variant of the exact torque-free asymmetric top (R10), from ``rng`` only.
+def draw(rng: np.random.Generator) -> dict[str, Any]:
+    """A body (:func:`~problems.templates.near_axis_stability.draw_body`), its axes ordered
+    ``I1 < I2 < I3``, spun about ê2 with a small perturbation or about ê1 or ê3 with a large
+    wobble."""
+    return _draw(rng).params()
 
-    Parameters are rounded to the figures shown and every answer is computed from the rounded
-    values by :mod:`solver.asymmetric_top`. Ill-posed draws are resampled.
 
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The only source of randomness; the same generator state gives the same variant.
+def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
+    """``period``, ``t_flip`` and ``circled_axis`` (R10), from :mod:`solver.asymmetric_top` on
+    the shown moments and ω(0).
 
-    Returns
-    -------
-    Variant
-        Parameters (SI), statement and answers of one student's question.
-
-    Raises
-    ------
-    RuntimeError
-        No acceptable draw in ``MAX_ATTEMPTS`` (a template bug: about one draw in a few is
-        rejected).
+    Raises :class:`~problems.family.IllPosed` for moments out of order or too close, a motion
+    near the separatrix, or a known mistake close to the key.
     """
-    return first_acceptable(lambda r: _variant(_draw(r)), rng, NAME, MAX_ATTEMPTS)
+    d = Draw.of(params)
+    reject_unless(_well_posed(d), "moments too close, or a motion near the separatrix")
+    return distinguishable(lambda: _answers(d), MARGIN)
+
+
+def statement(params: Mapping[str, Any]) -> str:
+    return _statement(Draw.of(params))

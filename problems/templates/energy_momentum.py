@@ -23,12 +23,15 @@ of a hand computation of a small angle from nearly parallel vectors would grow).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from problems.answers import Answer, Mistake
+from problems.family import IllPosed, Parameter, reject_unless
 from problems.rounding import format_sig, latex_sig, round_sig
-from problems.variant import Variant
 from solver.inertia import angular_momentum, kinetic_energy, shape_tensor
 from solver.parameters import principal_moments
 
@@ -92,22 +95,37 @@ def _answers(tensor, omega, T_naive, L_naive, naive, extra_angle=()) -> tuple | 
     return None if None in answers else answers
 
 
-def _tumbling_satellite(rng: np.random.Generator) -> Variant | None:
+def _physical(tensor: np.ndarray) -> bool:
+    """Still a physical inertia tensor after the rounding (R4)."""
+    try:
+        principal_moments(*np.linalg.eigvalsh(tensor))
+    except ValueError:
+        return False
+    return True
+
+
+def _tumbling_satellite(rng: np.random.Generator) -> dict[str, Any] | None:
+    """A satellite's tensor (principal moments turned at random, 4 figures) and its ω."""
     moments = np.sort(rng.uniform(5.0, 60.0, size=3))
     if moments[2] >= moments[0] + moments[1] or np.min(np.diff(moments)) < 2.0:
         return None  # not a physical body, or a nearly symmetric one (small products)
     Q = Rotation.random(rng=rng).as_matrix()
     upper = round_sig(np.triu(Q @ np.diag(moments) @ Q.T), 4)
     tensor = upper + np.triu(upper, 1).T
-    try:
-        principal_moments(*np.linalg.eigvalsh(tensor))  # still a physical tensor after rounding
-    except ValueError:
+    if not _physical(tensor):
         return None
     omega = round_sig(rng.uniform(-0.3, 0.3, size=3), 3)
     if np.linalg.norm(omega) < 0.1:
         return None
+    return {"scene": "tumbling_satellite", "I": tensor.tolist(), "omega": omega.tolist()}
+
+
+def _satellite_answers(params: Mapping[str, Any]) -> tuple | None:
+    tensor, omega = np.array(params["I"]), np.array(params["omega"])
+    reject_unless(_physical(tensor) and np.linalg.norm(omega) >= 0.1,
+                  "no physical tensor, or too slow a tumble")
     diag = np.diag(np.diag(tensor))
-    answers = _answers(
+    return _answers(
         tensor, omega, float(kinetic_energy(diag, omega)), angular_momentum(diag, omega),
         ("products_ignored",
          "The products of inertia (off-diagonal entries) matter: the body axes are not principal "
@@ -115,38 +133,44 @@ def _tumbling_satellite(rng: np.random.Generator) -> Variant | None:
          "The products of inertia (off-diagonal entries) matter: the body axes are not principal "
          "axes, so L = I·ω with the full tensor (R5)."),
     )
-    if answers is None:
-        return None
-    params = {"I": tensor.tolist(), "omega": omega.tolist()}
-    units = {"I": "kg m^2", "omega": "rad/s"}
+
+
+_ASK = ("Find the kinetic energy $T$, the angular momentum $\\mathbf L$ about the centre of "
+        "mass (along the same axes as $\\boldsymbol\\omega$), and the angle between "
+        "$\\mathbf L$ and $\\boldsymbol\\omega$ (from 0 to π).")
+
+
+def _satellite_statement(params: Mapping[str, Any]) -> str:
+    tensor, omega = params["I"], params["omega"]
     rows = " \\\\ ".join(" & ".join(latex_sig(x, 4) for x in row) for row in tensor)
-    statement = (
-        "A small satellite tumbles after the failure of its attitude control. In its body axes "
-        "its inertia tensor about the centre of mass is (`I`, kg m²)\n\n"
-        f"$$\\mathsf I = \\begin{{pmatrix}} {rows} \\end{{pmatrix}}\\ \\mathrm{{kg\\,m^2}},$$\n\n"
-        "and its angular velocity has the body components "
+    return (
+        "A small satellite tumbles after its attitude control failed. In its body axes, its "
+        "inertia tensor about the centre of mass is (`I`)\n\n"
+        f"$$\\mathsf I = \\begin{{pmatrix}} {rows} \\end{{pmatrix}}\\ \\mathrm{{kg\\,m^2}},$$"
+        "\n\nand its angular velocity is "
         f"$\\boldsymbol\\omega = ({', '.join(format_sig(w, 3) for w in omega)})$ rad/s "
-        "(`omega`).\n\n"
-        "Find the rotational kinetic energy $T$, the angular momentum $\\mathbf L$ about the "
-        "centre of mass (body components), and the angle between $\\mathbf L$ and "
-        f"$\\boldsymbol\\omega$ in radians (between 0 and π)."
+        f"(`omega`).\n\n{_ASK}"
     )
-    return Variant(NAME, "Energy and angular momentum of a tumbling satellite", params, units,
-                   statement, answers)
 
 
-def _askew_disc(rng: np.random.Generator) -> Variant | None:
+def _askew_disc(rng: np.random.Generator) -> dict[str, Any]:
+    """A grinding wheel or saw blade: its mass, radius, tilt and spin, rounded."""
     kind = list(DISCS)[int(rng.integers(len(DISCS)))]
     radius_range, mass_range, spin_range = DISCS[kind]
     M, R = round_sig(rng.uniform(*mass_range), 3), round_sig(rng.uniform(*radius_range), 3)
     theta = round_sig(rng.uniform(0.12, 0.4), 3)
     w = round_sig(rng.uniform(*spin_range), 3)
+    return {"scene": "askew_disc", "disc": kind, "M": M, "R": R, "theta": theta, "omega": w}
+
+
+def _disc_answers(params: Mapping[str, Any]) -> tuple | None:
+    M, R, theta, w = (params[n] for n in ("M", "R", "theta", "omega"))
     disc = shape_tensor("disc", M, radius=R)  # principal: symmetry axis along z
     tilt = Rotation.from_euler("y", theta).as_matrix()  # the disc's axis (sin θ, 0, cos θ)
     tensor = tilt @ disc @ tilt.T
     omega = np.array([0.0, 0.0, w])
     I3 = disc[2, 2]
-    answers = _answers(
+    return _answers(
         tensor, omega, 0.5 * I3 * w**2, I3 * omega,
         ("untilted",
          "½ I3 ω² would hold for an untilted disc. Tilted, its moment about the axle is "
@@ -156,44 +180,72 @@ def _askew_disc(rng: np.random.Generator) -> Variant | None:
         extra_angle=[("tilt_angle", theta, "θ is the angle between the disc's axis and ω; the "
                       "question asks for the angle between L and ω, which is smaller.")],
     )
-    if answers is None:
-        return None
-    params = {"M": M, "R": R, "theta": theta, "omega": w}
-    units = {"M": "kg", "R": "m", "theta": "rad", "omega": "rad/s"}
-    statement = (
-        f"A {kind}, a uniform thin disc of mass $M = {latex_sig(M, 3)}$ kg (`M`) and radius "
-        f"$R = {latex_sig(R, 3)}$ m (`R`), is mounted askew on its axle: the axle passes "
-        "through the disc's centre, but the disc's symmetry axis makes the angle "
-        f"$\\theta = {latex_sig(theta, 3)}$ rad (`theta`) with it. The axle spins at "
-        f"$\\omega = {latex_sig(w, 3)}$ rad/s (`omega`).\n\n"
-        "Take axes through the disc's centre with $z$ along the axle and the disc's symmetry "
-        "axis in the $xz$ plane, along $(\\sin\\theta, 0, \\cos\\theta)$, at the instant "
-        "shown. Find the kinetic energy $T$, the angular momentum $\\mathbf L$ about the "
-        "centre (components along $x, y, z$), and the angle between $\\mathbf L$ and "
-        f"$\\boldsymbol\\omega$ in radians (between 0 and π)."
+
+
+def _disc_statement(params: Mapping[str, Any]) -> str:
+    M, R, theta, w = (params[n] for n in ("M", "R", "theta", "omega"))
+    return (
+        f"A {params['disc']}, a uniform thin disc of mass $M = {latex_sig(M, 3)}$ kg (`M`) and "
+        f"radius $R = {latex_sig(R, 3)}$ m (`R`), is mounted askew: its axle passes through its "
+        f"centre at the angle $\\theta = {latex_sig(theta, 3)}$ rad (`theta`) to its symmetry "
+        f"axis, and spins at $\\omega = {latex_sig(w, 3)}$ rad/s (`omega`). Take $z$ along the "
+        "axle and the symmetry axis along $(\\sin\\theta, 0, \\cos\\theta)$ at this "
+        f"instant.\n\n{_ASK}"
     )
-    return Variant(NAME, f"A {kind} mounted askew", params, units, statement, answers)
 
 
-SCENES = (_tumbling_satellite, _askew_disc)
+SCENES = {
+    "tumbling_satellite": (_tumbling_satellite, _satellite_answers, _satellite_statement,
+                           "Energy and angular momentum of a tumbling satellite"),
+    "askew_disc": (_askew_disc, _disc_answers, _disc_statement, "A {disc} mounted askew"),
+}
+"""Scene → (its draw, answers, statement, title)."""
+
+PARAMETERS: dict[str, Parameter] = {
+    "scene": Parameter(choices=tuple(SCENES), description="a satellite, or a disc askew"),
+    "disc": Parameter(choices=tuple(DISCS), description="the disc's object"),
+    "I": Parameter(unit="kg m^2", shape=(3, 3), figures=4, description="inertia tensor"),
+    "M": Parameter(unit="kg", description="mass of the disc"),
+    "R": Parameter(unit="m", description="radius of the disc"),
+    "theta": Parameter(unit="rad", description="tilt of the disc on its axle"),
+    "omega": Parameter(unit="rad/s", shape=None,
+                       description="angular velocity (a vector), or the axle's spin"),
+}
 
 
-def generate(rng: np.random.Generator) -> Variant:
-    """One variant: a scene drawn from :data:`SCENES`, redrawn until it is well posed (R3, R5).
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The only source of randomness.
-
-    Returns
-    -------
-    Variant
-        Answers ``T`` (J), ``L`` (kg m²/s, vector) and ``angle`` (rad).
-    """
-    scene = SCENES[int(rng.integers(len(SCENES)))]
+def draw(rng: np.random.Generator) -> dict[str, Any] | None:
+    """A scene of :data:`SCENES`, then draws of it until one is well posed (at most
+    ``MAX_TRIES``)."""
+    scene = SCENES[list(SCENES)[int(rng.integers(len(SCENES)))]][0]
     for _ in range(MAX_TRIES):
-        variant = scene(rng)
-        if variant is not None:
-            return variant
-    raise RuntimeError(f"{NAME}: no well-posed draw in {MAX_TRIES} tries")  # pragma: no cover
+        params = scene(rng)
+        if params is not None and _well_posed(params):
+            return params
+    return None  # pragma: no cover
+
+
+def _well_posed(params: Mapping[str, Any]) -> bool:
+    try:
+        answers(params)
+    except IllPosed:
+        return False
+    return True
+
+
+def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
+    """``T`` (J), ``L`` (kg m²/s, vector) and ``angle`` (rad) between L and ω, R3, R5.
+
+    Raises :class:`~problems.family.IllPosed` for an angle below ``MIN_ANGLE`` or a known
+    mistake close to the key.
+    """
+    found = SCENES[params["scene"]][1](params)
+    reject_unless(found is not None, "too small an angle, or a mistake close to the key")
+    return found
+
+
+def heading(params: Mapping[str, Any]) -> str:
+    return SCENES[params["scene"]][3].format(disc=params.get("disc"))
+
+
+def statement(params: Mapping[str, Any]) -> str:
+    return SCENES[params["scene"]][2](params)

@@ -27,14 +27,16 @@ coefficient such as ``0.5``; any wrong term changes the values by far more at ge
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from functools import cache
+from typing import Any
 
 import numpy as np
 import sympy as sp
 
 from problems.answers import Answer, Mistake
+from problems.family import Parameter, reject_unless
 from problems.rounding import latex_sig, round_sig
-from problems.variant import Variant
 from solver.euler_angles import kinetic_energy_euler
 from solver.inertia import parallel_axis, shape_tensor
 from solver.parameters import principal_moments
@@ -73,8 +75,8 @@ _OMEGA3_IS_GAMMA_DOT = (
     "component α̇ cos β along ê₃."
 )
 _EXPRESSION_TASK = (
-    "For a **symmetric** body ($I_2 = I_1$), write the kinetic energy as an expression in "
-    "`I1, I3, beta, alpha_dot, beta_dot, gamma_dot` (a sympy expression or a string, e.g. "
+    "`T_expr`: for a **symmetric** body ($I_2 = I_1$), $T$ as an expression in "
+    "`I1, I3, beta, alpha_dot, beta_dot, gamma_dot` (sympy, or a string such as "
     "`\"I1*beta_dot**2/2 + ...\"`)."
 )
 
@@ -153,23 +155,23 @@ def _energy_answer(moments, angles, rates, swap: tuple[int, int]) -> Answer | No
                   mistakes=tuple(Mistake(n, v, f) for n, v, f in mistakes))
 
 
-def _toy_top(rng: np.random.Generator):
+_NAMES = ("beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot")
+
+
+def _toy_top(rng: np.random.Generator) -> dict[str, Any]:
+    """A toy top's moments about its tip (3 figures), Euler angles and rates."""
     M, R = rng.uniform(0.03, 0.1), rng.uniform(0.02, 0.05)
     h = rng.uniform(0.02, 0.06)
     about_tip = parallel_axis(shape_tensor("disc", M, radius=R), M, [0.0, 0.0, h])
     I1, I3 = round_sig(np.diag(about_tip)[[0, 2]], 3)
     angles = (round_sig(rng.uniform(0.1, 1.3), 3), round_sig(rng.uniform(0.1, 6.2), 3))
     rates = round_sig([rng.uniform(1.0, 6.0), rng.uniform(-2.0, 2.0), rng.uniform(60, 150)], 3)
-    text = (
-        "A toy top spins with its tip fixed on a table. Its principal moments about the tip are "
-        f"$I_1 = I_2 = {latex_sig(I1, 3)}$ kg m² (`I1`, about any axis through the tip "
-        f"perpendicular to the symmetry axis) and $I_3 = {latex_sig(I3, 3)}$ kg m² (`I3`, about "
-        "the symmetry axis)."
-    )
-    return "A spinning toy top", {"I1": I1, "I3": I3}, (I1, I1, I3), angles, rates, (0, 2), text
+    return {"scene": "toy_top", "I1": float(I1), "I3": float(I3),
+            **dict(zip(_NAMES, map(float, (*angles, *rates)), strict=True))}
 
 
-def _tumbling_box(rng: np.random.Generator):
+def _tumbling_box(rng: np.random.Generator) -> dict[str, Any]:
+    """A smartphone's or book's principal moments (3 figures), Euler angles and rates."""
     kind = list(BOXES)[int(rng.integers(len(BOXES)))]
     *edges, mass_range = BOXES[kind]
     dims = dict(zip("abc", (rng.uniform(*r) for r in edges), strict=True))
@@ -177,57 +179,77 @@ def _tumbling_box(rng: np.random.Generator):
     principal_moments(*moments)  # a physical body (R4); guards the sampling ranges
     angles = tuple(round_sig([rng.uniform(0.2, 2.9), rng.uniform(0.1, 6.2)], 3))
     rates = round_sig(rng.uniform(-15.0, 15.0, size=3), 3)
-    I1, I2, I3 = moments
-    text = (
-        f"A {kind} is tossed in the air, tumbling about its centre of mass. Its principal moments "
-        f"are $I_1 = {latex_sig(I1, 3)}$ kg m² (`I1`), $I_2 = {latex_sig(I2, 3)}$ kg m² (`I2`) "
-        f"and $I_3 = {latex_sig(I3, 3)}$ kg m² (`I3`)."
+    return {"scene": "tumbling_box", "box": kind,
+            **dict(zip(("I1", "I2", "I3"), map(float, moments), strict=True)),
+            **dict(zip(_NAMES, map(float, (*angles, *rates)), strict=True))}
+
+
+def _moments(params: Mapping[str, Any]) -> tuple[tuple[float, float, float], tuple[int, int]]:
+    """``(I1, I2, I3)`` and the pair a student may swap: ``I1, I3`` of the symmetric toy top
+    (``I2 = I1``), ``I1, I2`` of a box."""
+    if params["scene"] == "toy_top":
+        return (params["I1"], params["I1"], params["I3"]), (0, 2)
+    return (params["I1"], params["I2"], params["I3"]), (0, 1)
+
+
+def _body_text(params: Mapping[str, Any]) -> str:
+    I1, I3 = latex_sig(params["I1"], 3), latex_sig(params["I3"], 3)
+    if params["scene"] == "toy_top":
+        return (
+            "A toy top spins on a fixed tip. Its principal moments about the tip are "
+            f"$I_1 = I_2 = {I1}$ kg m² (`I1`) and $I_3 = {I3}$ kg m² (`I3`, about the symmetry "
+            "axis)."
+        )
+    return (
+        f"A {params['box']} tumbles in the air. Its principal moments about the centre of mass "
+        f"are $I_1 = {I1}$ kg m² (`I1`), $I_2 = {latex_sig(params['I2'], 3)}$ kg m² (`I2`) and "
+        f"$I_3 = {I3}$ kg m² (`I3`)."
     )
-    params = {"I1": I1, "I2": I2, "I3": I3}
-    return f"A tumbling {kind}", params, (I1, I2, I3), angles, rates, (0, 1), text
 
 
-SCENES = (_toy_top, _tumbling_box)
+SCENES = {"toy_top": _toy_top, "tumbling_box": _tumbling_box}
+
+PARAMETERS: dict[str, Parameter] = {
+    "scene": Parameter(choices=tuple(SCENES), description="a toy top, or a tumbling box"),
+    "box": Parameter(choices=tuple(BOXES), description="the box's object"),
+    **{f"I{i}": Parameter(unit="kg m^2", description=f"principal moment I{i}") for i in (1, 2, 3)},
+    "beta": Parameter(unit="rad", description="Euler angle β"),
+    "gamma": Parameter(unit="rad", low=0.1, high=6.2, description="Euler angle γ"),
+    **{n: Parameter(unit="rad/s", description=f"rate of {n[:-4]}") for n in _NAMES[2:]},
+}
 
 
-def _draw(rng: np.random.Generator) -> Variant | None:
-    scene = SCENES[int(rng.integers(len(SCENES)))]
-    title, params, moments, angles, rates, swap, text = scene(rng)
+def draw(rng: np.random.Generator) -> dict[str, Any]:
+    """A scene of :data:`SCENES`: its moments, Euler angles and rates."""
+    return list(SCENES.values())[int(rng.integers(len(SCENES)))](rng)
+
+
+def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
+    """``T`` (R12, R13) from the shown values, and ``T_expr``, the symmetric top's ``T``
+    derived by :mod:`solver.symbolic`.
+
+    Raises :class:`~problems.family.IllPosed` when two of ``T``'s mistakes are close.
+    """
+    moments, swap = _moments(params)
+    angles = (params["beta"], params["gamma"])
+    rates = np.array([params[n] for n in _NAMES[2:]])
     energy = _energy_answer(np.array(moments, dtype=float), angles, rates, swap)
-    if energy is None:
-        return None
-    names = ("beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot")
-    params = {k: float(v) for k, v in params.items()}
-    params |= dict(zip(names, map(float, (*angles, *rates)), strict=True))
-    units = {k: "kg m^2" for k in params if k.startswith("I")}
-    units |= {n: ("rad" if i < 2 else "rad/s") for i, n in enumerate(names)}
+    reject_unless(energy is not None, "two known mistakes of T are close")
+    return (energy, _expression_answer())
+
+
+def heading(params: Mapping[str, Any]) -> str:
+    if params["scene"] == "toy_top":
+        return "A spinning toy top"
+    return f"A tumbling {params['box']}"
+
+
+def statement(params: Mapping[str, Any]) -> str:
     symbols = (r"\beta", r"\gamma", r"\dot\alpha", r"\dot\beta", r"\dot\gamma")
-    shown = ", ".join(f"${s} = {latex_sig(params[n], 3)}$ {units[n]} (`{n}`)"
-                      for s, n in zip(symbols, names, strict=True))
-    statement = (
-        f"{text} At one instant its Euler angles and their rates are {shown}; its body axes "
-        "$\\hat e_1, \\hat e_2, \\hat e_3$ are the principal axes of $I_1, I_2, I_3$.\n\n"
-        "1. Find its rotational kinetic energy $T$ at that instant.\n"
+    shown = ", ".join(f"${s} = {latex_sig(params[n], 3)}$ {PARAMETERS[n].unit} (`{n}`)"
+                      for s, n in zip(symbols, _NAMES, strict=True))
+    return (
+        f"{_body_text(params)} At one instant its Euler angles and rates are {shown}.\n\n"
+        "1. `T`: its kinetic energy at that instant;\n"
         f"2. {_EXPRESSION_TASK}"
     )
-    return Variant(NAME, title, params, units, statement, (energy, _expression_answer()))
-
-
-def generate(rng: np.random.Generator) -> Variant:
-    """One variant, redrawn until every mistake is distinguishable from the key (R12, R13).
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The only source of randomness.
-
-    Returns
-    -------
-    Variant
-        Answers ``T`` (J) and ``T_expr`` (expression, J).
-    """
-    for _ in range(MAX_TRIES):
-        variant = _draw(rng)
-        if variant is not None:
-            return variant
-    raise RuntimeError(f"{NAME}: no well-posed draw in {MAX_TRIES} tries")  # pragma: no cover

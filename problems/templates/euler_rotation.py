@@ -22,11 +22,14 @@ are exact inputs; entries of R are O(1) and a student computing with numpy is ex
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 import numpy as np
 
 from problems.answers import Answer, Mistake
+from problems.family import Parameter, reject_unless
 from problems.rounding import format_sig, latex_sig, round_sig
-from problems.variant import Variant
 from solver.euler_angles import omega_body, rotation_matrix, to_body, to_inertial
 
 NAME = "euler_rotation"
@@ -38,10 +41,12 @@ RTOL = 1e-3
 SEPARATION = 5.0  # key and mistakes at least this many tolerances apart
 MAX_TRIES = 200
 
-# Bodies: (β range rad, α̇ range, β̇ range, γ̇ range in rad/s).
+# Bodies: label -> (words, β range rad, α̇ range, β̇ range, γ̇ range in rad/s).
 BODIES = {
-    "a toy top spinning on a table": ((0.1, 1.4), (1.0, 6.0), (-1.5, 1.5), (60.0, 150.0)),
-    "a quadcopter drone in a turn": ((0.05, 0.6), (-1.5, 1.5), (-1.0, 1.0), (-2.0, 2.0)),
+    "toy_top": ("a toy top spinning on a table", (0.1, 1.4), (1.0, 6.0), (-1.5, 1.5),
+                (60.0, 150.0)),
+    "drone": ("a quadcopter drone in a turn", (0.05, 0.6), (-1.5, 1.5), (-1.0, 1.0),
+              (-2.0, 2.0)),
 }
 
 CONVENTIONS = ("euler_angles",)
@@ -83,32 +88,32 @@ def _matrix_answer(alpha, beta, gamma) -> Answer | None:
     ], "", "R, its 9 entries row by row: [R11, R12, R13, R21, …, R33]")
 
 
-def _vector_answer(rng, alpha, beta, gamma) -> tuple[Answer | None, dict, dict, str]:
-    """Either a marker body → lab, or a force lab → body: answer, params, units, text."""
+def _vector_answer(params: Mapping[str, Any]) -> tuple[Answer | None, str]:
+    """Either a marker body → lab (``r_body`` given), or a force lab → body (``F_lab``):
+    the answer and the sentence asking for it."""
+    alpha, beta, gamma = (params[n] for n in ("alpha", "beta", "gamma"))
     R = rotation_matrix(alpha, beta, gamma)
     R_deg = rotation_matrix(*np.radians([alpha, beta, gamma]))
-    if rng.integers(2):
-        r_body = round_sig(rng.uniform(-0.08, 0.08, size=3), 2)
+    if "r_body" in params:
+        r_body = np.array(params["r_body"])
         r_lab = to_inertial(R, r_body)
         answer = _answer("r_lab", r_lab, [
             ("transpose", to_body(R, r_body), _TRANSPOSE),
             ("degree_mode", to_inertial(R_deg, r_body), _DEGREE_MODE),
         ], "m", "lab components of the marker's position")
-        text = ("A marker painted on the body sits at body coordinates "
+        text = ("`r_lab`: the lab coordinates of a marker at the body coordinates "
                 f"$\\mathbf r' = ({', '.join(format_sig(x, 2) for x in r_body)})$ m (`r_body`) "
-                "relative to the origin (the fixed tip or centre). Find its lab coordinates "
-                "$\\mathbf r$.")
-        return answer, {"r_body": r_body.tolist()}, {"r_body": "m"}, text
-    F_lab = round_sig(rng.uniform(-5.0, 5.0, size=3), 3)
+                "from the fixed point;")
+        return answer, text
+    F_lab = np.array(params["F_lab"])
     F_body = to_body(R, F_lab)
     answer = _answer("F_body", F_body, [
         ("transpose", to_inertial(R, F_lab), _TRANSPOSE),
         ("degree_mode", to_body(R_deg, F_lab), _DEGREE_MODE),
     ], "N", "body components of the force")
-    text = ("A force with lab components "
-            f"$\\mathbf F = ({', '.join(format_sig(x, 3) for x in F_lab)})$ N (`F_lab`) acts on "
-            "the body. Find its body components $\\mathbf F'$.")
-    return answer, {"F_lab": F_lab.tolist()}, {"F_lab": "N"}, text
+    text = ("`F_body`: the body components of a force with the lab components "
+            f"$\\mathbf F = ({', '.join(format_sig(x, 3) for x in F_lab)})$ N (`F_lab`);")
+    return answer, text
 
 
 def _omega_answer(alpha, beta, gamma, rates) -> Answer | None:
@@ -139,52 +144,63 @@ def _spin_mistake(w: np.ndarray, beta: float, rates: np.ndarray) -> list[tuple]:
     return [("omega3_is_gamma_dot", wrong, _OMEGA3_IS_GAMMA_DOT)]
 
 
-def _draw(rng: np.random.Generator) -> Variant | None:
-    body = list(BODIES)[int(rng.integers(len(BODIES)))]
-    beta_range, *rate_ranges = BODIES[body]
+_ANGLES = ("alpha", "beta", "gamma")
+_RATES = ("alpha_dot", "beta_dot", "gamma_dot")
+
+PARAMETERS: dict[str, Parameter] = {
+    "body": Parameter(choices=tuple(BODIES), description="the body"),
+    "alpha": Parameter(unit="rad", low=0.1, high=6.18, description="Euler angle α"),
+    "beta": Parameter(unit="rad", description="Euler angle β"),
+    "gamma": Parameter(unit="rad", low=0.1, high=6.18, description="Euler angle γ"),
+    **{n: Parameter(unit="rad/s", description=f"rate of {n[:-4]}") for n in _RATES},
+    "r_body": Parameter(unit="m", shape=(3,), figures=2, description="a marker, body frame"),
+    "F_lab": Parameter(unit="N", shape=(3,), description="a force, lab frame"),
+}
+
+
+def draw(rng: np.random.Generator) -> dict[str, Any]:
+    """A body of :data:`BODIES` at one instant: Euler angles and rates in its ranges, then a
+    marker's body coordinates or a force's lab components (each one time in two)."""
+    label = list(BODIES)[int(rng.integers(len(BODIES)))]
+    beta_range, *rate_ranges = BODIES[label][1:]
     alpha, gamma = round_sig(rng.uniform(0.1, 2 * np.pi - 0.1, size=2), 3)
     beta = round_sig(rng.uniform(*beta_range), 3)
-    rates = np.array([round_sig(rng.uniform(*r), 3) for r in rate_ranges])
-    vector, vector_params, vector_units, vector_text = _vector_answer(rng, alpha, beta, gamma)
-    answers = (_matrix_answer(alpha, beta, gamma), vector,
-               _omega_answer(alpha, beta, gamma, rates))
-    if None in answers:
-        return None
-    names = ("alpha", "beta", "gamma", "alpha_dot", "beta_dot", "gamma_dot")
-    params = dict(zip(names, map(float, (alpha, beta, gamma, *rates)), strict=True))
-    params |= vector_params
-    units = {n: ("rad" if i < 3 else "rad/s") for i, n in enumerate(names)} | vector_units
+    rates = [round_sig(rng.uniform(*r), 3) for r in rate_ranges]
+    params = {"body": label, **dict(zip(_ANGLES, map(float, (alpha, beta, gamma)), strict=True)),
+              **dict(zip(_RATES, map(float, rates), strict=True))}
+    if rng.integers(2):
+        return params | {"r_body": round_sig(rng.uniform(-0.08, 0.08, size=3), 2).tolist()}
+    return params | {"F_lab": round_sig(rng.uniform(-5.0, 5.0, size=3), 3).tolist()}
+
+
+def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
+    """``R`` (its 9 entries), ``r_lab`` (m) or ``F_body`` (N), and ``omega_body`` (rad/s),
+    R11, R12.
+
+    Raises :class:`~problems.family.IllPosed` when a known mistake is close to the key.
+    """
+    alpha, beta, gamma = (params[n] for n in _ANGLES)
+    rates = np.array([params[n] for n in _RATES])
+    found = (_matrix_answer(alpha, beta, gamma), _vector_answer(params)[0],
+             _omega_answer(alpha, beta, gamma, rates))
+    reject_unless(None not in found, "a known mistake close to the key")
+    return found
+
+
+def heading(params: Mapping[str, Any]) -> str:
+    return f"Euler angles of {BODIES[params['body']][0]}"
+
+
+def statement(params: Mapping[str, Any]) -> str:
     symbols = (r"\alpha", r"\beta", r"\gamma", r"\dot\alpha", r"\dot\beta", r"\dot\gamma")
     shown = ", ".join(
-        f"${s} = {latex_sig(params[n], 3)}$ {units[n]} (`{n}`)"
-        for s, n in zip(symbols, names, strict=True)
+        f"${s} = {latex_sig(params[n], 3)}$ {PARAMETERS[n].unit} (`{n}`)"
+        for s, n in zip(symbols, (*_ANGLES, *_RATES), strict=True)
     )
-    statement = (
-        f"The orientation of {body} is described by Euler angles. At one instant: {shown}.\n\n"
-        "1. Find the rotation matrix $R$; give its nine entries row by row, "
-        "$[R_{11}, R_{12}, R_{13}, R_{21}, \\dots, R_{33}]$ (e.g. `R.ravel()`).\n"
-        f"2. {vector_text}\n"
-        "3. Find the body components $(\\omega_1, \\omega_2, \\omega_3)$ of the angular "
-        "velocity."
+    return (
+        f"At one instant, the Euler angles of {BODIES[params['body']][0]} and their rates are "
+        f"{shown}.\n\n"
+        "1. `R`: the rotation matrix, its nine entries row by row (e.g. `R.ravel()`);\n"
+        f"2. {_vector_answer(params)[1]}\n"
+        "3. `omega_body`: the body components of the angular velocity."
     )
-    return Variant(NAME, f"Euler angles of {body}", params, units, statement, answers)
-
-
-def generate(rng: np.random.Generator) -> Variant:
-    """One variant, redrawn until every mistake is distinguishable from the key (R11, R12).
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The only source of randomness.
-
-    Returns
-    -------
-    Variant
-        Answers ``R`` (9 entries), ``r_lab`` (m) or ``F_body`` (N), and ``omega_body`` (rad/s).
-    """
-    for _ in range(MAX_TRIES):
-        variant = _draw(rng)
-        if variant is not None:
-            return variant
-    raise RuntimeError(f"{NAME}: no well-posed draw in {MAX_TRIES} tries")  # pragma: no cover

@@ -46,14 +46,15 @@ key or of another mistake.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import astuple, dataclass
+from typing import Any
 
 import numpy as np
 
 from problems.answers import Answer, Mistake
+from problems.family import Parameter, reject_unless
 from problems.rounding import latex_sig, round_sig
-from problems.variant import Variant, first_acceptable
 from solver.heavy_top import constants_of_motion, turning_points
 from solver.inertia import centre_of_mass_offset, parallel_axis, shape_tensor
 
@@ -134,9 +135,9 @@ class Top:
     title : str
         Question title.
     text : str
-        Markdown describing the body; names every entry of ``params`` in backticks.
-    params, units : dict
-        Shown (rounded) parameters, SI, and their units.
+        Markdown describing the body; names every number of ``params`` in backticks.
+    params : dict
+        The scene and its shown (rounded) numbers, SI.
     I1, I3, Mgl : float
         Moments about the fixed point (kg m²) and weight × lever arm (J), from ``params``.
     I1_cm : float or None
@@ -152,8 +153,7 @@ class Top:
     scene: str
     title: str
     text: str
-    params: dict[str, float]
-    units: dict[str, str]
+    params: dict[str, Any]
     I1: float
     I3: float
     Mgl: float
@@ -173,55 +173,75 @@ class State:
     gamma_dot0: float
 
 
+PARAMETERS: dict[str, Parameter] = {
+    "scene": Parameter(choices=("toy_top", "gyroscope", "hanging"), description="the top"),
+    "M": Parameter(unit="kg", description="mass"),
+    "R": Parameter(unit="m", description="radius of the disc"),
+    "l": Parameter(unit="m", description="fixed point to centre of mass"),
+    "I1": Parameter(unit="kg m^2", description="transverse moment about the pivot"),
+    "I3": Parameter(unit="kg m^2", description="moment about the symmetry axis"),
+    "g": Parameter(unit="m/s^2", description="gravitational acceleration"),
+    "beta0": Parameter(unit="rad", low=0.15, high=2.85, description="initial tilt"),
+    "alpha_dot0": Parameter(unit="rad/s", description="initial precession rate"),
+    "beta_dot0": Parameter(unit="rad/s", description="initial nodding rate"),
+    "gamma_dot0": Parameter(unit="rad/s", description="initial spin rate"),
+}
+"""The parameters of a top and its initial state (shared with turning_points and
+motion_type). ``beta0`` may be set (each scene accepts part of its range: a draw outside the
+scene's limits is rejected)."""
+
+
 def _r(x: float) -> float:
     return round_sig(x, SIG)
 
 
-def _disc_body(rng: np.random.Generator, lever: tuple[float, float]):
-    """Shown ``M, R, l`` of a thin brass disc on a light axle, and its moments about the tip."""
+def _disc_body(rng: np.random.Generator, lever: tuple[float, float]) -> dict[str, float]:
+    """Shown ``M, R, l, g`` of a thin brass disc on a light axle."""
     R, thickness = _r(rng.uniform(0.02, 0.04)), rng.uniform(0.003, 0.006)
     M, arm = _r(BRASS * math.pi * R**2 * thickness), _r(rng.uniform(*lever))
-    params = {"M": M, "R": R, "l": arm, "g": G}
-    units = {"M": "kg", "R": "m", "l": "m", "g": "m/s^2"}
-    I1_cm = M * R**2 / 4  # R2: thin disc about a diameter
-    return params, units, I1_cm + M * arm**2, M * R**2 / 2, M * G * arm, I1_cm
+    return {"M": M, "R": R, "l": arm, "g": G}
 
 
-def _shown(p: dict[str, float], name: str, symbol: str, unit: str) -> str:
+def _disc_moments(p: Mapping[str, Any]) -> tuple[float, float, float, float]:
+    """``I1`` about the tip, ``I3``, ``Mgl`` and ``I1`` about the centre of mass of the disc
+    scenes (R2: thin disc about a diameter, parallel-axis theorem)."""
+    M, R, arm = p["M"], p["R"], p["l"]
+    I1_cm = M * R**2 / 4
+    return I1_cm + M * arm**2, M * R**2 / 2, M * p["g"] * arm, I1_cm
+
+
+def _shown(p: Mapping[str, Any], name: str, symbol: str, unit: str) -> str:
     return f"${symbol} = {latex_sig(p[name], SIG)}$ {unit} (`{name}`)"
 
 
-def _toy_top(rng: np.random.Generator) -> Top:
-    params, units, I1, I3, Mgl, I1_cm = _disc_body(rng, (0.025, 0.06))
-    touch = math.atan2(params["l"], params["R"])  # the rim reaches the table
+def _toy_top(p: Mapping[str, Any]) -> Top:
+    I1, I3, Mgl, I1_cm = _disc_moments(p)
+    touch = math.atan2(p["l"], p["R"])  # the rim reaches the table
     text = (
-        f"A toy top is a thin brass disc of mass {_shown(params, 'M', 'M', 'kg')} and radius "
-        f"{_shown(params, 'R', 'R', 'm')}, fixed at its centre on a light axle perpendicular to "
-        f"it. The disc's centre is {_shown(params, 'l', 'l', 'm')} from the axle's lower tip, "
-        "which spins in a small dimple in the table: a fixed point. Treat the disc as thin and "
-        f"the axle as massless; {_shown(params, 'g', 'g', 'm/s²')}."
+        f"A toy top: a thin brass disc of mass {_shown(p, 'M', 'M', 'kg')} and radius "
+        f"{_shown(p, 'R', 'R', 'm')} on a massless axle whose tip, {_shown(p, 'l', 'l', 'm')} "
+        f"from the disc's centre, rests in a dimple of the table; {_shown(p, 'g', 'g', 'm/s²')}."
     )
-    return Top("toy_top", "A toy top on a table", text, params, units, I1, I3, Mgl, I1_cm,
+    return Top("toy_top", "A toy top on a table", text, dict(p), I1, I3, Mgl, I1_cm,
                (0.15, touch - 0.1), (POLE_MARGIN, touch - TABLE_MARGIN), (100.0, 300.0))
 
 
-def _hanging(rng: np.random.Generator) -> Top:
-    params, units, I1, I3, Mgl, I1_cm = _disc_body(rng, (0.03, 0.07))
+def _hanging(p: Mapping[str, Any]) -> Top:
+    I1, I3, Mgl, I1_cm = _disc_moments(p)
     text = (
-        f"A thin brass disc of mass {_shown(params, 'M', 'M', 'kg')} and radius "
-        f"{_shown(params, 'R', 'R', 'm')} is fixed at its centre on a light rod perpendicular "
-        "to it. The rod's upper end hangs from a ball joint (a fixed point), the disc's centre "
-        f"{_shown(params, 'l', 'l', 'm')} below it along the rod, so that the symmetry axis "
-        "from the joint to the disc points below the horizontal ($\\beta > \\pi/2$). Treat the "
-        f"disc as thin and the rod as massless; {_shown(params, 'g', 'g', 'm/s²')}."
+        f"A thin brass disc of mass {_shown(p, 'M', 'M', 'kg')} and radius "
+        f"{_shown(p, 'R', 'R', 'm')} hangs on a massless rod from a ball joint, its centre "
+        f"{_shown(p, 'l', 'l', 'm')} from the joint: the symmetry axis points below the "
+        f"horizontal ($\\beta > \\pi/2$); {_shown(p, 'g', 'g', 'm/s²')}."
     )
-    return Top("hanging", "A spinning disc hanging from a ball joint", text, params, units,
+    return Top("hanging", "A spinning disc hanging from a ball joint", text, dict(p),
                I1, I3, Mgl, I1_cm, (1.9, 2.85), (math.pi / 2, math.pi - POLE_MARGIN),
                (60.0, 250.0))
 
 
-def _gyroscope(rng: np.random.Generator) -> Top:
-    """Brass rotor (thin disc) at ``d`` on a steel axle (thin rod from the pivot), R2."""
+def _gyroscope_body(rng: np.random.Generator) -> dict[str, float]:
+    """Brass rotor (thin disc) at ``d`` on a steel axle (thin rod from the pivot), R2: the
+    shown ``M, l, I1, I3, g``."""
     R, d = rng.uniform(0.025, 0.04), rng.uniform(0.04, 0.07)
     m_rotor = BRASS * math.pi * R**2 * rng.uniform(0.004, 0.008)
     length, radius = d + rng.uniform(0.01, 0.02), 0.002
@@ -231,30 +251,42 @@ def _gyroscope(rng: np.random.Generator) -> Top:
               + parallel_axis(shape_tensor("thin_rod", m_axle, length=length), m_axle,
                               [0.0, 0.0, rod_cm]))
     M = m_rotor + m_axle
-    params = {"M": _r(M), "l": _r((m_rotor * d + m_axle * rod_cm) / M),
-              "I1": _r(tensor[0, 0]), "I3": _r(tensor[2, 2]), "g": G}
-    units = {"M": "kg", "l": "m", "I1": "kg m^2", "I3": "kg m^2", "g": "m/s^2"}
+    return {"M": _r(M), "l": _r((m_rotor * d + m_axle * rod_cm) / M),
+            "I1": _r(tensor[0, 0]), "I3": _r(tensor[2, 2]), "g": G}
+
+
+def _gyroscope(p: Mapping[str, Any]) -> Top:
     text = (
-        "A gyroscope (a brass rotor on a steel axle) spins with the lower end of its axle "
-        "resting in a cup on top of a tall post: a fixed point. Its mass is "
-        f"{_shown(params, 'M', 'M', 'kg')}, its centre of mass lies on the axle "
-        f"{_shown(params, 'l', 'l', 'm')} from the pivot, and its moments of inertia are "
-        f"{_shown(params, 'I1', 'I_1', 'kg m²')} about any axis through the pivot "
-        f"perpendicular to the axle and {_shown(params, 'I3', 'I_3', 'kg m²')} about the axle; "
-        f"{_shown(params, 'g', 'g', 'm/s²')}."
+        "A gyroscope rests on a post at the end of its axle (the pivot): mass "
+        f"{_shown(p, 'M', 'M', 'kg')}, centre of mass {_shown(p, 'l', 'l', 'm')} from the "
+        f"pivot, moments {_shown(p, 'I1', 'I_1', 'kg m²')} about the pivot and "
+        f"{_shown(p, 'I3', 'I_3', 'kg m²')} about the axle; {_shown(p, 'g', 'g', 'm/s²')}."
     )
-    p = params
-    return Top("gyroscope", "A gyroscope on a post", text, params, units, p["I1"], p["I3"],
-               p["M"] * G * p["l"], None, (0.2, 1.6), (POLE_MARGIN, math.pi / 2 + 0.4),
+    return Top("gyroscope", "A gyroscope on a post", text, dict(p), p["I1"], p["I3"],
+               p["M"] * p["g"] * p["l"], None, (0.2, 1.6), (POLE_MARGIN, math.pi / 2 + 0.4),
                (100.0, 400.0))
 
 
-SCENES: tuple[Callable[[np.random.Generator], Top], ...] = (_toy_top, _gyroscope, _hanging)
+SCENES: dict[str, tuple[Callable[[np.random.Generator], dict], Callable[[Mapping], Top]]] = {
+    "toy_top": (lambda rng: _disc_body(rng, (0.025, 0.06)), _toy_top),
+    "gyroscope": (_gyroscope_body, _gyroscope),
+    "hanging": (lambda rng: _disc_body(rng, (0.03, 0.07)), _hanging),
+}
+"""Scene → (draw of its shown numbers, its :class:`Top` from them)."""
+
+_BODY_NAMES = ("M", "R", "l", "I1", "I3", "g")
 
 
 def draw_top(rng: np.random.Generator) -> Top:
     """A random real top (toy top, gyroscope or hanging disc), moments from the shown values."""
-    return SCENES[int(rng.integers(len(SCENES)))](rng)
+    scene = list(SCENES)[int(rng.integers(len(SCENES)))]
+    return top_from_params({"scene": scene, **SCENES[scene][0](rng)})
+
+
+def top_from_params(params: Mapping[str, Any]) -> Top:
+    """The :class:`Top` of recorded parameters (the scene and its shown numbers)."""
+    shown = {k: params[k] for k in ("scene", *_BODY_NAMES) if k in params}
+    return SCENES[params["scene"]][1](shown)
 
 
 def draw_state(rng: np.random.Generator, top: Top, precession: float, nod: float) -> State:
@@ -281,6 +313,11 @@ def draw_state(rng: np.random.Generator, top: Top, precession: float, nod: float
     return State(beta0, alpha_dot0, beta_dot0, gamma_dot0)
 
 
+def state_from_params(params: Mapping[str, Any]) -> State:
+    """The :class:`State` of recorded parameters."""
+    return State(*(params[n] for n in STATE_NAMES))
+
+
 def state_args(top: Top, state: State) -> tuple[float, ...]:
     """``(I1, I3, Mgl, beta0, alpha_dot0, beta_dot0, gamma_dot0)`` for :mod:`solver.heavy_top`."""
     return (top.I1, top.I3, top.Mgl, *astuple(state))
@@ -292,14 +329,12 @@ def state_text(state: State) -> str:
         f"${s} = {latex_sig(v, SIG)}$ {STATE_UNITS[n]} (`{n}`)"
         for s, n, v in zip(_STATE_SYMBOLS, STATE_NAMES, astuple(state), strict=True)
     )
-    return f"At $t = 0$ the Euler angles' values and rates are {shown}."
+    return f"At $t = 0$: {shown}."
 
 
-def variant_params(top: Top, state: State, **extra: float) -> tuple[dict, dict]:
-    """Shown parameters and their units: the body's, the state's, then ``extra`` (rad)."""
-    params = {**top.params, **dict(zip(STATE_NAMES, astuple(state), strict=True)), **extra}
-    units = {**top.units, **STATE_UNITS, **dict.fromkeys(extra, "rad")}
-    return {k: float(v) for k, v in params.items()}, units
+def variant_params(top: Top, state: State, **extra: float) -> dict[str, Any]:
+    """The recorded parameters: the scene and body's, the state's, then ``extra``."""
+    return {**top.params, **dict(zip(STATE_NAMES, astuple(state), strict=True)), **extra}
 
 
 def mistaken_states(top: Top, state: State) -> dict[str, tuple[float, ...]]:
@@ -430,47 +465,39 @@ def _answers(top: Top, state: State) -> tuple[Answer, ...] | None:
 
 def _statement(top: Top, state: State) -> str:
     return (
-        f"{top.text}\n\n{state_text(state)}\n\n"
-        "Find the constants of the motion:\n\n"
-        "1. `p_gamma`: the momentum $p_\\gamma$ conjugate to $\\gamma$, in kg m²/s;\n"
-        "2. `p_alpha`: the momentum $p_\\alpha$ conjugate to $\\alpha$, in kg m²/s;\n"
-        "3. `E_prime`: the reduced energy $E' = E - p_\\gamma^2/(2 I_3)$, in J."
+        f"{top.text} {state_text(state)}\n\n"
+        "1. `p_gamma`, `p_alpha`: the momenta conjugate to $\\gamma$ and $\\alpha$;\n"
+        "2. `E_prime`: the reduced energy $E' = E - p_\\gamma^2/(2 I_3)$."
     )
 
 
-def _variant(rng: np.random.Generator) -> Variant | None:
+def draw(rng: np.random.Generator) -> dict[str, Any]:
+    """A real top (:func:`draw_top`) launched with a precession of either sense and a nod."""
     top = draw_top(rng)
     sense = rng.choice([1.0, 1.0, -1.0])
     nod = rng.choice([0.0, 1.0, -1.0]) * rng.uniform(0.02, 0.15)
-    state = draw_state(rng, top, sense * rng.uniform(0.3, 2.5), nod)
-    beta1, beta2 = turning_points(*state_args(top, state))
-    if not motion_within_limits(top, float(beta1), float(beta2)):
-        return None  # a top that would hit the table, sleep or flop over: not this scene
-    answers = _answers(top, state)
-    if answers is None:
-        return None
-    params, units = variant_params(top, state)
-    return Variant(NAME, f"{top.title}: constants of motion", params, units,
-                   _statement(top, state), answers)
+    return variant_params(top, draw_state(rng, top, sense * rng.uniform(0.3, 2.5), nod))
 
 
-def generate(rng: np.random.Generator) -> Variant:
-    """One variant of the heavy top's constants of motion (R15, R16), from ``rng`` only.
+def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
+    """``p_gamma``, ``p_alpha`` and ``E_prime`` (R15, R16), from the shown values.
 
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The only source of randomness; the same generator state gives the same variant.
-
-    Returns
-    -------
-    Variant
-        Answers ``p_gamma``, ``p_alpha`` (kg m²/s) and ``E_prime`` (J), computed by
-        :func:`solver.heavy_top.constants_of_motion` from the shown (rounded) parameters.
-
-    Raises
-    ------
-    RuntimeError
-        No acceptable draw in ``MAX_ATTEMPTS`` (a template bug: most draws are accepted).
+    Raises :class:`~problems.family.IllPosed` for a motion outside the scene's limits (a top
+    that would hit the table, sleep or flop over), an ill-conditioned answer, or a primary
+    mistake close to the key.
     """
-    return first_acceptable(_variant, rng, NAME, MAX_ATTEMPTS)
+    top, state = top_from_params(params), state_from_params(params)
+    beta1, beta2 = turning_points(*state_args(top, state))
+    reject_unless(motion_within_limits(top, float(beta1), float(beta2)),
+                  "the motion leaves the scene's limits")
+    found = _answers(top, state)
+    reject_unless(found is not None, "ill-conditioned, or a mistake close to the key")
+    return found
+
+
+def heading(params: Mapping[str, Any]) -> str:
+    return f"{top_from_params(params).title}: constants of motion"
+
+
+def statement(params: Mapping[str, Any]) -> str:
+    return _statement(top_from_params(params), state_from_params(params))

@@ -26,11 +26,14 @@ one who rounds intermediate results to 3 figures may not, and the statement says
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 import numpy as np
 
 from problems.answers import Answer, Mistake
+from problems.family import IllPosed, Parameter, reject_unless
 from problems.rounding import format_sig, latex_sig, round_sig
-from problems.variant import Variant
 from solver.inertia import parallel_axis, point_mass_tensor, principal_axes, shape_tensor
 
 NAME = "inertia_tensor"
@@ -53,11 +56,13 @@ BOXES = {
     "solar panel": ((1.5, 2.5), (0.8, 1.2), (0.02, 0.04), (8.0, 20.0)),
 }
 
-_AXIS_NOTE = (
-    "An eigenvector is defined only up to its sign: give the **unit** vector with a **positive "
-    "$z$ component**."
+_ASK = (
+    "Find the inertia tensor about $O$: its diagonal $(I_{xx}, I_{yy}, I_{zz})$ and its products "
+    "of inertia $(I_{xy}, I_{xz}, I_{yz})$, with their minus sign, $I_{xy} = -\\sum m\\,x y$. "
+    "Then the principal moments, ascending, and the **unit** axis of the largest, with a "
+    "**positive $z$ component**."
 )
-_SIGN_NOTE = "with their minus sign, $I_{xy} = -\\sum m\\,x y$"
+"""What is asked, for either scene."""
 
 
 def _positive_z(v: np.ndarray) -> np.ndarray:
@@ -137,16 +142,29 @@ _PRODUCT_SIGN = (
 )
 
 
-def _point_masses(rng: np.random.Generator) -> Variant | None:
+def _point_masses(rng: np.random.Generator) -> dict[str, Any] | None:
+    """Three or four weights on a 1 cm grid (None: one at the pivot, or two in one place)."""
     n = int(rng.integers(3, 5))
     masses = round_sig(rng.uniform(0.02, 0.25, size=n), 3)
     positions = round_sig(rng.integers(-15, 16, size=(n, 3)) / 100.0, 2)
     radii = np.linalg.norm(positions, axis=1)
     if np.min(radii) < 0.03 or len(np.unique(positions, axis=0)) < n:
         return None  # a weight at the pivot, or two weights in one place
+    params: dict[str, Any] = {"scene": "point_masses"}
+    params |= {f"m{k}": float(m) for k, m in enumerate(masses, 1)}
+    return params | {f"r{k}": r.tolist() for k, r in enumerate(positions, 1)}
+
+
+def _weights(params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """The masses and positions of the point-mass scene."""
+    n = sum(1 for k in range(1, MAX_WEIGHTS + 1) if f"m{k}" in params)
+    masses = np.array([params[f"m{k}"] for k in range(1, n + 1)])
+    return masses, np.array([params[f"r{k}"] for k in range(1, n + 1)])
+
+
+def _point_mass_tensor(params: Mapping[str, Any]) -> tuple[np.ndarray, dict]:
+    masses, positions = _weights(params)
     tensor = point_mass_tensor(masses, positions)
-    if not _well_posed(tensor):
-        return None
     mistaken = {
         "product_sign": (2 * np.diag(np.diag(tensor)) - tensor, _PRODUCT_SIGN),
         "axis_distance": (
@@ -154,42 +172,37 @@ def _point_masses(rng: np.random.Generator) -> Variant | None:
             "I_xx is Σ m (y² + z²), the squared distance *from* the x axis (R2), not Σ m x².",
         ),
     }
-    answers = _tensor_answers(tensor, mistaken)
-    if None in answers:
-        return None
-    params = {f"m{k}": float(m) for k, m in enumerate(masses, 1)}
-    params |= {f"r{k}": r.tolist() for k, r in enumerate(positions, 1)}
-    units = {name: ("kg" if name.startswith("m") else "m") for name in params}
+    return tensor, mistaken
+
+
+def _point_mass_statement(params: Mapping[str, Any]) -> str:
+    masses, positions = _weights(params)
     rows = "\n".join(
         f"| {k} | $m_{k} = {latex_sig(m, 3)}$ kg (`m{k}`) | "
         f"$\\mathbf r_{k} = ({', '.join(format_sig(x, 2) for x in r)})$ m (`r{k}`) |"
         for k, (m, r) in enumerate(zip(masses, positions, strict=True), 1)
     )
-    statement = (
-        f"{n} small weights, which may be treated as point masses, are fixed on a light rigid "
-        "frame that turns about a pivot $O$. Their masses and their positions relative to $O$ "
-        "(components along the frame's axes $x, y, z$) are:\n\n"
-        "| weight | mass | position |\n| --- | --- | --- |\n"
-        f"{rows}\n\n"
-        "Find the inertia tensor of the weights about $O$ in the frame's axes: its diagonal "
-        "$(I_{xx}, I_{yy}, I_{zz})$ and its products of inertia $(I_{xy}, I_{xz}, I_{yz})$, "
-        f"{_SIGN_NOTE}. "
-        "Then find the principal moments about $O$, in ascending order, and the principal axis "
-        f"of the largest one. {_AXIS_NOTE}"
+    return (
+        f"{len(masses)} point masses on a light rigid frame turn about a pivot $O$. Their "
+        "masses, and positions from $O$ along the frame's axes $x, y, z$:\n\n"
+        "| | mass | position |\n| --- | --- | --- |\n"
+        f"{rows}\n\n{_ASK}"
     )
-    return Variant(NAME, "Inertia tensor of point masses", params, units, statement,
-                   tuple(answers))
 
 
-def _box_corner(rng: np.random.Generator) -> Variant | None:
+def _box_corner(rng: np.random.Generator) -> dict[str, Any]:
+    """A book, smartphone or solar panel: its edges and mass, rounded."""
     kind = list(BOXES)[int(rng.integers(len(BOXES)))]
     *edges, mass_range = BOXES[kind]
     a, b, c = (round_sig(rng.uniform(*r), 3) for r in edges)
     M = round_sig(rng.uniform(*mass_range), 3)
+    return {"scene": "box_corner", "box": kind, "M": M, "a": a, "b": b, "c": c}
+
+
+def _box_tensor(params: Mapping[str, Any]) -> tuple[np.ndarray, dict]:
+    M, a, b, c = (params[n] for n in ("M", "a", "b", "c"))
     tensor_cm = shape_tensor("box", M, a=a, b=b, c=c)
     tensor = parallel_axis(tensor_cm, M, [a / 2, b / 2, c / 2])
-    if not _well_posed(tensor):
-        return None
     mistaken = {
         "parallel_axis_forgotten": (
             tensor_cm,
@@ -198,46 +211,75 @@ def _box_corner(rng: np.random.Generator) -> Variant | None:
         ),
         "product_sign": (2 * np.diag(np.diag(tensor)) - tensor, _PRODUCT_SIGN),
     }
-    answers = _tensor_answers(tensor, mistaken)
-    if None in answers:
-        return None
-    params = {"M": M, "a": a, "b": b, "c": c}
-    units = {"M": "kg", "a": "m", "b": "m", "c": "m"}
-    statement = (
-        f"A {kind} is modelled as a uniform rectangular box of mass $M = {latex_sig(M, 3)}$ kg "
-        f"(`M`) with edges $a = {latex_sig(a, 3)}$ m (`a`), $b = {latex_sig(b, 3)}$ m (`b`) and "
-        f"$c = {latex_sig(c, 3)}$ m (`c`). It turns about one of its corners, $O$. Take axes "
-        "$x, y, z$ from $O$ along the edges $a, b, c$, so that the box fills "
-        "$0 \\le x \\le a$, $0 \\le y \\le b$, $0 \\le z \\le c$.\n\n"
-        "Find the inertia tensor of the box about $O$ in these axes: its diagonal "
-        "$(I_{xx}, I_{yy}, I_{zz})$ and its products of inertia $(I_{xy}, I_{xz}, I_{yz})$, "
-        f"{_SIGN_NOTE}. "
-        "Then find the principal moments about $O$, in ascending order, and the principal axis "
-        f"of the largest one. {_AXIS_NOTE}"
+    return tensor, mistaken
+
+
+def _box_statement(params: Mapping[str, Any]) -> str:
+    M, a, b, c = (params[n] for n in ("M", "a", "b", "c"))
+    return (
+        f"A {params['box']}, a uniform box of mass $M = {latex_sig(M, 3)}$ kg (`M`) with edges "
+        f"$a = {latex_sig(a, 3)}$ m (`a`), $b = {latex_sig(b, 3)}$ m (`b`) and "
+        f"$c = {latex_sig(c, 3)}$ m (`c`), turns about a corner $O$. Axes $x, y, z$ run from "
+        "$O$ along $a, b, c$: the box fills $0 \\le x \\le a$, $0 \\le y \\le b$, "
+        f"$0 \\le z \\le c$.\n\n{_ASK}"
     )
-    return Variant(NAME, f"Inertia tensor of a {kind} about a corner", params, units, statement,
-                   tuple(answers))
 
 
-SCENES = (_point_masses, _box_corner)
+SCENES = {"point_masses": (_point_masses, _point_mass_tensor, _point_mass_statement),
+          "box_corner": (_box_corner, _box_tensor, _box_statement)}
+"""Scene → (its draw, its tensor and mistaken tensors, its statement)."""
+
+MAX_WEIGHTS = 4
+
+PARAMETERS: dict[str, Parameter] = {
+    "scene": Parameter(choices=tuple(SCENES), description="point masses, or a box"),
+    "box": Parameter(choices=tuple(BOXES), description="the box's object"),
+    "M": Parameter(unit="kg", description="mass of the box"),
+    **{e: Parameter(unit="m", description=f"edge {e} of the box") for e in "abc"},
+    **{f"m{k}": Parameter(unit="kg", description=f"mass of weight {k}")
+       for k in range(1, MAX_WEIGHTS + 1)},
+    **{f"r{k}": Parameter(unit="m", shape=(3,), figures=2, description=f"position of weight {k}")
+       for k in range(1, MAX_WEIGHTS + 1)},
+}
 
 
-def generate(rng: np.random.Generator) -> Variant:
-    """One variant: a scene drawn from :data:`SCENES`, redrawn until it is well posed (R2, R4).
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The only source of randomness (the variant is a pure function of its state).
-
-    Returns
-    -------
-    Variant
-        Answers ``I_diag``, ``I_offdiag``, ``moments`` (kg m²) and ``axis_max`` (unit vector).
-    """
-    scene = SCENES[int(rng.integers(len(SCENES)))]
+def draw(rng: np.random.Generator) -> dict[str, Any] | None:
+    """A scene of :data:`SCENES`, then draws of it until one is well posed (at most
+    ``MAX_TRIES``)."""
+    scene = SCENES[list(SCENES)[int(rng.integers(len(SCENES)))]][0]
     for _ in range(MAX_TRIES):
-        variant = scene(rng)
-        if variant is not None:
-            return variant
-    raise RuntimeError(f"{NAME}: no well-posed draw in {MAX_TRIES} tries")  # pragma: no cover
+        params = scene(rng)
+        if params is not None and _well_posed_params(params):
+            return params
+    return None  # pragma: no cover
+
+
+def _well_posed_params(params: Mapping[str, Any]) -> bool:
+    try:
+        answers(params)
+    except IllPosed:
+        return False
+    return True
+
+
+def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
+    """``I_diag``, ``I_offdiag``, ``moments`` (kg m²) and ``axis_max`` (unit vector), R2, R4.
+
+    Raises :class:`~problems.family.IllPosed` for a nearly degenerate largest moment, an axis
+    near the xy plane, or a known mistake close to the key.
+    """
+    tensor, mistaken = SCENES[params["scene"]][1](params)
+    reject_unless(_well_posed(tensor), "a nearly degenerate moment, or an axis near the xy plane")
+    found = _tensor_answers(tensor, mistaken)
+    reject_unless(None not in found, "a known mistake close to the key")
+    return tuple(found)
+
+
+def heading(params: Mapping[str, Any]) -> str:
+    if params["scene"] == "point_masses":
+        return "Inertia tensor of point masses"
+    return f"Inertia tensor of a {params['box']} about a corner"
+
+
+def statement(params: Mapping[str, Any]) -> str:
+    return SCENES[params["scene"]][2](params)

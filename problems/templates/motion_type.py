@@ -37,9 +37,13 @@ zero, and a student's turning point carried to 1e-8 leaves a residue there far b
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 import numpy as np
 
 from problems.answers import Answer, Mistake
+from problems.family import reject_unless
 from problems.templates.heavy_top_constants import (
     CONVENTIONS as CONVENTIONS,  # the same convention topics (problems.conventions)
 )
@@ -54,10 +58,14 @@ from problems.templates.heavy_top_constants import (
     motion_within_limits,
     select_mistakes,
     state_args,
+    state_from_params,
     state_text,
+    top_from_params,
     variant_params,
 )
-from problems.variant import Variant, first_acceptable
+from problems.templates.heavy_top_constants import (
+    PARAMETERS as PARAMETERS,  # the same tops and states
+)
 from solver.heavy_top import constants_of_motion, precession_rate, solve_heavy_top, turning_points
 
 NAME = "motion_type"
@@ -162,53 +170,44 @@ def _figure_answer(figure: str) -> Answer:
 
 def _statement(top: Top, state: State) -> str:
     return (
-        f"{top.text}\n\n{state_text(state)}\n\n"
-        "The axis nods (nutates) between the turning points $\\beta_1 \\le \\beta_2$ while it "
-        "precesses. Find:\n\n"
-        "1. `alpha_dot1`, `alpha_dot2`: the precession rate $\\dot\\alpha$, in rad/s, at the "
-        "instants when the tilt is $\\beta_1$ and $\\beta_2$ respectively;\n"
-        "2. `motion`: the figure that the symmetry axis traces on a sphere centred on the "
-        'fixed point, one of `"waves"`, `"loops"` or `"cusps"`.'
+        f"{top.text} {state_text(state)}\n\n"
+        "1. `alpha_dot1`, `alpha_dot2`: the precession rate $\\dot\\alpha$ when the tilt is at "
+        "the turning points $\\beta_1 \\le \\beta_2$ of the nutation;\n"
+        "2. `motion`: the figure the symmetry axis traces on a sphere about the fixed point: "
+        '`"waves"`, `"loops"` or `"cusps"`.'
     )
 
 
-def _variant(rng: np.random.Generator) -> Variant | None:
+def draw(rng: np.random.Generator) -> dict[str, Any]:
+    """A real top, a figure drawn (each equally often) and a state meant to trace it."""
     top = draw_top(rng)
-    state = _draw_state(rng, top, OPTIONS[int(rng.integers(len(OPTIONS)))])
+    return variant_params(top, _draw_state(rng, top, OPTIONS[int(rng.integers(len(OPTIONS)))]))
+
+
+def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
+    """``alpha_dot1``, ``alpha_dot2`` and ``motion`` (R18), from
+    :func:`solver.heavy_top.solve_heavy_top` on the shown (rounded) parameters.
+
+    Raises :class:`~problems.family.IllPosed` for a motion outside the scene's limits, a figure
+    the rounding of a turning point could change, or a primary mistake close to the key.
+    """
+    top, state = top_from_params(params), state_from_params(params)
     mistaken, rows, beta1, beta2 = _moment_mistakes(top, state)
-    if not motion_within_limits(top, float(beta1[0]), float(beta2[0])):
-        return None
+    reject_unless(motion_within_limits(top, float(beta1[0]), float(beta2[0])),
+                  "the motion leaves the scene's limits")
     # the key from the solver's one-state summary: exact α̇ = 0 at a cusp, and the figure
     solution = solve_heavy_top(*state_args(top, state))
     rates = (solution["alpha_dot_beta1"], solution["alpha_dot_beta2"])
     figure = solution["motion"]
-    if None in rates or not _robust(state, figure, rates):
-        return None
-    answers = _rate_answers(rates, tuple(mistaken), rows, beta1, beta2)
-    if answers is None:
-        return None
-    params, units = variant_params(top, state)
-    return Variant(NAME, f"{top.title}: waves, loops or cusps?", params, units,
-                   _statement(top, state), (*answers, _figure_answer(figure)))
+    reject_unless(None not in rates and _robust(state, figure, rates), "an ambiguous figure")
+    found = _rate_answers(rates, tuple(mistaken), rows, beta1, beta2)
+    reject_unless(found is not None, "a mistake close to the key")
+    return (*found, _figure_answer(figure))
 
 
-def generate(rng: np.random.Generator) -> Variant:
-    """One variant of the precession rates at the turning points and the figure (R18).
+def heading(params: Mapping[str, Any]) -> str:
+    return f"{top_from_params(params).title}: waves, loops or cusps?"
 
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The only source of randomness; the same generator state gives the same variant.
 
-    Returns
-    -------
-    Variant
-        Answers ``alpha_dot1``, ``alpha_dot2`` (rad/s) and ``motion`` (choice), computed by
-        :func:`solver.heavy_top.solve_heavy_top` from the shown (rounded) parameters.
-
-    Raises
-    ------
-    RuntimeError
-        No acceptable draw in ``MAX_ATTEMPTS`` (a template bug: most draws are accepted).
-    """
-    return first_acceptable(_variant, rng, NAME, MAX_ATTEMPTS)
+def statement(params: Mapping[str, Any]) -> str:
+    return _statement(top_from_params(params), state_from_params(params))

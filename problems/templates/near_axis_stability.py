@@ -19,14 +19,17 @@ known mistakes within five tolerances of the key or of one another.
 
 from __future__ import annotations
 
+import itertools
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from problems.answers import Answer, Mistake, distinguishable_answers
+from problems.answers import Answer, Mistake
+from problems.family import Parameter, distinguishable, reject_unless
 from problems.rounding import latex_sig, round_sig
-from problems.variant import Variant, first_acceptable
 from solver.asymmetric_top import asymmetric_top_period
 from solver.inertia import parallel_axis, shape_tensor
 from solver.torque_free import near_axis_stability
@@ -59,30 +62,42 @@ MAX_ATTEMPTS = 1000
 @dataclass(frozen=True)
 class Body:
     """A body and its three principal axes, ``axes[i]`` naming the axis whose moment is
-    ``moments[i]`` (kg m², about the centre of mass)."""
+    ``moments[i]`` (kg m², about the centre of mass; None when rebuilt from recorded
+    parameters, which hold the rounded moments instead)."""
 
-    noun: str
-    description: str
-    axes: tuple[str, str, str]
-    moments: tuple[float, float, float]
-    spin: tuple[float, float]  # rad/s
+    label: str  # its parameter value: a key of KINDS
+    moments: tuple[float, float, float] | None = None
+
+    @property
+    def noun(self) -> str:
+        return KINDS[self.label].noun
+
+    @property
+    def axes(self) -> tuple[str, str, str]:
+        return KINDS[self.label].axes
+
+    @property
+    def spin(self) -> tuple[float, float]:
+        """Range of the spin, rad/s."""
+        return KINDS[self.label].spin
+
+    @property
+    def description(self) -> str:
+        """The body in words."""
+        return KINDS[self.label].description
 
 
 def _u(rng: np.random.Generator, low: float, high: float) -> float:
     return round_sig(rng.uniform(low, high), SIG)
 
 
-def _box(rng: np.random.Generator, noun: str, mass: tuple[float, float],
-         edges: tuple[tuple[float, float], ...], spin: tuple[float, float]) -> Body:
+def _box(rng: np.random.Generator, label: str, mass: tuple[float, float],
+         edges: tuple[tuple[float, float], ...]) -> Body:
     """A uniform box (R2); ``edges`` are the ranges of length, width and thickness (m)."""
     m = _u(rng, *mass)
     a, b, c = (_u(rng, *e) for e in edges)
     tensor = shape_tensor("box", m, a=a, b=b, c=c)
-    description = (f"a uniform box of mass ${latex_sig(m, SIG)}$ kg, "
-                   f"${latex_sig(a, SIG)} \\times {latex_sig(b, SIG)} \\times "
-                   f"{latex_sig(c, SIG)}$ m")
-    axes = ("along its length", "along its width", "perpendicular to its largest face")
-    return Body(noun, description, axes, tuple(np.diag(tensor).tolist()), spin)
+    return Body(label, tuple(np.diag(tensor).tolist()))
 
 
 def _racket(rng: np.random.Generator) -> Body:
@@ -97,13 +112,7 @@ def _racket(rng: np.random.Generator) -> Body:
     x_cm = (m_h * x_h + m_d * x_d) / (m_h + m_d)
     tensor = (parallel_axis(handle, m_h, [x_h - x_cm, 0.0, 0.0])
               + parallel_axis(head, m_d, [x_d - x_cm, 0.0, 0.0]))
-    description = (f"a handle of mass ${latex_sig(m_h, SIG)}$ kg and length "
-                   f"${latex_sig(l_h, SIG)}$ m ending in a round head of mass "
-                   f"${latex_sig(m_d, SIG)}$ kg and radius ${latex_sig(r_d, SIG)}$ m")
-    axes = ("along the handle", "in the plane of the strings, across the handle",
-            "perpendicular to the strings")
-    return Body("a tennis racket", description, axes, tuple(np.diag(tensor).tolist()),
-                (4.0, 12.0))
+    return Body("racket", tuple(np.diag(tensor).tolist()))
 
 
 def _t_handle(rng: np.random.Generator) -> Body:
@@ -119,12 +128,49 @@ def _t_handle(rng: np.random.Generator) -> Body:
     y_cm = m_s * y_s / (m_c + m_s)
     tensor = (parallel_axis(bar, m_c, [0.0, -y_cm, 0.0])
               + parallel_axis(stem, m_s, [0.0, y_s - y_cm, 0.0]))
-    description = (f"a crossbar of mass ${latex_sig(m_c, SIG)}$ kg, length "
-                   f"${latex_sig(l_c, SIG)}$ m and radius ${latex_sig(r_c, SIG)}$ m with a stem "
-                   f"of mass ${latex_sig(m_s, SIG)}$ kg, length ${latex_sig(l_s, SIG)}$ m and "
-                   f"radius ${latex_sig(r_s, SIG)}$ m fixed to its middle")
-    axes = ("along the crossbar", "along the stem", "perpendicular to crossbar and stem")
-    return Body("a T-handle", description, axes, tuple(np.diag(tensor).tolist()), (5.0, 20.0))
+    return Body("t_handle", tuple(np.diag(tensor).tolist()))
+
+
+@dataclass(frozen=True)
+class Kind:
+    """What the statement says about a kind of body, and its range of spins (rad/s)."""
+
+    noun: str
+    description: str
+    axes: tuple[str, str, str]
+    spin: tuple[float, float]
+
+
+_BOX_AXES = ("along its length", "along its width", "perpendicular to its largest face")
+KINDS: dict[str, Kind] = {
+    "smartphone": Kind("a smartphone", "a uniform box", _BOX_AXES, (5.0, 20.0)),
+    "book": Kind("a book", "a uniform box", _BOX_AXES, (3.0, 12.0)),
+    "brick": Kind("a brick", "a uniform box", _BOX_AXES, (3.0, 10.0)),
+    "racket": Kind("a tennis racket", "a handle ending in a round head",
+                   ("along the handle", "in the plane of the strings, across the handle",
+                    "perpendicular to the strings"), (4.0, 12.0)),
+    "t_handle": Kind("a T-handle", "a crossbar with a stem fixed to its middle",
+                     ("along the crossbar", "along the stem",
+                      "perpendicular to crossbar and stem"), (5.0, 20.0)),
+}
+"""Label → kind of body (the bodies of :func:`draw_body`)."""
+
+ORDERS = tuple("".join(map(str, p)) for p in itertools.permutations(range(3)))
+"""Which body axis is ê1, ê2, ê3, as a label: ``"201"`` makes ê1 the body's third axis."""
+
+
+def body_parameters() -> dict[str, Parameter]:
+    """The parameters of a body and its spin (shared with asymmetric_free_top): its kind,
+    which body axis is each ê_i, the rounded moments (computed from dimensions the student is
+    not shown), the axis spun about and ω(0)."""
+    return {
+        "body": Parameter(choices=tuple(KINDS), description="the body tossed"),
+        "order": Parameter(choices=ORDERS, description="body axis of ê1, ê2, ê3"),
+        **{f"I{i}": Parameter(unit="kg m^2", figures=SIG_MOMENTS, description=f"moment I{i}")
+           for i in (1, 2, 3)},
+        "spin_axis": Parameter(choices=("1", "2", "3"), description="the axis spun about"),
+        "omega0": Parameter(unit="rad/s", shape=(3,), description="ω(0), body frame"),
+    }
 
 
 def draw_body(rng: np.random.Generator) -> Body:
@@ -135,14 +181,12 @@ def draw_body(rng: np.random.Generator) -> Body:
     """
     kind = rng.integers(5)
     if kind == 0:
-        return _box(rng, "a smartphone", (0.14, 0.22),
-                    ((0.14, 0.165), (0.065, 0.078), (0.007, 0.009)), (5.0, 20.0))
+        return _box(rng, "smartphone", (0.14, 0.22),
+                    ((0.14, 0.165), (0.065, 0.078), (0.007, 0.009)))
     if kind == 1:
-        return _box(rng, "a book", (0.3, 1.2), ((0.20, 0.28), (0.13, 0.20), (0.015, 0.05)),
-                    (3.0, 12.0))
+        return _box(rng, "book", (0.3, 1.2), ((0.20, 0.28), (0.13, 0.20), (0.015, 0.05)))
     if kind == 2:
-        return _box(rng, "a brick", (2.0, 3.0), ((0.20, 0.23), (0.09, 0.11), (0.05, 0.075)),
-                    (3.0, 10.0))
+        return _box(rng, "brick", (2.0, 3.0), ((0.20, 0.23), (0.09, 0.11), (0.05, 0.075)))
     if kind == 3:
         return _racket(rng)
     return _t_handle(rng)
@@ -157,6 +201,25 @@ class Draw:
     moments: tuple[float, float, float]  # I1, I2, I3
     spin_axis: int  # 1, 2 or 3
     omega0: tuple[float, float, float]
+
+    @property
+    def axes(self) -> tuple[str, str, str]:
+        """The names of the principal axes ê1, ê2, ê3."""
+        return tuple(self.body.axes[i] for i in self.order)
+
+    def params(self) -> dict[str, Any]:
+        """The recorded parameters."""
+        I1, I2, I3 = self.moments
+        return {"body": self.body.label,
+                "order": "".join(map(str, self.order)), "I1": I1, "I2": I2, "I3": I3,
+                "spin_axis": str(self.spin_axis), "omega0": list(self.omega0)}
+
+    @classmethod
+    def of(cls, params: Mapping[str, Any]) -> Draw:
+        """The draw of recorded parameters."""
+        return cls(Body(params["body"]), tuple(int(i) for i in params["order"]),
+                   (params["I1"], params["I2"], params["I3"]), int(params["spin_axis"]),
+                   tuple(params["omega0"]))
 
 
 def _draw(rng: np.random.Generator) -> Draw:
@@ -240,67 +303,49 @@ RATE_DESCRIPTION = ("R9 rate for the spin about ê{axis}: wobble angular frequen
 """The ``rate`` answer's description: identical for a stable and an unstable spin."""
 
 
+def axes_text(d: Draw) -> str:
+    """``$\\hat e_1$ along its length, $I_1 = …$ kg m²; …`` for the shown moments."""
+    return "; ".join(f"$\\hat e_{i}$ {d.axes[i - 1]}, "
+                     f"$I_{i} = {latex_sig(d.moments[i - 1], SIG_MOMENTS)}$ kg m²"
+                     for i in (1, 2, 3))
+
+
 def _statement(d: Draw) -> str:
     b, s = d.body, d.spin_axis
-    axes = "; ".join(
-        f"$\\hat e_{i}$ {b.axes[d.order[i - 1]]}, "
-        f"$I_{i} = {latex_sig(d.moments[i - 1], SIG_MOMENTS)}$"
-        f" kg m²" for i in (1, 2, 3)
-    )
     w = ",\\ ".join(latex_sig(x, SIG) for x in d.omega0)
     return (
-        f"{b.noun[0].upper()}{b.noun[1:]} ({b.description}) is tossed into the air. Its "
-        f"principal axes and moments about the centre of mass are: {axes} (`I1`, `I2`, `I3`; "
-        "use them as given), **not** necessarily in increasing order.\n\n"
-        f"It is spun mainly about $\\hat e_{s}$: at $t = 0$ the body-frame components of the "
-        f"angular velocity are $(\\omega_1, \\omega_2, \\omega_3) = ({w})$ rad/s (`omega0`).\n\n"
-        "1. `stable1`, `stable2`, `stable3`: is a steady spin about $\\hat e_k$ stable against "
-        "small perturbations (`True`) or not (`False`)?\n"
-        f"2. `rate`: for the spin about $\\hat e_{s}$ given here, in the linear approximation "
-        "of Euler's equations (R9): if it is stable, the angular frequency at which the small "
-        "components of $\\boldsymbol\\omega$ oscillate; if not, the rate $\\gamma > 0$ at "
-        "which they grow as $e^{\\gamma t}$ (1/s, the same as rad/s)."
+        f"{b.noun[0].upper()}{b.noun[1:]} ({b.description}) is tossed into the air, spun mainly "
+        f"about $\\hat e_{s}$: $\\boldsymbol\\omega(0) = ({w})$ rad/s in body components "
+        "(`omega0`). Its principal axes and moments about the centre of mass, **not** "
+        f"necessarily in increasing order: {axes_text(d)} (`I1`, `I2`, `I3`).\n\n"
+        "1. `stable1`, `stable2`, `stable3`: is steady spin about $\\hat e_k$ stable against "
+        "small perturbations?\n"
+        f"2. `rate`: for the spin about $\\hat e_{s}$, in the linear approximation (R9): the "
+        "angular frequency of the wobble if it is stable, else its growth rate $\\gamma$ "
+        "($\\propto e^{\\gamma t}$)."
     )
 
 
-def _variant(d: Draw) -> Variant | None:
-    if not _well_posed(d):
-        return None
-    answers = distinguishable_answers(lambda: (*_stability_answers(d), _rate_answer(d)), MARGIN)
-    if answers is None:
-        return None
-    I1, I2, I3 = d.moments
-    return Variant(
-        family=NAME,
-        title=TITLE,
-        params={"I1": I1, "I2": I2, "I3": I3, "omega0": list(d.omega0)},
-        param_units={"I1": "kg m^2", "I2": "kg m^2", "I3": "kg m^2", "omega0": "rad/s"},
-        statement=_statement(d),
-        answers=answers,
-    )
+PARAMETERS: dict[str, Parameter] = body_parameters()
 
 
-def generate(rng: np.random.Generator) -> Variant:
-    """One variant of spin near a principal axis (R9), from ``rng`` only.
+def draw(rng: np.random.Generator) -> dict[str, Any]:
+    """A body (:func:`draw_body`), its axes in random order, and a spin about one of them with
+    a small wobble."""
+    return _draw(rng).params()
 
-    Parameters are rounded to the figures shown and every answer is computed from the rounded
-    values by :mod:`solver.torque_free` (the linear-regime check uses the exact R10 period of
-    :mod:`solver.asymmetric_top`). Ill-posed draws are resampled.
 
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The only source of randomness; the same generator state gives the same variant.
+def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
+    """``stable1``–``stable3`` and ``rate`` (R9), from :mod:`solver.torque_free` on the shown
+    moments and ω(0).
 
-    Returns
-    -------
-    Variant
-        Parameters (SI), statement and answers of one student's question.
-
-    Raises
-    ------
-    RuntimeError
-        No acceptable draw in ``MAX_ATTEMPTS`` (a template bug: about one draw in a few is
-        rejected).
+    Raises :class:`~problems.family.IllPosed` for no rigid body, nearly degenerate moments, a
+    stable wobble beyond R9's linear regime, or a known mistake close to the key.
     """
-    return first_acceptable(lambda r: _variant(_draw(r)), rng, NAME, MAX_ATTEMPTS)
+    d = Draw.of(params)
+    reject_unless(_well_posed(d), "degenerate moments, or a wobble beyond the linear regime")
+    return distinguishable(lambda: (*_stability_answers(d), _rate_answer(d)), MARGIN)
+
+
+def statement(params: Mapping[str, Any]) -> str:
+    return _statement(Draw.of(params))

@@ -39,14 +39,16 @@ lands far inside 1e-3, and every known mistake is at least 5e-3 away.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 from scipy.special import ellipk
 
-from problems.answers import Answer, Mistake, distinguishable_answers
+from problems.answers import Answer, Mistake
+from problems.family import Parameter, distinguishable, reject_unless
 from problems.rounding import latex_sig, round_sig
-from problems.templates.sleeping_top import draw_top
-from problems.variant import Variant, first_acceptable
+from problems.templates.sleeping_top import TOP_KINDS, TOP_PARAMETERS, draw_top
 from solver.heavy_top import constants_of_motion, critical_spin, cubic_roots, nutation
 
 NAME = "nutation_precession"
@@ -76,10 +78,8 @@ MAX_BETA2 = 2.5
 MAX_ATTEMPTS = 1000
 
 _TOOLS = (
-    "You may use `numpy.roots` for the cubic $f(u)$ of $u = \\cos\\beta$, "
-    "`scipy.special.ellipk` (note: its argument is the parameter $m = k^2$) and "
-    "`scipy.integrate.quad` (the precession integrand has inverse-square-root singularities at "
-    "the turning points; the substitution $u = u_1 + (u_2 - u_1)\\sin^2\\theta$ removes them)."
+    "Tools: `numpy.roots` (the cubic in $u = \\cos\\beta$), `scipy.special.ellipk(m)` "
+    "($m = k^2$), `scipy.integrate.quad` (substitute $u = u_1 + (u_2 - u_1)\\sin^2\\theta$)."
 )
 
 
@@ -171,35 +171,39 @@ def _answers(I1, I3, Mgl, beta0, omega3, alpha_dot0) -> tuple[Answer, Answer]:
     )
 
 
-def _statement(noun: str, p: dict[str, float]) -> str:
+def _statement(noun: str, p: Mapping[str, Any]) -> str:
     def show(name: str, symbol: str, unit: str) -> str:
         return f"${symbol} = {latex_sig(p[name], SIG)}$ {unit} (`{name}`)"
 
     beta0 = show("beta0", r"\beta_0", "rad")
     omega3 = show("omega3", r"\omega_3", "rad/s")
     alpha_dot0 = show("alpha_dot0", r"\dot\alpha_0", "rad/s")
-    how = ("without any precession: " if p["alpha_dot0"] == 0.0
-           else "with a sideways push that sets the axis precessing: ")
+    how = "without precessing" if p["alpha_dot0"] == 0.0 else "pushed sideways"
     return (
-        f"A top, {noun}, spins on a fixed frictionless tip. Its moments of inertia are "
-        f"{show('I1', 'I_1', 'kg m²')} about any axis through the tip perpendicular to the "
-        f"symmetry axis and {show('I3', 'I_3', 'kg m²')} about the symmetry axis; its weight "
-        f"times the distance from the tip to its centre of mass is "
-        f"{show('Mgl', 'Mgl', 'J')}.\n\n"
-        f"The top is let go at the tilt {beta0} with $\\dot\\beta = 0$, spinning at "
-        f"{omega3} about its symmetry axis, {how}{alpha_dot0}"
-        ". The tilt then oscillates (nutates) between two turning angles $\\beta_1$ and "
-        "$\\beta_2$. Find, exactly (not in the fast-top approximation):\n\n"
-        "1. `T_nut`: the nutation period (s), the time for $\\beta$ to go from $\\beta_1$ to "
-        "$\\beta_2$ and back;\n"
+        f"A top, {noun}, spins on a fixed tip: {show('I1', 'I_1', 'kg m²')} about the tip, "
+        f"{show('I3', 'I_3', 'kg m²')} about its symmetry axis, {show('Mgl', 'Mgl', 'J')}. It "
+        f"is let go at the tilt {beta0} with $\\dot\\beta = 0$, spinning at {omega3}, {how}: "
+        f"{alpha_dot0}. Exactly (not in the fast-top approximation), find:\n\n"
+        "1. `T_nut`: the nutation period ($\\beta$ from $\\beta_1$ to $\\beta_2$ and back);\n"
         "2. `mean_rate`: the mean precession rate $\\langle\\dot\\alpha\\rangle$ over one "
-        "nutation period (rad/s), the change of $\\alpha$ during one period divided by "
-        "the period.\n\n"
-        f"{_TOOLS}"
+        f"nutation period.\n\n{_TOOLS}"
     )
 
 
-def _variant(rng: np.random.Generator) -> Variant | None:
+PARAMETERS: dict[str, Parameter] = {
+    "top": TOP_PARAMETERS["top"],
+    "I1": Parameter(unit="kg m^2", description="transverse moment about the tip"),
+    "I3": Parameter(unit="kg m^2", description="moment about the symmetry axis"),
+    "Mgl": Parameter(unit="J", description="weight times tip-to-centre distance"),
+    "beta0": Parameter(unit="rad", low=TILT[0], high=TILT[1], description="tilt when let go"),
+    "omega3": Parameter(unit="rad/s", description="spin (a multiple of the critical spin)"),
+    "alpha_dot0": Parameter(unit="rad/s", description="precession rate when let go"),
+}
+
+
+def draw(rng: np.random.Generator) -> dict[str, Any] | None:
+    """A real top's moments and ``Mgl`` (rounded), its spin (a multiple of the critical spin),
+    the tilt, and one time in two a push ``α̇0`` (a multiple of ``Mgl/p_γ``)."""
     top = draw_top(rng)
     I1, I3, Mgl = (round_sig(x, SIG) for x in (top.I1, top.I3, top.Mgl))
     if I3 > 2 * I1:  # pragma: no cover - rounding cannot cross this for real tops
@@ -209,32 +213,26 @@ def _variant(rng: np.random.Generator) -> Variant | None:
     alpha_dot0 = 0.0
     if rng.random() < 0.5:
         alpha_dot0 = round_sig(rng.uniform(*PUSH) * Mgl / (I3 * omega3), SIG)
-    if not _well_posed(_state(I1, I3, Mgl, beta0, omega3, alpha_dot0)):
-        return None
-    answers = distinguishable_answers(
-        lambda: _answers(I1, I3, Mgl, beta0, omega3, alpha_dot0), MARGIN
-    )
-    if answers is None:
-        return None
-    params = {"I1": I1, "I3": I3, "Mgl": Mgl, "beta0": beta0, "omega3": omega3,
-              "alpha_dot0": alpha_dot0}
-    units = {"I1": "kg m^2", "I3": "kg m^2", "Mgl": "J", "beta0": "rad", "omega3": "rad/s",
-             "alpha_dot0": "rad/s"}
-    return Variant(NAME, TITLE, params, units, _statement(top.kind.noun, params), answers)
+    return {"top": top.kind.shape, "I1": I1, "I3": I3, "Mgl": Mgl, "beta0": beta0,
+            "omega3": omega3, "alpha_dot0": alpha_dot0}
 
 
-def generate(rng: np.random.Generator) -> Variant:
-    """One variant: a top let go at a tilt; its nutation period and mean precession (R20).
+def _numbers(params: Mapping[str, Any]) -> tuple[float, ...]:
+    return tuple(params[n] for n in ("I1", "I3", "Mgl", "beta0", "omega3", "alpha_dot0"))
 
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The only source of randomness.
 
-    Returns
-    -------
-    Variant
-        Answers ``T_nut`` (s) and ``mean_rate`` (rad/s), computed by
-        :func:`solver.heavy_top.nutation` from the displayed (3-figure) parameters.
+def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
+    """``T_nut`` and ``mean_rate`` (R20), from :func:`solver.heavy_top.nutation` on the shown
+    (3-figure) parameters.
+
+    Raises :class:`~problems.family.IllPosed` for a nearly steady motion, one near the
+    separatrix or swinging too low, or a known mistake close to the key.
     """
-    return first_acceptable(_variant, rng, NAME, MAX_ATTEMPTS)
+    numbers = _numbers(params)
+    reject_unless(_well_posed(_state(*numbers)), "nearly steady, near the separatrix, or low")
+    return distinguishable(lambda: _answers(*numbers), MARGIN)
+
+
+def statement(params: Mapping[str, Any]) -> str:
+    noun = next(k.noun for k in TOP_KINDS if k.shape == params["top"])
+    return _statement(noun, params)

@@ -32,14 +32,16 @@ of order one.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 
-from problems.answers import Answer, Mistake, distinguishable_answers
+from problems.answers import Answer, Mistake
+from problems.family import Parameter, distinguishable, reject_unless
 from problems.rounding import latex_sig, round_sig
-from problems.variant import Variant, first_acceptable
 from solver.heavy_top import critical_spin, sleeping_top_stable
 from solver.inertia import centre_of_mass_offset, parallel_axis, shape_tensor
 
@@ -144,14 +146,49 @@ def draw_top(rng: np.random.Generator, sig: int = SIG) -> Top:
     M, R = u(kind.mass), u(kind.radius)
     h = None if kind.height is None else u(kind.height)
     if kind.arm_range is None:
+        return top_of(kind, M, R, h)
+    # the axle must leave the rotor clear of the tip: l ≥ h/2 + 1 cm
+    low = max(kind.arm_range[0], (h or 0.0) / 2 + 0.01)
+    return Top(kind, M, R, h, u((low, kind.arm_range[1])))
+
+
+def top_of(kind: TopKind, M: float, R: float, h: float | None, arm: float | None = None) -> Top:
+    """The top of these shown dimensions; ``arm`` (``l``) None for a cone on its apex, whose
+    ``l = 3h/4`` follows from ``h``."""
+    if arm is None:
         arm = float(centre_of_mass_offset(kind.shape, radius=R, height=h))
-    else:
-        # the axle must leave the rotor clear of the tip: l ≥ h/2 + 1 cm
-        low = max(kind.arm_range[0], (h or 0.0) / 2 + 0.01)
-        arm = u((low, kind.arm_range[1]))
     return Top(kind, M, R, h, arm)
 
 
+TOP_PARAMETERS: dict[str, Parameter] = {
+    "top": Parameter(choices=tuple(k.shape for k in TOP_KINDS), description="the kind of top"),
+    "M": Parameter(unit="kg", low=0.03, high=0.5, description="mass"),
+    "R": Parameter(unit="m", low=0.02, high=0.05, description="radius"),
+    "h": Parameter(unit="m", low=0.008, high=0.06,
+                   description="thickness of the rotor, or height of the cone"),
+    "l": Parameter(unit="m", low=0.02, high=0.06, description="tip to centre of mass"),
+    "g": Parameter(unit="m/s^2", description="gravitational acceleration"),
+}
+"""The shown dimensions of a top (:func:`top_params`); shared with the other heavy-top
+templates. A range is the union of the kinds' ranges."""
+
+
+def top_params(top: Top) -> dict[str, float | str]:
+    """The top's parameters: its kind, ``M``, ``R``, ``h`` (not for a disc), ``l`` (not for a
+    cone), ``g``."""
+    params: dict[str, float | str] = {"top": top.kind.shape, "M": top.M, "R": top.R}
+    if top.h is not None:
+        params["h"] = top.h
+    if top.kind.arm_range is not None:
+        params["l"] = top.arm
+    return params | {"g": top.g}
+
+
+def top_from_params(params: Mapping[str, Any]) -> Top:
+    """The :class:`Top` of :func:`top_params`."""
+    kind = next(k for k in TOP_KINDS if k.shape == params["top"])
+    top = top_of(kind, params["M"], params["R"], params.get("h"), params.get("l"))
+    return replace(top, g=params["g"])
 
 
 # --------------------------------------------------------------------------------------------
@@ -191,63 +228,50 @@ def _stable_answer(top: Top, omega3: float) -> Answer:
 
 def _statement(top: Top, omega3: float) -> str:
     R, M, g = latex_sig(top.R, SIG), latex_sig(top.M, SIG), latex_sig(top.g, SIG)
-    if top.kind.shape == "disc":
-        body = (f"a thin uniform disc of mass $M = {M}$ kg (`M`) and radius $R = {R}$ m (`R`) "
-                f"whose centre is $l = {latex_sig(top.arm, SIG)}$ m (`l`) from the tip along "
-                "the massless axle")
-    elif top.kind.shape == "solid_cylinder":
-        body = (f"a uniform solid cylinder of mass $M = {M}$ kg (`M`), radius $R = {R}$ m "
-                f"(`R`) and thickness $h = {latex_sig(top.h, SIG)}$ m (`h`) whose centre is "
-                f"$l = {latex_sig(top.arm, SIG)}$ m (`l`) from the tip along the massless axle")
+    body = f"mass $M = {M}$ kg (`M`), {'base ' if top.h and top.kind.arm_range is None else ''}"
+    body += f"radius $R = {R}$ m (`R`)"
+    if top.kind.shape == "solid_cylinder":
+        body += f", thickness $h = {latex_sig(top.h, SIG)}$ m (`h`)"
+    if top.kind.arm_range is None:  # the cone: its apex is the tip
+        body += f", height $h = {latex_sig(top.h, SIG)}$ m (`h`; the centre of mass is $3h/4$ "
+        body += "from the apex)"
     else:
-        body = (f"a uniform solid cone of mass $M = {M}$ kg (`M`), base radius $R = {R}$ m "
-                f"(`R`) and height $h = {latex_sig(top.h, SIG)}$ m (`h`) spinning on its apex (its "
-                "centre of mass is $3h/4$ from the apex)")
+        body += f", centre $l = {latex_sig(top.arm, SIG)}$ m (`l`) from the tip"
     return (
-        f"A top, {top.kind.noun}, spins on a fixed frictionless tip: {body}. Take "
-        f"$g = {g}$ m/s² (`g`). At $\\beta = 0$ the top stands upright (sleeping).\n\n"
-        "1. `omega3_c`: the least spin $\\omega_3$ about the symmetry axis (rad/s) for which "
-        "the upright spinning top is stable against small tilts.\n"
-        f"2. `stable`: the top is set spinning upright at $\\omega_3 = "
-        f"{latex_sig(omega3, SIG)}$ rad/s (`omega3`). Does it keep sleeping (`True`) or does a "
-        "small disturbance make it wobble away from the vertical (`False`)?"
+        f"A top, {top.kind.noun}, spins upright (sleeping) on a fixed tip. It is uniform: "
+        f"{body}; $g = {g}$ m/s² (`g`).\n\n"
+        "1. `omega3_c`: the least spin $\\omega_3$ for which the upright top is stable against "
+        "small tilts;\n"
+        f"2. `stable`: spun upright at $\\omega_3 = {latex_sig(omega3, SIG)}$ rad/s (`omega3`), "
+        "does it keep sleeping (`True`) or wobble away from the vertical (`False`)?"
     )
 
 
-def _variant(rng: np.random.Generator) -> Variant | None:
+PARAMETERS: dict[str, Parameter] = {
+    **TOP_PARAMETERS,
+    "omega3": Parameter(unit="rad/s", description="the given spin (a multiple of the critical)"),
+}
+
+
+def draw(rng: np.random.Generator) -> dict[str, Any]:
+    """A real top (:func:`draw_top`) and a spin between half and twice its critical spin."""
     top = draw_top(rng)
     critical = float(critical_spin(top.I1, top.I3, top.Mgl))
-    omega3 = round_sig(critical * rng.uniform(*SPIN_RATIO), SIG)
-    if abs(omega3 / critical - 1.0) < THRESHOLD_MARGIN:
-        return None
-    answers = distinguishable_answers(
-        lambda: (_spin_answer(top), _stable_answer(top, omega3)), MARGIN
-    )
-    if answers is None:
-        return None
-    params = {"M": top.M, "R": top.R} | ({} if top.h is None else {"h": top.h})
-    if top.kind.arm_range is not None:
-        params["l"] = top.arm
-    params |= {"g": top.g, "omega3": omega3}
-    units = {"M": "kg", "R": "m", "h": "m", "l": "m", "g": "m/s^2", "omega3": "rad/s"}
-    return Variant(NAME, TITLE, params, {k: units[k] for k in params}, _statement(top, omega3),
-                   answers)
+    return {**top_params(top), "omega3": round_sig(critical * rng.uniform(*SPIN_RATIO), SIG)}
 
 
-def generate(rng: np.random.Generator) -> Variant:
-    """One sleeping-top variant (R2, R19), from ``rng`` only.
+def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
+    """``omega3_c`` (R19, with ``I1`` about the tip, R2) and ``stable``, from the shown values.
 
-    The body's dimensions are rounded to ``SIG`` figures and the answers computed from them by
-    :mod:`solver.inertia` and :mod:`solver.heavy_top`; ill-posed draws are resampled.
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The only source of randomness.
-
-    Returns
-    -------
-    Variant
-        Answers ``omega3_c`` (rad/s) and ``stable`` (boolean).
+    Raises :class:`~problems.family.IllPosed` when the given spin is within
+    ``THRESHOLD_MARGIN`` of the critical one, or a known mistake is close to the key.
     """
-    return first_acceptable(_variant, rng, NAME, MAX_ATTEMPTS)
+    top, omega3 = top_from_params(params), params["omega3"]
+    critical = float(critical_spin(top.I1, top.I3, top.Mgl))
+    reject_unless(abs(omega3 / critical - 1.0) >= THRESHOLD_MARGIN,
+                  "the given spin is too close to the critical one")
+    return distinguishable(lambda: (_spin_answer(top), _stable_answer(top, omega3)), MARGIN)
+
+
+def statement(params: Mapping[str, Any]) -> str:
+    return _statement(top_from_params(params), params["omega3"])

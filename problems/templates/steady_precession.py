@@ -37,13 +37,15 @@ absolute error is the student's relative error in ``slow`` (≲ 1e-13 in floatin
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
-from problems.answers import Answer, Mistake, distinguishable_answers
+from problems.answers import Answer, Mistake
+from problems.family import Parameter, distinguishable, reject_unless
 from problems.rounding import latex_sig, round_sig
-from problems.templates.sleeping_top import G, draw_top
-from problems.variant import Variant, first_acceptable
+from problems.templates.sleeping_top import TOP_KINDS, TOP_PARAMETERS, draw_top
 from solver.heavy_top import fast_top_rates, steady_precession_rates
 
 NAME = "steady_precession"
@@ -139,61 +141,63 @@ def _answers(M, arm, Icm, I3, g, beta0, omega3) -> tuple[Answer, ...]:
     return tuple(answers)
 
 
-def _statement(noun: str, p: dict[str, float]) -> str:
+def _statement(noun: str, p: Mapping[str, Any]) -> str:
     def show(name: str, symbol: str, unit: str) -> str:
         return f"${symbol} = {latex_sig(p[name], SIG)}$ {unit} (`{name}`)"
 
     icm = show("Icm", r"I_\mathrm{cm}", "kg m²")
     omega3, beta0 = show("omega3", r"\omega_3", "rad/s"), show("beta0", r"\beta_0", "rad")
     return (
-        f"A top, {noun}, spins on a fixed frictionless pivot. Its data: mass "
-        f"{show('M', 'M', 'kg')}, centre of mass {show('l', 'l', 'm')} from the pivot along the "
-        f"symmetry axis, moment of inertia {icm} about any "
-        "axis through the centre of mass perpendicular to the symmetry axis, and "
-        f"{show('I3', 'I_3', 'kg m²')} about the symmetry axis; take "
-        f"{show('g', 'g', 'm/s²')}. It spins at {omega3} about its "
-        f"symmetry axis, which is tilted at {beta0} from the upward "
-        "vertical.\n\n"
-        "With the right precession rate $\\dot\\alpha$ the axis precesses steadily at the "
-        "constant tilt $\\beta_0$, without nutation. Find (rad/s unless stated):\n\n"
-        "1. `slow` and `fast`: the exact slow and fast steady precession rates at $\\beta_0$;\n"
-        "2. `slow_approx` and `fast_approx`: their fast-top approximations;\n"
-        "3. `slow_error`: the relative error of the slow approximation, "
-        "(`slow_approx` − `slow`)/`slow` (a plain number, with its sign)."
+        f"A top, {noun}, spins on a fixed pivot: mass {show('M', 'M', 'kg')}, centre of mass "
+        f"{show('l', 'l', 'm')} from the pivot, {icm} about a transverse axis through the "
+        f"centre of mass, {show('I3', 'I_3', 'kg m²')} about the symmetry axis; "
+        f"{show('g', 'g', 'm/s²')}. It spins at {omega3}, its axis tilted at {beta0}. For "
+        "steady precession at that tilt, find:\n\n"
+        "1. `slow`, `fast`: the exact slow and fast precession rates;\n"
+        "2. `slow_approx`, `fast_approx`: their fast-top approximations;\n"
+        "3. `slow_error`: (`slow_approx` − `slow`)/`slow`, with its sign."
     )
 
 
-def _variant(rng: np.random.Generator) -> Variant | None:
+PARAMETERS: dict[str, Parameter] = {
+    "top": TOP_PARAMETERS["top"],
+    "M": Parameter(unit="kg", description="mass"),
+    "l": Parameter(unit="m", description="pivot to centre of mass"),
+    "Icm": Parameter(unit="kg m^2", description="transverse moment about the centre of mass"),
+    "I3": Parameter(unit="kg m^2", description="moment about the symmetry axis"),
+    "g": TOP_PARAMETERS["g"],
+    "omega3": Parameter(unit="rad/s", description="spin"),
+    "beta0": Parameter(unit="rad", low=TILT[0], high=TILT[1], description="tilt"),
+}
+
+
+def draw(rng: np.random.Generator) -> dict[str, Any]:
+    """A real top's data sheet (rounded), the tilt, and a spin whose stiffness
+    ``p_γ²/(4 I1 Mgl cos β0)`` is drawn in :data:`STIFFNESS`."""
     top = draw_top(rng)
     M, arm, Icm, I3 = (round_sig(x, SIG) for x in (top.M, top.arm, top.I_cm, top.I3))
     beta0 = round_sig(rng.uniform(*TILT), SIG)
-    I1, Mgl = Icm + M * arm**2, M * G * arm
+    I1, Mgl = Icm + M * arm**2, M * top.g * arm
     spin = 2.0 * math.sqrt(rng.uniform(*STIFFNESS) * I1 * Mgl * math.cos(beta0)) / I3
-    omega3 = round_sig(spin, SIG)
-    stiffness = (I3 * omega3) ** 2 / (4 * I1 * Mgl * math.cos(beta0))
-    if not STIFFNESS[0] <= stiffness <= STIFFNESS[1]:  # moved out by the rounding
-        return None
-    answers = distinguishable_answers(lambda: _answers(M, arm, Icm, I3, G, beta0, omega3), MARGIN)
-    if answers is None:
-        return None
-    params = {"M": M, "l": arm, "Icm": Icm, "I3": I3, "g": G, "omega3": omega3, "beta0": beta0}
-    units = {"M": "kg", "l": "m", "Icm": "kg m^2", "I3": "kg m^2", "g": "m/s^2",
-             "omega3": "rad/s", "beta0": "rad"}
-    return Variant(NAME, TITLE, params, units, _statement(top.kind.noun, params), answers)
+    return {"top": top.kind.shape, "M": M, "l": arm, "Icm": Icm, "I3": I3, "g": top.g,
+            "omega3": round_sig(spin, SIG), "beta0": beta0}
 
 
-def generate(rng: np.random.Generator) -> Variant:
-    """One steady-precession variant (R2, R15, R21), from ``rng`` only.
+def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
+    """``slow``, ``fast``, their fast-top approximations and ``slow_error`` (R21), from the
+    shown parameters (``I1 = Icm + M l²``, R2).
 
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The only source of randomness.
-
-    Returns
-    -------
-    Variant
-        Answers ``slow``, ``fast``, ``slow_approx``, ``fast_approx`` (rad/s) and
-        ``slow_error`` (dimensionless), computed from the displayed (3-figure) parameters.
+    Raises :class:`~problems.family.IllPosed` when the rounding moved the stiffness out of
+    :data:`STIFFNESS`, or a known mistake is close to the key.
     """
-    return first_acceptable(_variant, rng, NAME, MAX_ATTEMPTS)
+    M, arm, Icm, I3, g, omega3, beta0 = (params[n] for n in ("M", "l", "Icm", "I3", "g",
+                                                              "omega3", "beta0"))
+    I1, Mgl = Icm + M * arm**2, M * g * arm
+    stiffness = (I3 * omega3) ** 2 / (4 * I1 * Mgl * math.cos(beta0))
+    reject_unless(STIFFNESS[0] <= stiffness <= STIFFNESS[1], "stiffness out of range")
+    return distinguishable(lambda: _answers(M, arm, Icm, I3, g, beta0, omega3), MARGIN)
+
+
+def statement(params: Mapping[str, Any]) -> str:
+    noun = next(k.noun for k in TOP_KINDS if k.shape == params["top"])
+    return _statement(noun, params)

@@ -36,17 +36,18 @@ each other are resampled.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import cache
+from typing import Any
 
 import numpy as np
 import sympy as sp
 
-from problems.answers import Answer, Mistake, distinguishable_answers
+from problems.answers import Answer, Mistake
+from problems.family import Parameter, distinguishable
 from problems.rounding import latex_sig, round_sig
 from problems.templates.sleeping_top import draw_top
-from problems.variant import Variant, first_acceptable
 from solver.heavy_top import constants_of_motion, critical_spin
 from solver.symbolic import (
     SYMBOLS,
@@ -209,35 +210,33 @@ class Quantity:
 
 QUANTITIES: tuple[Quantity, ...] = (
     Quantity("p_alpha", "The momentum conjugate to α",
-             "the momentum $p_\\alpha = \\partial L/\\partial\\dot\\alpha$ conjugate to the "
-             "azimuth $\\alpha$, in terms of the Euler angles and their rates", "kg m^2/s",
+             "$p_\\alpha = \\partial L/\\partial\\dot\\alpha$ in the Euler angles and rates",
+             "kg m^2/s",
              ("I1", "I3", "beta", "alpha_dot", "gamma_dot"),
              lambda: conjugate_momenta()["p_alpha"], _p_alpha_mistakes),
     Quantity("p_gamma", "The momentum conjugate to γ",
-             "the momentum $p_\\gamma = \\partial L/\\partial\\dot\\gamma$ conjugate to the spin "
-             "angle $\\gamma$, in terms of the Euler angles and their rates", "kg m^2/s",
+             "$p_\\gamma = \\partial L/\\partial\\dot\\gamma$ in the Euler angles and rates",
+             "kg m^2/s",
              ("I1", "I3", "beta", "alpha_dot", "gamma_dot"),
              lambda: conjugate_momenta()["p_gamma"], _p_gamma_mistakes),
     Quantity("E_prime", "The reduced energy E'",
-             "the reduced energy $E' = E - p_\\gamma^2/(2 I_3)$, in terms of the Euler angles "
-             "and their rates (not of the momenta)", "J",
+             "$E' = E - p_\\gamma^2/(2 I_3)$ in the Euler angles and rates (not the momenta)",
+             "J",
              ("I1", "I3", "Mgl", "beta", "alpha_dot", "beta_dot", "gamma_dot"),
              _reduced_energy, _energy_mistakes),
     Quantity("V_eff", "The effective potential",
-             "the effective potential $V_\\mathrm{eff}(\\beta)$, defined by "
-             "$E' = \\tfrac12 I_1 \\dot\\beta^2 + V_\\mathrm{eff}(\\beta)$, in terms of the "
-             "conserved momenta $p_\\alpha$, $p_\\gamma$", "J",
+             "$V_\\mathrm{eff}(\\beta)$, defined by "
+             "$E' = \\tfrac12 I_1 \\dot\\beta^2 + V_\\mathrm{eff}(\\beta)$, in the momenta "
+             "$p_\\alpha$, $p_\\gamma$", "J",
              ("I1", "Mgl", "beta", "p_alpha", "p_gamma"),
              effective_potential_expr, _potential_mistakes),
     Quantity("alpha_dot", "The precession rate from the momenta",
-             "the precession rate $\\dot\\alpha$ as a function of $\\beta$, in terms of the "
-             "conserved momenta $p_\\alpha$, $p_\\gamma$", "rad/s",
+             "the precession rate $\\dot\\alpha(\\beta)$ in the momenta $p_\\alpha$, "
+             "$p_\\gamma$", "rad/s",
              ("I1", "beta", "p_alpha", "p_gamma"), _precession_rate, _rate_mistakes),
     Quantity("c2", "The sleeping top's β² coefficient",
-             "for a top with $p_\\alpha = p_\\gamma$ (its axis passes through the vertical), "
-             "the coefficient $c_2$ of $\\beta^2$ in the expansion "
-             "$V_\\mathrm{eff}(\\beta) = c_0 + c_2 \\beta^2 + O(\\beta^4)$ about "
-             "$\\beta = 0$ (the sleeping top is stable where $c_2 \\ge 0$)", "J",
+             "for $p_\\alpha = p_\\gamma$ (an axis through the vertical), $c_2$ in "
+             "$V_\\mathrm{eff}(\\beta) = c_0 + c_2 \\beta^2 + O(\\beta^4)$", "J",
              ("I1", "Mgl", "p_gamma"), lambda: sleeping_top_expansion()[1], _c2_mistakes),
 )
 
@@ -303,47 +302,57 @@ def _number_answer(q: Quantity, c: _Compiled, values: list[float]) -> Answer:
 
 def _statement(q: Quantity, params: dict[str, float]) -> str:
     names = ", ".join(f"`{n}`" for n in q.symbols)
-    mgl = " (`Mgl` is one symbol, the product $Mgl$)" if "Mgl" in q.symbols else ""
+    mgl = "; `Mgl` is one symbol" if "Mgl" in q.symbols else ""
     shown = ", ".join(f"${_PARAM[n][0]} = {latex_sig(v, SIG)}$ {_PARAM[n][1]} (`{n}`)"
                       for n, v in params.items())
     return (
-        "A heavy symmetric top spins on a fixed tip. Its Lagrangian (R14) is\n\n"
+        "A heavy symmetric top spins on a fixed tip; its Lagrangian (R14) is\n\n"
         "$$L = \\tfrac12 I_1 (\\dot\\alpha^2 \\sin^2\\beta + \\dot\\beta^2) + \\tfrac12 I_3 "
         "(\\dot\\alpha\\cos\\beta + \\dot\\gamma)^2 - Mgl\\cos\\beta .$$\n\n"
-        f"1. `{q.name}_expr`: derive {q.task}. Give a sympy expression or a string in the "
-        f"symbols {names}{mgl}; the functions `sin`, `cos`, `sqrt` and the constant `pi` "
-        "may appear, e.g. `\"I1*sin(beta)**2\"`.\n"
-        f"2. `{q.name}`: its value ({q.unit.replace('^2', '²')}) for a top with {shown}."
+        f"1. `{q.name}_expr`: derive {q.task}, as a sympy expression or a string in {names} "
+        f"(and `sin`, `cos`, `sqrt`, `pi`{mgl});\n"
+        f"2. `{q.name}`: its value for {shown}."
     )
 
 
-def _variant(rng: np.random.Generator) -> Variant | None:
-    index = int(rng.integers(len(QUANTITIES)))
-    q, c = QUANTITIES[index], _compiled(index)
+PARAMETERS: dict[str, Parameter] = {
+    "quantity": Parameter(choices=tuple(q.name for q in QUANTITIES),
+                          description="the quantity to derive"),
+    **{name: Parameter(unit=unit, description=f"${symbol}$")
+       for name, (symbol, _, unit) in _PARAM.items()},
+}
+"""The quantity, and the numbers it needs: those of its symbols (:attr:`Quantity.symbols`)."""
+
+
+def draw(rng: np.random.Generator) -> dict[str, Any]:
+    """A quantity of :data:`QUANTITIES`, and the values of its symbols for a real top in a
+    plausible state (:func:`_state`)."""
+    q = QUANTITIES[int(rng.integers(len(QUANTITIES)))]
     state = _state(rng)
-    params = {n: state[n] for n in q.symbols}
-    answers = distinguishable_answers(
-        lambda: (_number_answer(q, c, list(params.values())),), MARGIN
-    )
-    if answers is None:
-        return None
-    (number,) = answers
-    units = {n: _PARAM[n][2] for n in params}
-    return Variant(NAME, q.title, params, units, _statement(q, params), (c.expression, number))
+    return {"quantity": q.name, **{n: state[n] for n in q.symbols}}
 
 
-def generate(rng: np.random.Generator) -> Variant:
-    """One derivation variant (R14–R16, R18, R19), from ``rng`` only.
+def _quantity(params: Mapping[str, Any]) -> tuple[Quantity, _Compiled]:
+    index = next(i for i, q in enumerate(QUANTITIES) if q.name == params["quantity"])
+    return QUANTITIES[index], _compiled(index)
 
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The only source of randomness.
 
-    Returns
-    -------
-    Variant
-        Answers ``<quantity>_expr`` (expression) and ``<quantity>`` (its value, scalar), for a
-        quantity drawn from :data:`QUANTITIES`.
+def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
+    """``<quantity>_expr`` (derived by :mod:`solver.symbolic`) and ``<quantity>``, its value
+    at the shown parameters.
+
+    Raises :class:`~problems.family.IllPosed` when a numerical mistake is close to the key.
     """
-    return first_acceptable(_variant, rng, NAME, MAX_ATTEMPTS)
+    q, c = _quantity(params)
+    values = [params[n] for n in q.symbols]
+    (number,) = distinguishable(lambda: (_number_answer(q, c, values),), MARGIN)
+    return (c.expression, number)
+
+
+def heading(params: Mapping[str, Any]) -> str:
+    return _quantity(params)[0].title
+
+
+def statement(params: Mapping[str, Any]) -> str:
+    q, _ = _quantity(params)
+    return _statement(q, {n: params[n] for n in q.symbols})

@@ -17,14 +17,16 @@ mistake (e.g. ``sin Ωt ≈ 0``, where turning ω the wrong way round gives the 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from problems.answers import Answer, Mistake, distinguishable_answers
+from problems.answers import Answer, Mistake
+from problems.family import Parameter, distinguishable, reject_unless
 from problems.rounding import latex_sig, round_sig
-from problems.variant import Variant, first_acceptable
 from solver.inertia import shape_tensor
 from solver.parameters import ParameterError
 from solver.torque_free import (
@@ -58,6 +60,7 @@ MAX_ATTEMPTS = 1000
 class Body:
     """A uniform solid cylinder from everyday life, and how it is thrown (SI ranges)."""
 
+    label: str  # its parameter value
     noun: str
     story: str
     mass: tuple[float, float]  # kg
@@ -67,16 +70,16 @@ class Body:
 
 
 BODIES: tuple[Body, ...] = (
-    Body("a coin", "is flipped into the air", (3e-3, 10e-3), (9.5e-3, 15e-3), (1.5e-3, 2.5e-3),
-         (100.0, 250.0)),
-    Body("a dinner plate", "is tossed up spinning", (0.4, 0.7), (0.11, 0.14), (0.015, 0.025),
-         (5.0, 15.0)),
-    Body("an ice-hockey puck", "slides off the ice and tumbles through the air", (0.156, 0.170),
-         (0.037, 0.039), (0.024, 0.026), (20.0, 60.0)),
-    Body("a can of soup", "is thrown like a spiral pass", (0.30, 0.45), (0.033, 0.042),
+    Body("coin", "a coin", "is flipped into the air", (3e-3, 10e-3), (9.5e-3, 15e-3),
+         (1.5e-3, 2.5e-3), (100.0, 250.0)),
+    Body("plate", "a dinner plate", "is tossed up spinning", (0.4, 0.7), (0.11, 0.14),
+         (0.015, 0.025), (5.0, 15.0)),
+    Body("puck", "an ice-hockey puck", "slides off the ice and tumbles through the air",
+         (0.156, 0.170), (0.037, 0.039), (0.024, 0.026), (20.0, 60.0)),
+    Body("can", "a can of soup", "is thrown like a spiral pass", (0.30, 0.45), (0.033, 0.042),
          (0.10, 0.12), (10.0, 30.0)),
-    Body("a rolling pin", "is thrown spinning about its long axis", (0.6, 1.0), (0.025, 0.03),
-         (0.38, 0.45), (5.0, 15.0)),
+    Body("rolling_pin", "a rolling pin", "is thrown spinning about its long axis", (0.6, 1.0),
+         (0.025, 0.03), (0.38, 0.45), (5.0, 15.0)),
 )
 
 TILT = (math.radians(5.0), math.radians(30.0))
@@ -90,17 +93,15 @@ class Draw:
     """Displayed (rounded) values of one variant, SI."""
 
     body: Body
-    mass: float
-    radius: float
-    height: float
     I1: float
     I3: float
     omega0: tuple[float, float, float]
     t: float
 
 
-def _draw(rng: np.random.Generator) -> Draw | None:
-    """A draw, or None if the rounding pushed ``I3`` past ``2 I1`` (no rigid body)."""
+def draw(rng: np.random.Generator) -> dict[str, Any] | None:
+    """A body of :data:`BODIES`, its moments (4 figures), ω(0) and ``t`` (None: the rounding
+    pushed ``I3`` past ``2 I1``, no rigid body)."""
     body = BODIES[rng.integers(len(BODIES))]
     mass, radius, height = (round_sig(rng.uniform(*r), SIG)
                             for r in (body.mass, body.radius, body.height))
@@ -111,10 +112,24 @@ def _draw(rng: np.random.Generator) -> Draw | None:
     omega3 = rng.uniform(*body.spin)
     wobble = omega3 * math.tan(rng.uniform(*TILT))
     phi = rng.uniform(0.0, 2.0 * math.pi)
-    omega0 = tuple(round_sig([wobble * math.cos(phi), wobble * math.sin(phi), omega3], SIG))
+    omega0 = round_sig([wobble * math.cos(phi), wobble * math.sin(phi), omega3], SIG).tolist()
     period = 2.0 * math.pi / abs(float(body_precession_rate(I1, I3, omega0[2])))
     t = round_sig(rng.uniform(*PHASE_TIME) * period, SIG)
-    return Draw(body, mass, radius, height, I1, I3, omega0, t)
+    return {"body": body.label, "I1": I1, "I3": I3, "omega0": omega0, "t": t}
+
+
+def _draw_of(params: Mapping[str, Any]) -> Draw:
+    body = next(b for b in BODIES if b.label == params["body"])
+    return Draw(body, params["I1"], params["I3"], tuple(params["omega0"]), params["t"])
+
+
+PARAMETERS: dict[str, Parameter] = {
+    "body": Parameter(choices=tuple(b.label for b in BODIES), description="the body thrown"),
+    "I1": Parameter(unit="kg m^2", figures=SIG_MOMENTS, description="transverse moment"),
+    "I3": Parameter(unit="kg m^2", figures=SIG_MOMENTS, description="axial moment"),
+    "omega0": Parameter(unit="rad/s", shape=(3,), description="ω(0), body frame"),
+    "t": Parameter(unit="s", description="the time ω(t) is asked at"),
+}
 
 
 def _turned(omega0: tuple[float, ...], rate: float, t: float) -> list[float]:
@@ -205,69 +220,36 @@ def _statement(d: Draw) -> str:
     b = d.body
     w1, w2, w3 = (latex_sig(w, SIG) for w in d.omega0)
     return (
-        f"{b.noun[0].upper()}{b.noun[1:]} (a uniform cylinder of mass "
-        f"${latex_sig(d.mass, SIG)}$ kg, "
-        f"radius ${latex_sig(d.radius, SIG)}$ m and height (along its axis) "
-        f"${latex_sig(d.height, SIG)}$ m) {b.story}. It is a symmetric top: its principal "
-        "moments about the centre of mass are "
-        f"$I_1 = I_2 = {latex_sig(d.I1, SIG_MOMENTS)}$ kg m² (any axis perpendicular to the "
-        f"symmetry axis) and $I_3 = {latex_sig(d.I3, SIG_MOMENTS)}$ kg m² (the symmetry axis "
-        "$\\hat e_3$) (`I1`, `I3`; use them as given).\n\n"
-        "At $t = 0$ the body-frame components of the angular velocity are "
-        "$\\boldsymbol\\omega(0) = "
-        f"(\\omega_1, \\omega_2, \\omega_3) = ({w1},\\ {w2},\\ {w3})$ rad/s (`omega0`).\n\n"
-        "1. `Omega`: the rate $\\Omega$ (rad/s) at which $\\boldsymbol\\omega$ precesses about "
-        "$\\hat e_3$ *in the body frame*, with its sign: $\\Omega > 0$ when "
-        "$(\\omega_1, \\omega_2)$ turns from $\\hat e_1$ towards $\\hat e_2$ (counter-clockwise "
-        "seen from the tip of $\\hat e_3$).\n"
-        "2. `T_body`: the period (s) of this body-frame precession.\n"
-        f"3. `omega_t`: the body-frame components $[\\omega_1, \\omega_2, \\omega_3]$ (rad/s) "
-        f"at $t = {latex_sig(d.t, SIG)}$ s (`t`).\n"
-        "4. `alpha_dot`: the rate (rad/s, positive) at which the symmetry axis $\\hat e_3$ "
-        "precesses about the fixed angular momentum $\\mathbf L$, *seen from the inertial "
-        "frame*.\n"
-        "5. `theta`: the angle $\\theta$ (rad) between $\\hat e_3$ and $\\mathbf L$, the "
-        "half-angle of the cone that $\\hat e_3$ sweeps."
+        f"{b.noun[0].upper()}{b.noun[1:]} (a uniform cylinder) {b.story}. Its principal "
+        f"moments about the centre of mass are $I_1 = I_2 = {latex_sig(d.I1, SIG_MOMENTS)}$ kg "
+        "m² (`I1`) and "
+        f"$I_3 = {latex_sig(d.I3, SIG_MOMENTS)}$ kg m² (`I3`, about the symmetry axis "
+        "$\\hat e_3$). At $t = 0$ its angular velocity is "
+        f"$\\boldsymbol\\omega = ({w1},\\ {w2},\\ {w3})$ rad/s in body components "
+        "(`omega0`).\n\n"
+        "1. `Omega`: the rate $\\Omega$ at which $\\boldsymbol\\omega$ precesses about "
+        "$\\hat e_3$ in the body frame, positive when $(\\omega_1, \\omega_2)$ turns from "
+        "$\\hat e_1$ towards $\\hat e_2$;\n"
+        "2. `T_body`: the period of that precession;\n"
+        f"3. `omega_t`: $\\boldsymbol\\omega$ in body components at $t = {latex_sig(d.t, SIG)}$ s "
+        "(`t`);\n"
+        "4. `alpha_dot`: the rate at which $\\hat e_3$ precesses about $\\mathbf L$, seen from "
+        "the inertial frame;\n"
+        "5. `theta`: the angle between $\\hat e_3$ and $\\mathbf L$."
     )
 
 
-def _variant(d: Draw | None) -> Variant | None:
-    if d is None:
-        return None
-    answers = distinguishable_answers(lambda: _answers(d), MARGIN)
-    if answers is None:
-        return None
-    return Variant(
-        family=NAME,
-        title=TITLE,
-        params={"I1": d.I1, "I3": d.I3, "omega0": list(d.omega0), "t": d.t},
-        param_units={"I1": "kg m^2", "I3": "kg m^2", "omega0": "rad/s", "t": "s"},
-        statement=_statement(d),
-        answers=answers,
-    )
+def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
+    """``Omega``, ``T_body``, ``omega_t``, ``alpha_dot`` and ``theta`` (R8), computed by
+    :mod:`solver.torque_free` from the shown (rounded) values.
 
-
-def generate(rng: np.random.Generator) -> Variant:
-    """One variant of a torque-free symmetric top (R8), from ``rng`` only.
-
-    Parameters are rounded to the figures shown and every answer is computed from the rounded
-    values by :mod:`solver.torque_free`. Draws whose known mistakes are not well separated from
-    the key are resampled.
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The only source of randomness; the same generator state gives the same variant.
-
-    Returns
-    -------
-    Variant
-        Parameters (SI), statement and answers of one student's question.
-
-    Raises
-    ------
-    RuntimeError
-        No acceptable draw in ``MAX_ATTEMPTS`` (a template bug: about one draw in a few is
-        rejected).
+    Raises :class:`~problems.family.IllPosed` for no rigid body (``I3 > 2 I1``) or a known
+    mistake close to the key (e.g. ``sin Ωt ≈ 0``).
     """
-    return first_acceptable(lambda r: _variant(_draw(r)), rng, NAME, MAX_ATTEMPTS)
+    d = _draw_of(params)
+    reject_unless(d.I3 <= 2 * d.I1, "no rigid body: I3 > 2 I1")
+    return distinguishable(lambda: _answers(d), MARGIN)
+
+
+def statement(params: Mapping[str, Any]) -> str:
+    return _statement(_draw_of(params))

@@ -34,11 +34,15 @@ exchanged turning points, degrees) within five tolerances of the key or of anoth
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
 from problems.answers import Answer
+from problems.family import Parameter, reject_unless
 from problems.rounding import latex_sig, round_sig
+from problems.templates import heavy_top_constants
 from problems.templates.heavy_top_constants import (
     CONVENTIONS as CONVENTIONS,  # the same convention topics (problems.conventions)
 )
@@ -54,11 +58,12 @@ from problems.templates.heavy_top_constants import (
     motion_within_limits,
     select_mistakes,
     state_args,
+    state_from_params,
     state_text,
+    top_from_params,
     variant_params,
     well_conditioned,
 )
-from problems.variant import Variant, first_acceptable
 from solver.heavy_top import constants_of_motion, effective_potential, turning_points
 
 NAME = "turning_points"
@@ -144,17 +149,36 @@ def _turning_point_answers(names: tuple[str, ...], low: np.ndarray, high: np.nda
 
 def _statement(top: Top, state: State, beta: float) -> str:
     return (
-        f"{top.text}\n\n{state_text(state)}\n\n"
-        "The axis nods (nutates) between two turning points. Find:\n\n"
-        "1. `V_eff`: the effective potential $V_{\\mathrm{eff}}(\\beta)$, in J, whose value at "
-        "the turning points equals $E' = E - p_\\gamma^2/(2 I_3)$, evaluated at "
+        f"{top.text} {state_text(state)}\n\n"
+        "1. `V_eff`: the effective potential $V_{\\mathrm{eff}}(\\beta)$ (which equals "
+        "$E' = E - p_\\gamma^2/(2 I_3)$ at the turning points) at "
         f"$\\beta = {latex_sig(beta, SIG)}$ rad (`beta`);\n"
-        "2. `beta1`, `beta2`: the turning points $\\beta_1 \\le \\beta_2$ of the nutation, in "
-        "rad."
+        "2. `beta1`, `beta2`: the turning points $\\beta_1 \\le \\beta_2$ of the nutation."
     )
 
 
-def _variant(rng: np.random.Generator) -> Variant | None:
+PARAMETERS: dict[str, Parameter] = {
+    **heavy_top_constants.PARAMETERS,
+    "beta": Parameter(unit="rad", description="the tilt at which V_eff is asked"),
+}
+
+
+def _solve(top: Top, state: State):
+    """One solver pass for the key and every mistaken state (rows: key first): the mistaken
+    states, ``p_α``, ``p_γ``, the states whose turning points move, and those turning points."""
+    mistaken = mistaken_states(top, state)
+    p_alpha, p_gamma, _ = constants_of_motion(*np.array([state_args(top, state),
+                                                         *mistaken.values()]).T)
+    moved = {k: v for k, v in mistaken.items() if k != "degree_mode"}  # the answer is in rad
+    moved["E_not_E_prime"] = _energy_state(top, state, float(p_gamma[0]))
+    low, high = turning_points(*np.array([state_args(top, state), *moved.values()]).T)
+    return mistaken, p_alpha, p_gamma, moved, low, high
+
+
+def draw(rng: np.random.Generator) -> dict[str, Any] | None:
+    """A real top, released from rest in α and β one time in three, else launched; the tilt
+    ``beta`` for ``V_eff`` drawn around the motion's range (None: the motion leaves the
+    scene's limits)."""
     top = draw_top(rng)
     if rng.uniform() < RELEASED:
         state = draw_state(rng, top, 0.0, 0.0)
@@ -162,44 +186,36 @@ def _variant(rng: np.random.Generator) -> Variant | None:
         sense = rng.choice([1.0, 1.0, -1.0])
         nod = rng.choice([0.0, 1.0, -1.0]) * rng.uniform(0.02, 0.15)
         state = draw_state(rng, top, sense * rng.uniform(0.3, 2.5), nod)
-    # One solver pass for the key and every mistaken state (rows: key first).
-    mistaken = mistaken_states(top, state)
-    p_alpha, p_gamma, _ = constants_of_motion(*np.array([state_args(top, state),
-                                                         *mistaken.values()]).T)
-    moved = {k: v for k, v in mistaken.items() if k != "degree_mode"}  # the answer is in rad
-    moved["E_not_E_prime"] = _energy_state(top, state, float(p_gamma[0]))
-    low, high = turning_points(*np.array([state_args(top, state), *moved.values()]).T)
+    *_, low, high = _solve(top, state)
     beta1, beta2 = float(low[0]), float(high[0])
     if not motion_within_limits(top, beta1, beta2):
         return None
     low_q = max(QUERY_MIN, beta1 - QUERY_MARGIN)
     beta = round_sig(rng.uniform(low_q, min(math.pi - QUERY_MIN, beta2 + QUERY_MARGIN)), SIG)
+    return variant_params(top, state, beta=beta)
+
+
+def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
+    """``V_eff`` at ``beta`` (R16) and the turning points ``beta1 ≤ beta2`` (R17), computed by
+    :mod:`solver.heavy_top` from the shown (rounded) parameters.
+
+    Raises :class:`~problems.family.IllPosed` for a motion outside the scene's limits, an
+    ill-conditioned ``V_eff``, or a primary mistake close to the key.
+    """
+    top, state, beta = top_from_params(params), state_from_params(params), params["beta"]
+    mistaken, p_alpha, p_gamma, moved, low, high = _solve(top, state)
+    reject_unless(motion_within_limits(top, float(low[0]), float(high[0])),
+                  "the motion leaves the scene's limits")
     potential = _potential_answer(top, state, beta, mistaken, p_alpha, p_gamma)
     points = _turning_point_answers(tuple(moved), low, high)
-    if potential is None or points is None:
-        return None
-    params, units = variant_params(top, state, beta=beta)
-    return Variant(NAME, f"{top.title}: turning points", params, units,
-                   _statement(top, state, beta), (potential, *points))
+    reject_unless(potential is not None and points is not None,
+                  "ill-conditioned, or a mistake close to the key")
+    return (potential, *points)
 
 
-def generate(rng: np.random.Generator) -> Variant:
-    """One variant of the effective potential and turning points (R16, R17), from ``rng`` only.
+def heading(params: Mapping[str, Any]) -> str:
+    return f"{top_from_params(params).title}: turning points"
 
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        The only source of randomness; the same generator state gives the same variant.
 
-    Returns
-    -------
-    Variant
-        Answers ``V_eff`` (J), ``beta1`` and ``beta2`` (rad, ``beta1 < beta2``), computed by
-        :mod:`solver.heavy_top` from the shown (rounded) parameters.
-
-    Raises
-    ------
-    RuntimeError
-        No acceptable draw in ``MAX_ATTEMPTS`` (a template bug: most draws are accepted).
-    """
-    return first_acceptable(_variant, rng, NAME, MAX_ATTEMPTS)
+def statement(params: Mapping[str, Any]) -> str:
+    return _statement(top_from_params(params), state_from_params(params), params["beta"])

@@ -1,9 +1,9 @@
 """Fixtures for the generator's tests: a test-only problem family and roster files.
 
-The family is a tilted thin rod (R2: a uniform rod of mass m and length L whose axis makes the
-angle θ with the rotation axis through its centre has I = m L² sin²θ / 12). It has one answer of
-every kind, all computed from the *displayed* (rounded) parameters, so the generator's tests do
-not depend on the real templates.
+The family (kept to the family contract, ``problems/API.md``) is a tilted thin rod (R2: a
+uniform rod of mass m and length L whose axis makes the angle θ with the rotation axis through
+its centre has I = m L² sin²θ / 12). It has one answer of every kind, all computed from the
+*displayed* (rounded) parameters, so the generator's tests do not depend on the real templates.
 """
 
 from __future__ import annotations
@@ -16,24 +16,27 @@ import pytest
 
 from problems import templates
 from problems.answers import Answer, Mistake
-from problems.rounding import round_sig
-from problems.variant import Variant
+from problems.family import Family, Parameter, draw_parameters
 
 
-def make_rod_family(name: str = "rod", fail_on_call: int | None = None) -> types.SimpleNamespace:
-    """A template-like namespace; ``fail_on_call=n`` makes the n-th ``generate`` call raise."""
+def make_rod_family(name: str = "rod", fail_on_call: int | None = None) -> Family:
+    """A family kept as a namespace; ``fail_on_call=n`` makes the n-th draw raise."""
     calls = {"n": 0}
+    parameters = {"m": Parameter(unit="kg", low=0.1, high=2.0),
+                  "L": Parameter(unit="m", low=0.2, high=1.5),
+                  "θ": Parameter(unit="rad", low=0.3, high=1.3)}
 
-    def generate(rng) -> Variant:
+    def draw(rng) -> dict:
         calls["n"] += 1
         if fail_on_call is not None and calls["n"] == fail_on_call:
             raise RuntimeError("test template exploded")
-        # displayed to 3 significant figures; the answers use the displayed values
-        m, L = round_sig(rng.uniform(0.1, 2.0), 3), round_sig(rng.uniform(0.2, 1.5), 3)
-        θ = round_sig(rng.uniform(0.3, 1.3), 3)
+        return draw_parameters(rng, parameters)  # displayed to 3 significant figures
+
+    def answers(p) -> tuple[Answer, ...]:
+        m, L, θ = p["m"], p["L"], p["θ"]  # the answers use the displayed values
         I_c = m * L**2 / 12
         I_tilt = I_c * math.sin(θ) ** 2
-        answers = (
+        return (
             Answer("I_c", "scalar", I_c, unit="kg m^2", description="moment about the centre",
                    mistakes=(Mistake("end_axis", m * L**2 / 3, "that is about the end"),)),
             Answer("I_tilt", "scalar", I_tilt, unit="kg m^2", description="about the tilted axis"),
@@ -46,20 +49,16 @@ def make_rod_family(name: str = "rod", fail_on_call: int | None = None) -> types
             Answer("I_expr", "expression", "m*L**2*sin(theta)**2/12",
                    symbols=("m", "L", "theta"), description="I about the tilted axis"),
         )
-        return Variant(
-            family=name,
-            title="Moment of inertia of a thin rod",
-            params={"m": m, "L": L, "θ": θ},
-            param_units={"m": "kg", "L": "m", "θ": "rad"},
-            statement=(f"A thin uniform rod of mass $m = {m}$ kg and length $L = {L}$ m turns "
-                       f"about an axis through its centre at $\\theta = {θ}$ rad to the rod."),
-            answers=answers,
-        )
 
-    return types.SimpleNamespace(
-        NAME=name, TITLE="Thin rod", SUMMARY="moment of inertia of a thin rod (test only)",
-        RESULTS=("R2",), generate=generate,
-    )
+    def statement(p) -> str:
+        return (f"A thin uniform rod of mass $m = {p['m']}$ kg and length $L = {p['L']}$ m turns "
+                f"about an axis through its centre at $\\theta = {p['θ']}$ rad to the rod.")
+
+    return Family(types.SimpleNamespace(
+        NAME=name, TITLE="Moment of inertia of a thin rod",
+        SUMMARY="moment of inertia of a thin rod (test only)", RESULTS=("R2",),
+        PARAMETERS=parameters, draw=draw, answers=answers, statement=statement,
+    ), origin="test")
 
 
 @pytest.fixture

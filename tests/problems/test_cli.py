@@ -17,8 +17,9 @@ def test_problems_lists_one_line_per_family(families, capsys):
     assert main(["problems"]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert len(lines) == len(families)
-    assert lines[list(families).index("rod")].split(None, 2) == [
-        "rod", "R2", "moment of inertia of a thin rod (test only)"]
+    assert lines[list(families).index("rod")].split(None, 3) == [
+        "rod", "test", "R2", "moment of inertia of a thin rod (test only)"]
+    assert lines[0].split(None, 3)[:3] == ["inertia_tensor", "built-in", "R2,R4"]
 
 
 def test_generate_writes_an_assignment(tmp_path, families, roster_path, capsys):

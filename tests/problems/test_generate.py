@@ -342,7 +342,7 @@ def test_entries_encoded_by_workers_are_written_as_the_parent_would():
 
 
 def prepared_families(calls: list[int], fail: bool = False) -> dict:
-    """The rod families, with a prepare() that generate() relies on (as a real template's
+    """The rod families, with a prepare() that answers() relies on (as a real template's
     cached sympy work): a worker that did not inherit it fails."""
     families = make_families()
     for family in families.values():
@@ -354,12 +354,12 @@ def prepared_families(calls: list[int], fail: bool = False) -> dict:
                 raise RuntimeError("cannot derive")
             state["ready"] = True
 
-        def generate(rng, state=state, original=family.generate):
+        def answers(params, state=state, original=family.module.answers):
             if not state["ready"]:
-                raise RuntimeError("generate() before prepare()")
-            return original(rng)
+                raise RuntimeError("answers() before prepare()")
+            return original(params)
 
-        family.prepare, family.generate = prepare, generate
+        family.module.prepare, family.module.answers = prepare, answers
     return families
 
 

@@ -20,14 +20,14 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from problems.templates import energy_momentum
+from problems.templates import FAMILIES, energy_momentum
 
 SEEDS = range(40)
 
 
 @pytest.fixture(scope="module")
 def variants():
-    return [energy_momentum.generate(np.random.default_rng(seed)) for seed in SEEDS]
+    return [FAMILIES[energy_momentum.NAME].generate(np.random.default_rng(seed)) for seed in SEEDS]
 
 
 def _answers(variant):

@@ -20,7 +20,7 @@ from scipy.spatial.transform import Rotation
 
 from problems.answers import grade
 from problems.expressions import parse_expression
-from problems.templates import euler_kinetic_energy
+from problems.templates import FAMILIES, euler_kinetic_energy
 from solver.symbolic import SYMBOLS, kinetic_energy_euler_expr
 
 SEEDS = range(40)
@@ -31,7 +31,8 @@ TEXTBOOK = (
 
 @pytest.fixture(scope="module")
 def variants():
-    return [euler_kinetic_energy.generate(np.random.default_rng(seed)) for seed in SEEDS]
+    family = FAMILIES[euler_kinetic_energy.NAME]
+    return [family.generate(np.random.default_rng(seed)) for seed in SEEDS]
 
 
 def _answer(variant, name):

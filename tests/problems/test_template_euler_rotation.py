@@ -18,14 +18,14 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from problems.templates import euler_rotation
+from problems.templates import FAMILIES, euler_rotation
 
 SEEDS = range(40)
 
 
 @pytest.fixture(scope="module")
 def variants():
-    return [euler_rotation.generate(np.random.default_rng(seed)) for seed in SEEDS]
+    return [FAMILIES[euler_rotation.NAME].generate(np.random.default_rng(seed)) for seed in SEEDS]
 
 
 def _answers(variant):

@@ -24,6 +24,7 @@ import pytest
 import sympy as sp
 
 from problems.answers import grade
+from problems.templates import FAMILIES
 from problems.templates import heavy_top_constants as template
 
 SEEDS = range(30)
@@ -38,7 +39,7 @@ def _mistaken(variant, name, mistake_name):
 
 @pytest.fixture(scope="module")
 def variants():
-    return [template.generate(np.random.default_rng(seed)) for seed in SEEDS]
+    return [FAMILIES[template.NAME].generate(np.random.default_rng(seed)) for seed in SEEDS]
 
 
 def moments(p: dict) -> tuple[float, float, float]:

@@ -19,13 +19,13 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from problems.templates import inertia_tensor
+from problems.templates import FAMILIES, inertia_tensor
 
 SEEDS = range(40)
 
 
 def _variant(seed):
-    return inertia_tensor.generate(np.random.default_rng(seed))
+    return FAMILIES[inertia_tensor.NAME].generate(np.random.default_rng(seed))
 
 
 def _answers(variant):
@@ -112,7 +112,7 @@ def test_statement_states_the_sign_of_the_products_and_the_key_follows_it():
 
     checked = 0
     for seed in range(40):
-        v = inertia_tensor.generate(np.random.default_rng(seed))
+        v = FAMILIES[inertia_tensor.NAME].generate(np.random.default_rng(seed))
         assert re.search(r"minus sign, \$I_\{xy\} = -\\sum m\\,x y\$", v.statement)
         masses = sorted(k for k in v.params if re.fullmatch(r"m\d+", k))
         if not masses:

@@ -27,6 +27,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from problems.answers import grade
+from problems.templates import FAMILIES
 from problems.templates import motion_type as template
 from problems.templates.heavy_top_constants import MARGIN
 
@@ -36,7 +37,7 @@ RTOL = 1e-10
 
 @pytest.fixture(scope="module")
 def variants():
-    return [template.generate(np.random.default_rng(seed)) for seed in SEEDS]
+    return [FAMILIES[template.NAME].generate(np.random.default_rng(seed)) for seed in SEEDS]
 
 
 def top(p: dict) -> tuple[float, float, float]:

@@ -18,6 +18,7 @@ import sympy as sp
 from numpy.testing import assert_allclose
 from scipy.integrate import solve_ivp
 
+from problems.templates import FAMILIES
 from problems.templates import near_axis_stability as template
 
 SEEDS = range(16)
@@ -33,7 +34,7 @@ RHS = sp.lambdify((_W, _I), _EULER, "numpy")
 
 @pytest.fixture(params=SEEDS, ids=[f"seed{s}" for s in SEEDS])
 def variant(request):
-    return template.generate(np.random.default_rng(request.param))
+    return FAMILIES[template.NAME].generate(np.random.default_rng(request.param))
 
 
 def moments(variant) -> tuple[float, float, float]:
@@ -77,7 +78,7 @@ def _stable_variants(n: int = 12) -> list:
     """The first ``n`` variants (over seeds 0, 1, …) whose spin is about a stable axis."""
     found = []
     for seed in range(200):
-        v = template.generate(np.random.default_rng(seed))
+        v = FAMILIES[template.NAME].generate(np.random.default_rng(seed))
         if v.answer(f"stable{spin_axis(v)}").value:
             found.append(v)
         if len(found) == n:
@@ -107,7 +108,7 @@ def test_stable_wobble_is_in_the_linear_regime(variant):
 def test_draws_are_well_posed_and_varied():
     axes, labels_sorted, bodies = set(), set(), set()
     for seed in range(60):
-        v = template.generate(np.random.default_rng(seed))
+        v = FAMILIES[template.NAME].generate(np.random.default_rng(seed))
         m = np.array(moments(v))
         gaps = np.abs(m[:, None] - m[None, :])[np.triu_indices(3, 1)]
         assert gaps.min() >= template.MIN_GAP * m.max()

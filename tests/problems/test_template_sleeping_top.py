@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
+from problems.templates import FAMILIES
 from problems.templates import sleeping_top as template
 
 SEEDS = range(20)
@@ -31,7 +32,7 @@ P_CRITICAL = sp.lambdify((_I1, _Mgl), _P_CRITICAL)
 
 @pytest.fixture(params=SEEDS, ids=[f"seed{s}" for s in SEEDS])
 def variant(request):
-    return template.generate(np.random.default_rng(request.param))
+    return FAMILIES[template.NAME].generate(np.random.default_rng(request.param))
 
 
 def moments(p: dict) -> tuple[float, float, float, float]:
@@ -97,7 +98,7 @@ def test_mistake_values_follow_the_mistaken_physics(variant):
 def test_draws_are_real_tops_and_both_outcomes_occur():
     outcomes, kinds = set(), set()
     for seed in range(60):
-        v = template.generate(np.random.default_rng(seed))
+        v = FAMILIES[template.NAME].generate(np.random.default_rng(seed))
         p = v.params
         assert 0.03 <= p["M"] <= 0.5 and 0.02 <= p["R"] <= 0.05
         I1, I3, _, Mgl = moments(p)

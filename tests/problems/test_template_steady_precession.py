@@ -15,6 +15,7 @@ import mpmath
 import numpy as np
 import pytest
 
+from problems.templates import FAMILIES
 from problems.templates import steady_precession as template
 
 SEEDS = range(20)
@@ -22,7 +23,7 @@ SEEDS = range(20)
 
 @pytest.fixture(params=SEEDS, ids=[f"seed{s}" for s in SEEDS])
 def variant(request):
-    return template.generate(np.random.default_rng(request.param))
+    return FAMILIES[template.NAME].generate(np.random.default_rng(request.param))
 
 
 def top(p: dict) -> tuple[float, float, float]:
@@ -87,7 +88,7 @@ def test_mistaken_moment_about_the_centre_of_mass(variant):
 
 def test_draws_have_real_rates_with_margin():
     for seed in range(60):
-        v = template.generate(np.random.default_rng(seed))
+        v = FAMILIES[template.NAME].generate(np.random.default_rng(seed))
         p = v.params
         I1, p_gamma, Mgl = top(p)
         stiffness = p_gamma**2 / (4 * I1 * Mgl * math.cos(p["beta0"]))

@@ -19,6 +19,7 @@ import pytest
 import sympy as sp
 
 from problems.answers import grade
+from problems.templates import FAMILIES
 from problems.templates import symbolic_derivation as template
 from solver.symbolic import SYMBOLS
 
@@ -104,13 +105,14 @@ def test_mistaken_expressions_are_graded_as_their_mistake(quantity):
 
 @pytest.mark.parametrize("seed", range(24))
 def test_numeric_answer_is_the_formula_at_the_displayed_state(seed):
-    v = template.generate(np.random.default_rng(seed))
+    v = FAMILIES[template.NAME].generate(np.random.default_rng(seed))
     number = next(a for a in v.answers if not a.name.endswith("_expr"))
     expected = REFERENCES[number.name](**v.params)
     assert math.isclose(number.value, float(expected), rel_tol=1e-11)
 
 
 def test_every_quantity_is_asked():
-    asked = {next(a.name for a in template.generate(np.random.default_rng(s)).answers)
+    family = FAMILIES[template.NAME]
+    asked = {next(a.name for a in family.generate(np.random.default_rng(s)).answers)
              for s in range(60)}
     assert asked == {f"{q.name}_expr" for q in template.QUANTITIES}

@@ -15,6 +15,7 @@ import pytest
 from numpy.testing import assert_allclose
 from scipy.integrate import solve_ivp
 
+from problems.templates import FAMILIES
 from problems.templates import symmetric_free_top as template
 
 SEEDS = range(12)
@@ -55,7 +56,7 @@ def integrate(variant, t_end: float, with_rotation: bool = False, n: int = 400):
 
 @pytest.fixture(params=SEEDS, ids=[f"seed{s}" for s in SEEDS])
 def variant(request):
-    return template.generate(np.random.default_rng(request.param))
+    return FAMILIES[template.NAME].generate(np.random.default_rng(request.param))
 
 
 def test_omega_at_t_matches_integrated_euler_equations(variant):
@@ -94,7 +95,7 @@ def test_space_precession_and_cone_angle_from_the_orientation(variant):
 def test_oblate_and_prolate_bodies_are_both_drawn():
     shapes = set()
     for seed in range(40):
-        v = template.generate(np.random.default_rng(seed))
+        v = FAMILIES[template.NAME].generate(np.random.default_rng(seed))
         oblate = v.params["I3"] > v.params["I1"]
         assert (v.answer("Omega").value > 0) == oblate  # ω3 > 0 in every draw
         # ω3 > 0 in every draw, so "oblate" would tell the sign of Ω: the shape is not named
@@ -108,7 +109,7 @@ def test_every_body_is_a_rigid_body_with_a_visible_wobble(body):
     """The catalogue's ranges give moments obeying I3 ≤ 2 I1 and the tilt stays in range."""
     seen = False
     for seed in range(60):
-        v = template.generate(np.random.default_rng(seed))
+        v = FAMILIES[template.NAME].generate(np.random.default_rng(seed))
         if body.noun[1:] not in v.statement:
             continue
         seen = True

@@ -23,6 +23,7 @@ import pytest
 from scipy.optimize import brentq, minimize_scalar
 
 from problems.answers import grade
+from problems.templates import FAMILIES
 from problems.templates import turning_points as template
 from problems.templates.heavy_top_constants import MARGIN
 
@@ -38,7 +39,7 @@ def _mistaken(variant, name, mistake_name):
 
 @pytest.fixture(scope="module")
 def variants():
-    return [template.generate(np.random.default_rng(seed)) for seed in SEEDS]
+    return [FAMILIES[template.NAME].generate(np.random.default_rng(seed)) for seed in SEEDS]
 
 
 def top(p: dict) -> tuple[float, float, float, float | None]:

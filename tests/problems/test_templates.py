@@ -33,6 +33,7 @@ import pytest
 
 from problems.answers import KINDS, Answer, check_form, grade
 from problems.rounding import round_sig
+from problems.selftest import numbers_in
 from problems.templates import FAMILIES
 from problems.variant import Variant, variable_name
 
@@ -109,11 +110,11 @@ def malformed(answer: Answer) -> list:
 
 @pytest.mark.parametrize("family", list(FAMILIES))
 def test_module_declares_name_title_summary_results(family):
-    module = FAMILIES[family]
-    assert module.NAME == family
-    for text in (module.TITLE, module.SUMMARY):
+    found = FAMILIES[family]
+    assert found.name == family
+    for text in (found.title, found.summary):
         assert isinstance(text, str) and text.strip() and "\n" not in text
-    assert module.RESULTS and all(re.fullmatch(r"R([1-9]|1\d|2[01])", r) for r in module.RESULTS)
+    assert found.results and all(re.fullmatch(r"R([1-9]|1\d|2[01])", r) for r in found.results)
 
 
 @pytest.mark.parametrize("family", list(FAMILIES))
@@ -199,28 +200,8 @@ def _leaves(value) -> list[float]:
     return [value]
 
 
-_NUMBER = re.compile(
-    r"(?<![\w.])10\^\{(-?\d+)\}"  # 10^{-7}
-    r"|(?<![\w.^{])(\d+(?:\.\d*)?(?:e[+-]?\d+)?)(?:\s*\\times\s*10\^\{(-?\d+)\})?"
-)
-
-
-def numbers_shown(statement: str) -> set[float]:
-    """Magnitudes of the numbers in a statement: ``0.05``, ``1.2e-5``, ``1.2 \\times 10^{-5}``,
-    ``10^{-7}`` (digits inside names such as ``r1`` or ``m_1`` are not numbers)."""
-    shown = set()
-    for power, mantissa, exponent in _NUMBER.findall(statement):
-        if power:
-            shown.add(float(f"1e{power}"))
-        elif exponent:
-            shown.add(float(f"{mantissa}e{exponent}"))
-        else:
-            shown.add(float(mantissa))
-    return shown
-
-
 def test_params_are_rounded_and_shown_in_the_statement(variant):
-    shown = numbers_shown(variant.statement)
+    shown = numbers_in(variant.statement)
     for name, value in variant.params.items():
         assert f"`{name}`" in variant.statement, f"parameter {name} not named in the statement"
         for x in _leaves(value):
@@ -236,6 +217,6 @@ def test_variant_round_trips_through_json(variant):
     assert json.dumps(again.to_dict(), allow_nan=False) == text
 
 
-def test_numbers_shown_reads_plain_scientific_and_latex():
+def test_numbers_in_reads_plain_scientific_and_latex():
     statement = r"$m_1 = 0.05$ kg (`r1`), $I = 1.2 \times 10^{-5}$, $10^{-7}$, 3e5, -2.5"
-    assert numbers_shown(statement) == {0.05, 1.2e-5, 1e-7, 3e5, 2.5}
+    assert numbers_in(statement) == {0.05, 1.2e-5, 1e-7, 3e5, 2.5}

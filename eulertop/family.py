@@ -1,0 +1,21 @@
+"""The problem-family API, for families written outside eulertop (``problems/API.md``).
+
+A family is one Python file (or package) that defines ``NAME``, ``TITLE``, ``SUMMARY``,
+``PARAMETERS`` (a dict of :class:`Parameter`), ``answers(params)`` (a tuple of :class:`Answer`,
+each with its known :class:`Mistake` s) and ``statement(params)``, and optionally ``draw(rng)``
+(default: :func:`draw_parameters`). ``eulertop new-family NAME --out DIR`` writes a working,
+commented example; ``eulertop problems test FILE`` checks one.
+
+Examples
+--------
+>>> from eulertop.family import Answer, Mistake, Parameter
+>>> Parameter(unit="m", low=0.2, high=2.0, figures=3).settable
+True
+"""
+
+from __future__ import annotations
+
+from problems.answers import Answer, Mistake
+from problems.family import IllPosed, Parameter, draw_parameters
+
+__all__ = ["Answer", "IllPosed", "Mistake", "Parameter", "draw_parameters"]

@@ -1,0 +1,367 @@
+"""The problem-family contract, and one family loaded and checked against it.
+
+A family is a Python module (one file, or a package) that defines::
+
+    NAME = "physical_pendulum"          # unique: the name in --problems and specs
+    TITLE = "..."                       # the question's title
+    SUMMARY = "..."                     # one line for `eulertop problems`
+    PARAMETERS = {"L": Parameter(unit="m", low=0.2, high=2.0, figures=3), ...}
+    def answers(params) -> tuple[Answer, ...]   # pure: from the shown params alone
+    def statement(params) -> str                # Markdown + LaTeX, as the student reads it
+
+and may define ``draw(rng) -> dict | None`` (default :func:`draw_parameters`: each parameter
+drawn in its range and rounded to its figures), ``heading(params) -> str`` (a title for these
+parameters; default ``TITLE``), ``RESULTS`` (R-ids of ``physics.md``), ``CONVENTIONS`` (topics
+of :mod:`problems.conventions` its statement relies on), ``prepare()`` (one-time work, done
+before the generator forks its workers) and ``MAX_ATTEMPTS`` (draws before giving up).
+
+Drawing is kept apart from answering, so that a key can be recomputed from the parameters an
+assignment recorded: :meth:`Family.variant` is ``answers(params)`` and ``statement(params)``
+and nothing else. A draw that is ill-posed (turning points that nearly coincide, a known mistake
+that cannot be told from the key) is rejected by returning None from ``draw`` or by raising
+:class:`IllPosed` from ``draw`` or ``answers``; :meth:`Family.generate` then draws again from
+the same generator.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from problems.answers import Answer, distinguishable_answers
+from problems.rounding import round_sig
+from problems.variant import Variant, plain_number_tree
+
+MAX_ATTEMPTS = 1000
+"""Draws :meth:`Family.generate` makes before it gives up, unless the family says otherwise."""
+
+
+class IllPosed(Exception):
+    """Raised by a family's ``draw`` or ``answers``: these parameters make no good question
+    (the generator draws again)."""
+
+
+class FamilyError(ValueError):
+    """A family that does not keep the contract; the message names its file."""
+
+
+def reject_unless(condition: bool, reason: str) -> None:
+    """Raise :class:`IllPosed` with ``reason`` unless ``condition`` holds."""
+    if not condition:
+        raise IllPosed(reason)
+
+
+def distinguishable(build: Callable[[], tuple[Answer, ...]], margin: float) -> tuple[Answer, ...]:
+    """``build()``'s answers, every known mistake ``margin`` tolerances from the key and from
+    the others (:func:`problems.answers.distinguishable_answers`), else :class:`IllPosed`."""
+    answers = distinguishable_answers(build, margin)
+    if answers is None:
+        raise IllPosed(f"a known mistake within {margin:g} tolerances of the key or another")
+    return answers
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One parameter of a family: a number (or an array of numbers) or a choice among labels.
+
+    Attributes
+    ----------
+    unit : str
+        SI unit shown with it (``"m"``, ``"kg m^2"``, ``"rad/s"``); ``""`` if dimensionless.
+    low, high : float or None
+        The range the family accepts, and the default draw's range. A parameter without one is
+        derived by the family's ``draw`` (from other parameters, or from quantities the student
+        is not shown) and cannot be set by an assignment spec.
+    figures : int or None
+        Significant figures it is shown with (and rounded to); None: not rounded (a derived
+        value the statement does not print, such as ``3h/4``).
+    shape : tuple of int or None
+        ``()`` for a number, ``(3,)`` for a vector, ``(3, 3)`` for a matrix; None for any of
+        them (a parameter that is a vector in one scene and a number in another; drawn as a
+        number).
+    choices : tuple of str
+        A choice parameter (a scene, a body): one of these labels. A spec may fix it or narrow
+        it to some of them (the draw is then repeated until it gives one of those).
+    cell : bool
+        Whether it is a variable of the student's parameter cell (``q{k}_{name}``). Choices
+        never are; a number with ``cell=False`` is only written into the statement.
+    description : str
+        What it is, in a few words (for ``eulertop problems preview`` and error messages).
+    """
+
+    unit: str = ""
+    low: float | None = None
+    high: float | None = None
+    figures: int | None = 3
+    shape: tuple[int, ...] | None = ()
+    choices: tuple[str, ...] = ()
+    cell: bool = True
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        if (self.low is None) != (self.high is None):
+            raise ValueError("give both low and high, or neither")
+        if self.low is not None and not (_finite(self.low) and _finite(self.high)
+                                         and self.low <= self.high):
+            raise ValueError(f"need finite low <= high, got {self.low!r}, {self.high!r}")
+        if self.figures is not None and (not isinstance(self.figures, int)
+                                         or isinstance(self.figures, bool) or self.figures < 1):
+            raise ValueError(f"figures must be a whole number >= 1 or None, got {self.figures!r}")
+        if self.choices and (self.low is not None or self.shape):
+            raise ValueError("a choice parameter has no range and no shape")
+        if self.choices and not all(isinstance(c, str) and c for c in self.choices):
+            raise ValueError(f"choices must be non-empty strings, got {self.choices!r}")
+        if self.shape is not None:
+            object.__setattr__(self, "shape", tuple(self.shape))
+        object.__setattr__(self, "choices", tuple(self.choices))
+
+    @property
+    def is_choice(self) -> bool:
+        """A choice among labels rather than a number."""
+        return bool(self.choices)
+
+    @property
+    def settable(self) -> bool:
+        """Whether an assignment spec may fix it or give it another range."""
+        return self.is_choice or self.low is not None
+
+    @property
+    def in_cell(self) -> bool:
+        """Whether it is a variable of the student's parameter cell."""
+        return self.cell and not self.is_choice
+
+    def draw(self, rng: np.random.Generator, low: float | None = None,
+             high: float | None = None) -> float | list | str:
+        """A value: a label drawn uniformly, or numbers uniform in ``[low, high]`` (default:
+        the parameter's range), rounded to its figures."""
+        if self.is_choice:
+            return self.choices[int(rng.integers(len(self.choices)))]
+        low = self.low if low is None else low
+        high = self.high if high is None else high
+        if low is None:
+            raise ValueError("no range to draw from")
+        value = rng.uniform(low, high, size=self.shape) if self.shape else rng.uniform(low, high)
+        if self.figures is not None:
+            value = round_sig(value, self.figures)
+        return np.asarray(value).tolist() if self.shape else float(value)
+
+    def problem(self, value: Any) -> str | None:
+        """What is wrong with ``value`` for this parameter (type, shape, range, figures), or
+        None."""
+        if self.is_choice:
+            if value not in self.choices:
+                return f"must be one of {', '.join(map(repr, self.choices))}, got {value!r}"
+            return None
+        try:
+            numbers_ = np.asarray(plain_number_tree(value, "value"), dtype=float)
+        except ValueError as e:
+            return str(e).removeprefix("value: ")
+        if self.shape is not None and numbers_.shape != self.shape:
+            return f"must have shape {self.shape}, got {numbers_.shape}"
+        for x in numbers_.ravel().tolist():
+            if self.low is not None and not self.low <= x <= self.high:
+                return f"{x!r} is outside [{self.low!r}, {self.high!r}]"
+            if self.figures is not None and round_sig(x, self.figures) != x:
+                return f"{x!r} has more than {self.figures} significant figures"
+        return None
+
+
+def _finite(x: Any) -> bool:
+    return isinstance(x, numbers.Real) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def draw_parameters(rng: np.random.Generator,
+                    parameters: Mapping[str, Parameter]) -> dict[str, Any]:
+    """The default ``draw``: every parameter in its range (labels uniformly), in order.
+
+    Raises
+    ------
+    ValueError
+        A parameter has neither a range nor choices (the family must define ``draw``).
+    """
+    return {name: p.draw(rng) for name, p in parameters.items()}
+
+
+_REQUIRED = ("NAME", "TITLE", "SUMMARY", "PARAMETERS", "answers", "statement")
+
+
+@dataclass(frozen=True, eq=False)
+class Family:
+    """A family module, checked against the contract (module docstring), and what it does.
+
+    Attributes
+    ----------
+    module : module
+        The family's own module (or any object with its attributes).
+    origin : str
+        Where it comes from, for ``eulertop problems``: ``"built-in"``, its file (as the
+        folder or path was given: ``my_problems/pendulum.py``), or ``"entry point NAME
+        (DIST)"``.
+    path : Path or None
+        Its source file (a package's ``__init__.py``), named in error messages.
+    """
+
+    module: Any
+    origin: str = "built-in"
+    path: Path | None = None
+
+    def __post_init__(self) -> None:
+        check_contract(self.module, self.where)
+
+    @property
+    def where(self) -> str:
+        """How messages name the family: its file, else its module."""
+        return str(self.path) if self.path else getattr(self.module, "__name__", "family")
+
+    @property
+    def name(self) -> str:
+        return self.module.NAME
+
+    @property
+    def title(self) -> str:
+        return self.module.TITLE
+
+    @property
+    def summary(self) -> str:
+        return self.module.SUMMARY
+
+    @property
+    def results(self) -> tuple[str, ...]:
+        return tuple(getattr(self.module, "RESULTS", ()))
+
+    @property
+    def conventions(self) -> tuple[str, ...]:
+        return tuple(getattr(self.module, "CONVENTIONS", ()))
+
+    @property
+    def parameters(self) -> dict[str, Parameter]:
+        return dict(self.module.PARAMETERS)
+
+    @property
+    def max_attempts(self) -> int:
+        return int(getattr(self.module, "MAX_ATTEMPTS", MAX_ATTEMPTS))
+
+    def prepare(self) -> None:
+        """The family's one-time work (``prepare()``), if it has any."""
+        prepare = getattr(self.module, "prepare", None)
+        if prepare is not None:
+            prepare()
+
+    def draw(self, rng: np.random.Generator) -> dict[str, Any] | None:
+        """One draw of parameters (None or :class:`IllPosed`: rejected)."""
+        own = getattr(self.module, "draw", None)
+        return draw_parameters(rng, self.module.PARAMETERS) if own is None else own(rng)
+
+    def answers(self, params: Mapping[str, Any]) -> tuple[Answer, ...]:
+        """The key for ``params`` (:class:`IllPosed` if they make no good question)."""
+        return tuple(self.module.answers(dict(params)))
+
+    def statement(self, params: Mapping[str, Any]) -> str:
+        return self.module.statement(dict(params))
+
+    def heading(self, params: Mapping[str, Any]) -> str:
+        """The question's title for ``params``: the family's ``heading``, else ``TITLE``."""
+        own = getattr(self.module, "heading", None)
+        return self.title if own is None else own(dict(params))
+
+    def variant(self, params: Mapping[str, Any],
+                answers: tuple[Answer, ...] | None = None) -> Variant:
+        """The variant of ``params`` (recorded or just drawn): their answers (unless given),
+        statement and title; the parameter cell holds the numbers with ``cell=True``."""
+        params = self.recorded(params)
+        if answers is None:
+            answers = self.answers(params)
+        declared = self.module.PARAMETERS
+        cell = {k: v for k, v in params.items() if declared[k].in_cell}
+        units = {k: declared[k].unit for k in cell if declared[k].unit}
+        return Variant(self.name, self.heading(params), cell, units, self.statement(params),
+                       answers, parameters=params)
+
+    def recorded(self, params: Mapping[str, Any]) -> dict[str, Any]:
+        """``params`` as plain JSON (floats, lists of floats, labels), every name declared in
+        ``PARAMETERS``; ``ValueError`` naming the family otherwise."""
+        if not isinstance(params, Mapping):
+            raise ValueError(f"{self.where}: draw() must return a dict, got {params!r}")
+        declared = self.module.PARAMETERS
+        unknown = [k for k in params if k not in declared]
+        if unknown:
+            raise ValueError(f"{self.where}: parameters not declared in PARAMETERS: {unknown}")
+        plain = {}
+        for name, value in params.items():
+            if declared[name].is_choice:
+                if value not in declared[name].choices:
+                    raise ValueError(f"{self.where}: parameter {name!r} must be one of "
+                                     f"{declared[name].choices}, got {value!r}")
+                plain[name] = value
+            else:
+                plain[name] = plain_number_tree(value, f"{self.where}, parameter {name!r}")
+        return plain
+
+    def generate(self, rng: np.random.Generator, settings: Any = None) -> Variant:
+        """A variant drawn from ``rng`` alone: draws until one is well posed.
+
+        ``settings`` (an assignment's :class:`problems.settings.QuestionSettings`) fixes or
+        re-ranges parameters after each draw and changes the answers' points and tolerances.
+
+        Raises
+        ------
+        RuntimeError
+            No acceptable draw in ``MAX_ATTEMPTS`` tries.
+        """
+        for _ in range(self.max_attempts):
+            drawn = self.accepted(rng, settings)
+            if drawn is not None:
+                params, answers = drawn
+                if settings is not None:
+                    answers = settings.adjust_answers(answers)
+                return self.variant(params, answers)
+        raise RuntimeError(f"{self.name}: no acceptable draw in {self.max_attempts} attempts")
+
+    def accepted(self, rng: np.random.Generator, settings: Any = None
+                 ) -> tuple[dict[str, Any], tuple[Answer, ...]] | None:
+        """One attempt: ``(params, answers)``, or None when the draw was rejected."""
+        try:
+            params = self.draw(rng)
+            if params is not None and settings is not None:
+                params = settings.adjust_parameters(params, self, rng)
+            if params is None:
+                return None
+            params = self.recorded(params)
+            return params, self.answers(params)
+        except IllPosed:
+            return None
+
+
+def check_contract(module: Any, where: str) -> None:
+    """Raise :class:`FamilyError` naming ``where`` unless ``module`` keeps the contract."""
+    missing = [attr for attr in _REQUIRED if not hasattr(module, attr)]
+    if missing:
+        raise FamilyError(f"{where}: a family must define {', '.join(missing)} "
+                          "(problems/API.md, 'A family')")
+    name = module.NAME
+    if not isinstance(name, str) or not name.isidentifier():
+        raise FamilyError(f"{where}: NAME must be a Python identifier, got {name!r}")
+    for attr in ("TITLE", "SUMMARY"):
+        text = getattr(module, attr)
+        if not isinstance(text, str) or not text.strip() or "\n" in text:
+            raise FamilyError(f"{where}: {attr} must be one line of text, got {text!r}")
+    for attr in ("answers", "statement", "draw", "heading", "prepare"):
+        if hasattr(module, attr) and not callable(getattr(module, attr)):
+            raise FamilyError(f"{where}: {attr} must be a function")
+    parameters = module.PARAMETERS
+    if not isinstance(parameters, Mapping):
+        raise FamilyError(f"{where}: PARAMETERS must be a dict of name -> Parameter")
+    for key, p in parameters.items():
+        if not isinstance(key, str) or not key.isidentifier():
+            raise FamilyError(f"{where}: PARAMETERS: {key!r} is not a Python identifier")
+        if not isinstance(p, Parameter):
+            raise FamilyError(f"{where}: PARAMETERS[{key!r}] must be a Parameter, got {p!r}")
+        if not hasattr(module, "draw") and not p.settable:
+            raise FamilyError(f"{where}: PARAMETERS[{key!r}] has neither a range nor choices; "
+                              "give it low and high, or define draw(rng)")

@@ -1,0 +1,365 @@
+"""``eulertop problems test``: the checks every family must pass, for any family.
+
+Each check runs over the seeds given (``numpy.random.default_rng(seed)`` per variant, as
+``tests/problems/test_templates.py`` does for the built-ins) and records, for a failure, the
+seed that reproduces it and what failed:
+
+``draws well posed or rejected``
+    Every draw either is rejected (``draw`` returns None or raises
+    :class:`~problems.family.IllPosed`, or ``answers`` raises it) or gives parameters that are
+    all declared, plain JSON and within their declared ranges and figures, answers and a
+    statement, without any other exception; a seed that finds no acceptable draw fails.
+``same seed, same variant``
+    Drawing the seed again gives the same variant, to the last bit of its JSON.
+``key recomputed from its parameters``
+    ``answers`` and ``statement`` of the recorded parameters, read back from JSON, give the
+    same variant — recomputed after every seed has been drawn, so that nothing a draw left
+    behind (a module variable) can stand in for a parameter: drawing and answering are kept
+    apart, and a key can be recomputed later from what the assignment recorded.
+``answers finite and JSON-able``
+    Each answer's record is plain JSON without NaN or infinities and reads back equal; the key
+    itself is graded correct.
+``known mistakes outside the tolerance``
+    Each known mistake's value is graded wrong, and recognised by its own name.
+``no answer value in the statement``
+    No number in the statement that is not one of the parameters equals an answer value
+    rounded to 2–6 significant figures or to 0–6 decimals (zero, and whole numbers below 10 —
+    list numbers, "π/2" — are not counted).
+``every tolerance stated in the notebook``
+    The question's cell in the student's notebook says how each answer is compared (its own
+    tolerance), and the statement never types a tolerance itself.
+``time per variant``
+    Drawing a variant takes at most :data:`MAX_SECONDS`.
+``solutions get full marks (sandbox)``
+    One solutions notebook holding the variants of the first ``sandbox_seeds`` seeds as its
+    questions is run as a submission (:func:`grader.execute.execute_submission`, in the sandbox
+    where this machine has one) and compared with their key (:func:`grader.compare.compare`):
+    every answer must be correct.
+
+The grader is imported inside :func:`full_marks` only (``problems/`` sits below ``grader/``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import tempfile
+import time
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from problems.answers import Answer, comparison_rule, grade
+from problems.family import Family, IllPosed
+from problems.notebook import build_notebook, notebook_text
+from problems.rounding import round_sig
+from problems.variant import Variant, variable_name
+
+MAX_SECONDS = 5.0
+"""The longest a variant may take to draw (a class of 300 × 14 questions is generated in
+minutes, not hours)."""
+SHOWN_FAILURES = 3
+"""Failures listed per check (the count says how many there were)."""
+
+CHECKS = (
+    "draws well posed or rejected",
+    "same seed, same variant",
+    "key recomputed from its parameters",
+    "answers finite and JSON-able",
+    "known mistakes outside the tolerance",
+    "no answer value in the statement",
+    "every tolerance stated in the notebook",
+    "time per variant",
+    "solutions get full marks (sandbox)",
+)
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    """One check over all seeds.
+
+    Attributes
+    ----------
+    name : str
+        One of :data:`CHECKS`.
+    passed, failed : int
+        Seeds (or variants) that passed and failed it.
+    failures : tuple of str
+        The first :data:`SHOWN_FAILURES` failures, each ``"seed S: what failed"``.
+    note : str
+        What else the table says (the time taken, the isolation used).
+    """
+
+    name: str
+    passed: int
+    failed: int
+    failures: tuple[str, ...] = ()
+    note: str = ""
+
+
+@dataclass(frozen=True)
+class Report:
+    """A family's self-test: its checks, in :data:`CHECKS` order."""
+
+    family: str
+    seeds: tuple[int, ...]
+    checks: tuple[CheckResult, ...]
+
+    @property
+    def passed(self) -> bool:
+        return all(c.failed == 0 for c in self.checks)
+
+
+class _Tally:
+    """Counts of one check while it runs."""
+
+    def __init__(self, name: str) -> None:
+        self.name, self.passed, self.failed, self.failures = name, 0, 0, []
+
+    def record(self, seed: int, problem: str | None) -> None:
+        if problem is None:
+            self.passed += 1
+            return
+        self.failed += 1
+        if len(self.failures) < SHOWN_FAILURES:
+            self.failures.append(f"seed {seed}: {problem}")
+
+    def result(self, note: str = "") -> CheckResult:
+        return CheckResult(self.name, self.passed, self.failed, tuple(self.failures), note)
+
+
+def self_test(family: Family, seeds: Iterable[int],
+              sandbox_seeds: int | None = None) -> Report:
+    """Run every check of :data:`CHECKS` on ``family`` over ``seeds``.
+
+    ``sandbox_seeds``: how many of the seeds (the first ones) the full-marks check runs (one
+    notebook); default all.
+    """
+    seeds = tuple(seeds)
+    family.prepare()
+    tallies = {name: _Tally(name) for name in CHECKS}
+    variants: dict[int, Variant] = {}
+    times = []
+    for seed in seeds:
+        variant, problem = drawn_variant(family, seed)
+        tallies[CHECKS[0]].record(seed, problem)
+        if variant is None:
+            continue
+        variants[seed] = variant
+        start = time.perf_counter()
+        again = family.generate(np.random.default_rng(seed))
+        times.append(time.perf_counter() - start)
+        tallies[CHECKS[1]].record(seed, _same(variant, again))
+        tallies[CHECKS[3]].record(seed, _first(_answer_problem(a) for a in variant.answers))
+        tallies[CHECKS[4]].record(seed, _first(_mistake_problem(a) for a in variant.answers))
+        tallies[CHECKS[5]].record(seed, _first(leaked_values(variant)))
+        tallies[CHECKS[6]].record(seed, _tolerance_problem(family, variant))
+        slow = times[-1] > MAX_SECONDS
+        tallies[CHECKS[7]].record(seed, f"took {times[-1]:.2f} s" if slow else None)
+    for seed, variant in variants.items():  # after every draw: no state of its own draw left
+        tallies[CHECKS[2]].record(seed, _recomputed(family, variant))
+    timing = f"max {max(times):.3f} s, mean {sum(times) / len(times):.3f} s" if times else ""
+    checks = [tallies[name].result(timing if name == CHECKS[7] else "") for name in CHECKS[:8]]
+    chosen = dict(list(variants.items())[:sandbox_seeds])
+    checks.append(full_marks(family, chosen) if chosen else
+                  CheckResult(CHECKS[8], 0, 1, ("no variant to run",)))
+    return Report(family.name, seeds, tuple(checks))
+
+
+def drawn_variant(family: Family, seed: int) -> tuple[Variant | None, str | None]:
+    """The seed's variant, drawn as :meth:`Family.generate` draws it, checking each step; or
+    None and what went wrong."""
+    rng = np.random.default_rng(seed)
+    declared = family.parameters
+    for attempt in range(1, family.max_attempts + 1):
+        step = "draw()"
+        try:
+            params = family.draw(rng)
+            if params is None:
+                continue
+            step = "the drawn parameters"
+            params = family.recorded(params)
+            bad = [f"{n}: {p}" for n, v in params.items() if (p := declared[n].problem(v))]
+            if bad:
+                return None, f"draw {attempt}: parameter {bad[0]}"
+            step = "answers()"
+            answers = family.answers(params)
+            step = "statement()"
+            return family.variant(params, answers), None
+        except IllPosed:
+            continue
+        except Exception as e:
+            return None, f"draw {attempt}: {step} raised {type(e).__name__}: {e}"
+    return None, f"no acceptable draw in {family.max_attempts} attempts"
+
+
+def _first(problems: Iterable[str | None]) -> str | None:
+    return next((p for p in problems if p is not None), None)
+
+
+def _json(variant: Variant) -> str:
+    return json.dumps(variant.to_dict(), sort_keys=True, allow_nan=False)
+
+
+def _same(variant: Variant, again: Variant) -> str | None:
+    if _json(variant) == _json(again):
+        return None
+    first = next(k for k, v in variant.to_dict().items() if again.to_dict().get(k) != v)
+    return f"drawn twice, the variants differ in {first!r}"
+
+
+def _recomputed(family: Family, variant: Variant) -> str | None:
+    recorded = json.loads(json.dumps(variant.parameters))
+    try:
+        again = family.variant(recorded)
+    except Exception as e:
+        return f"answers/statement of the recorded parameters raised {type(e).__name__}: {e}"
+    if _json(again) != _json(variant):
+        first = next(k for k, v in variant.to_dict().items() if again.to_dict().get(k) != v)
+        return f"recomputed from its recorded parameters, {first!r} differs"
+    return None
+
+
+def _answer_problem(answer: Answer) -> str | None:
+    try:
+        text = json.dumps(answer.to_dict(), allow_nan=False)
+    except (TypeError, ValueError) as e:
+        return f"answer {answer.name!r} is not plain JSON: {e}"
+    if Answer.from_dict(json.loads(text)) != answer:
+        return f"answer {answer.name!r} does not read back from JSON unchanged"
+    verdict = grade(answer, answer.value)
+    if verdict.status != "correct":
+        return f"answer {answer.name!r}: the key itself is graded {verdict.status}"
+    return None
+
+
+def _mistake_problem(answer: Answer) -> str | None:
+    for m in answer.mistakes:
+        verdict = grade(answer, m.value)
+        if (verdict.status, verdict.mistake) != ("wrong", m.name):
+            return (f"answer {answer.name!r}: mistake {m.name!r} is graded {verdict.status}"
+                    + (f" as {verdict.mistake!r}" if verdict.mistake else ""))
+    return None
+
+
+_NUMBER = re.compile(
+    r"(?<![\w.])10\^\{(-?\d+)\}"  # 10^{-7}
+    r"|(?<![\w.^{])(\d+(?:\.\d*)?(?:e[+-]?\d+)?)(?:\s*\\times\s*10\^\{(-?\d+)\})?"
+)
+
+
+def numbers_in(text: str) -> set[float]:
+    """Magnitudes of the numbers written in ``text``: ``0.05``, ``1.2e-5``,
+    ``1.2 \\times 10^{-5}``, ``10^{-7}`` (digits inside names such as ``r1`` or ``m_1`` are not
+    numbers).
+
+    Examples
+    --------
+    >>> sorted(numbers_in(r"$m_1 = 0.05$ kg (`r1`), $I = 1.2 \\times 10^{-5}$, 3e5"))
+    [1.2e-05, 0.05, 300000.0]
+    """
+    shown = set()
+    for power, mantissa, exponent in _NUMBER.findall(text):
+        if power:
+            shown.add(float(f"1e{power}"))
+        elif exponent:
+            shown.add(float(f"{mantissa}e{exponent}"))
+        else:
+            shown.add(float(mantissa))
+    return shown
+
+
+def _leaves(value: object) -> list[float]:
+    if isinstance(value, list):
+        return [x for v in value for x in _leaves(v)]
+    return [value] if isinstance(value, float | int) and not isinstance(value, bool) else []
+
+
+def readings(x: float) -> set[float]:
+    """What a student could read as ``|x|``: rounded to 2–6 significant figures, or to 0–6
+    decimals (zero excluded)."""
+    x = abs(x)
+    found = {round_sig(x, k) for k in range(2, 7)} | {round(x, d) for d in range(7)}
+    return {r for r in found if r != 0}
+
+
+def leaked_values(variant: Variant) -> list[str]:
+    """Answer values written in the statement (module docstring), one message each."""
+    given = {abs(x) for v in variant.parameters.values() for x in _leaves(v)}
+    shown = {x for x in numbers_in(variant.statement)
+             if x not in given and not (x < 10 and x == int(x))}
+    leaks = []
+    for answer in variant.answers:
+        if answer.kind not in ("scalar", "angle", "vector"):
+            continue
+        for x in _leaves(answer.value):
+            hits = sorted(shown & readings(x)) if math.isfinite(x) and x != 0 else []
+            if hits:
+                leaks.append(f"answer {answer.name!r} = {x!r} is written in the statement as "
+                             f"{hits[0]:g}")
+    return leaks
+
+
+def _tolerance_problem(family: Family, variant: Variant) -> str | None:
+    if re.search(r"toleran", variant.statement, re.I):
+        return "the statement types a tolerance (the notebook states each one itself)"
+    nb = build_notebook("self-test", {"id": "selftest"}, [variant],
+                        families={family.name: family})
+    cell = next(c for c in nb["cells"] if c["id"] == "q1-statement")
+    compared = "".join(cell["source"]).rsplit("\n\n", 1)[-1]
+    for answer in variant.answers:
+        if f"`{variable_name(1, answer.name)}`" not in compared \
+                or comparison_rule(answer) not in compared:
+            return f"the notebook does not say how {variable_name(1, answer.name)} is compared"
+    return None
+
+
+def full_marks(family: Family, variants: dict[int, Variant]) -> CheckResult:
+    """Run one solutions notebook of ``variants`` (seed → variant, one question each) as a
+    submission and compare it with their key; every answer must be correct."""
+    from grader.compare import compare, key_answers
+    from grader.execute import execute_submission
+    from grader.limits import Limits
+    from problems.generate import key_entry
+
+    seeds, chosen = list(variants), list(variants.values())
+    tally = _Tally(CHECKS[8])
+    nb = build_notebook(f"{family.name} self-test", {"id": "selftest"}, chosen,
+                        solutions=True, families={family.name: family})
+    expected = key_answers({"students": {"selftest": key_entry(chosen)}}, "selftest")
+    with tempfile.TemporaryDirectory(prefix="eulertop-selftest-") as folder:
+        path = Path(folder) / "selftest.ipynb"
+        path.write_text(notebook_text(nb), encoding="utf-8")
+        run = execute_submission(path, [k.variable for k in expected],
+                                 Limits(total_timeout=120 + 2 * len(chosen)))
+    if run.status != "ok":
+        return CheckResult(CHECKS[8], 0, len(seeds),
+                           (f"seeds {seeds[0]}–{seeds[-1]}: the solutions notebook did not run: "
+                            f"{run.status}: {run.message}",))
+    results = compare(expected, run.answers)
+    for k, seed in enumerate(seeds, start=1):
+        wrong = [r for r in results if r.question == k and r.verdict.status != "correct"]
+        tally.record(seed, None if not wrong else
+                     f"{wrong[0].variable}: {wrong[0].verdict.status}: {wrong[0].verdict.message}")
+    where = "sandboxed" if run.sandboxed else "NOT sandboxed (no sandbox on this machine)"
+    return tally.result(f"{where}, {run.duration:.1f} s")
+
+
+def report_lines(report: Report) -> list[str]:
+    """The table of a report, then each failure with its seed."""
+    width = max(len(c.name) for c in report.checks)
+    lines = [f"{'check':<{width}}  {'passed':>6}  {'failed':>6}  ",
+             f"{'-' * width}  {'-' * 6}  {'-' * 6}  "]
+    for c in report.checks:
+        lines.append(f"{c.name:<{width}}  {c.passed:>6}  {c.failed:>6}  {c.note}".rstrip())
+    failed = [c for c in report.checks if c.failed]
+    for c in failed:
+        lines.append(f"FAILED {c.name}: {c.failed} time(s)")
+        lines.extend(f"  {f}" for f in c.failures)
+    lines.append("all checks passed" if not failed else
+                 f"{len(failed)} check(s) failed; a seed reproduces its variant: "
+                 "eulertop problems preview NAME --seed S")
+    return lines

@@ -1,0 +1,233 @@
+"""The family contract: Parameter, the default draw, Family's checks, rejection, recomputing a key
+from recorded parameters, and what an assignment's settings change (problems/family.py,
+problems/settings.py)."""
+
+from __future__ import annotations
+
+import json
+import math
+import types
+
+import numpy as np
+import pytest
+
+from problems.answers import Answer, Mistake
+from problems.family import (
+    Family,
+    FamilyError,
+    IllPosed,
+    Parameter,
+    distinguishable,
+    draw_parameters,
+)
+from problems.rounding import round_sig
+from problems.settings import AnswerSetting, ParameterSetting, QuestionSettings
+from problems.templates import FAMILIES
+
+# --------------------------------------------------------------------------------------------
+# Parameter
+
+
+def test_a_parameter_draws_in_its_range_rounded_to_its_figures():
+    p = Parameter(unit="m", low=0.2, high=2.0, figures=3)
+    rng = np.random.default_rng(1)
+    values = [p.draw(rng) for _ in range(500)]
+    assert all(0.2 <= v <= 2.0 and round_sig(v, 3) == v for v in values)
+    assert min(values) < 0.4 and max(values) > 1.8  # the whole range, not a corner of it
+    assert p.draw(np.random.default_rng(7)) == p.draw(np.random.default_rng(7))
+
+
+def test_a_vector_parameter_and_a_choice():
+    vector = Parameter(unit="m", low=-1.0, high=1.0, figures=2, shape=(3,))
+    value = vector.draw(np.random.default_rng(0))
+    assert isinstance(value, list) and len(value) == 3
+    assert all(round_sig(x, 2) == x for x in value)
+    choice = Parameter(choices=("disc", "cone"))
+    drawn = {choice.draw(np.random.default_rng(s)) for s in range(40)}
+    assert drawn == {"disc", "cone"}
+    assert choice.is_choice and choice.settable and not choice.in_cell
+
+
+@pytest.mark.parametrize(("kwargs", "fragment"), [
+    ({"low": 1.0}, "both low and high"),
+    ({"low": 2.0, "high": 1.0}, "low <= high"),
+    ({"low": 0.0, "high": math.inf}, "finite"),
+    ({"figures": 0}, "figures"),
+    ({"choices": ("a",), "low": 0.0, "high": 1.0}, "no range"),
+    ({"choices": ("a", "")}, "non-empty"),
+])
+def test_bad_parameters_are_refused(kwargs, fragment):
+    with pytest.raises(ValueError, match=fragment):
+        Parameter(**kwargs)
+
+
+@pytest.mark.parametrize(("value", "fragment"), [
+    (0.1, "outside [0.2, 2.0]"),
+    (0.7512, "more than 3 significant figures"),
+    ([0.5, 0.6], "shape"),
+    ("0.5", "expected a number"),
+    (float("nan"), "finite"),
+])
+def test_what_is_wrong_with_a_value(value, fragment):
+    p = Parameter(unit="m", low=0.2, high=2.0, figures=3)
+    assert fragment in p.problem(value)
+    assert p.problem(0.75) is None
+
+
+def test_a_derived_parameter_is_not_settable():
+    derived = Parameter(unit="kg m^2", figures=4)
+    assert not derived.settable and derived.in_cell
+    with pytest.raises(ValueError, match="no range"):
+        derived.draw(np.random.default_rng(0))
+
+
+def test_the_default_draw_draws_each_parameter_in_order():
+    params = {"L": Parameter(low=1.0, high=2.0), "n": Parameter(choices=("a", "b"))}
+    a, b = np.random.default_rng(3), np.random.default_rng(3)
+    drawn = draw_parameters(a, params)
+    assert list(drawn) == ["L", "n"]
+    assert drawn["L"] == round_sig(b.uniform(1.0, 2.0), 3)  # the same stream, in order
+    assert drawn["n"] == ("a", "b")[int(b.integers(2))]
+
+
+# --------------------------------------------------------------------------------------------
+# A family
+
+
+def family(**changes) -> Family:
+    """A falling-ball family (t = √(2h/g)) kept as a namespace, with ``changes``."""
+    def answers(p):
+        t = math.sqrt(2 * p["h"] / p["g"])
+        return (Answer("t", "scalar", t, unit="s",
+                       mistakes=(Mistake("no_root", 2 * p["h"] / p["g"], "a square root"),)),)
+
+    attributes = dict(
+        NAME="drop", TITLE="A dropped ball", SUMMARY="free fall: the time to fall h",
+        PARAMETERS={"h": Parameter(unit="m", low=1.0, high=20.0),
+                    "g": Parameter(unit="m/s^2", low=9.81, high=9.81),
+                    "where": Parameter(choices=("a bridge", "a tower"))},
+        answers=answers,
+        statement=lambda p: f"A ball falls from {p['where']}, $h = {p['h']}$ m (`h`), "
+                            f"$g = {p['g']}$ m/s² (`g`).\n\n1. `t`: the time of the fall.",
+    )
+    return Family(types.SimpleNamespace(**{**attributes, **changes}), origin="test")
+
+
+def test_a_variant_has_the_cell_parameters_and_records_them_all():
+    v = family().generate(np.random.default_rng(5))
+    assert list(v.params) == ["h", "g"]  # the label is not a cell variable
+    assert v.param_units == {"h": "m", "g": "m/s^2"}
+    assert set(v.parameters) == {"h", "g", "where"}
+    assert v.answers[0].value == pytest.approx(math.sqrt(2 * v.params["h"] / 9.81), rel=1e-15)
+    assert v.title == "A dropped ball"
+
+
+def test_a_key_is_recomputed_from_the_recorded_parameters():
+    """The recorded parameters, through JSON, give the same variant: drawing is apart."""
+    for name, found in FAMILIES.items():
+        v = found.generate(np.random.default_rng(11))
+        recorded = json.loads(json.dumps(v.to_dict()))["parameters"]
+        assert found.variant(recorded) == v, name
+
+
+def test_rejected_draws_are_drawn_again_from_the_same_generator():
+    seen = []
+
+    def draw(rng):
+        h = round_sig(rng.uniform(1.0, 20.0), 3)
+        seen.append(h)
+        if len(seen) == 1:
+            return None  # rejected by draw
+        return {"h": h, "g": 9.81, "where": "a tower"}
+
+    def answers(p):
+        if len(seen) == 2:
+            raise IllPosed("rejected by answers")
+        return (Answer("t", "scalar", math.sqrt(2 * p["h"] / p["g"]), unit="s"),)
+
+    v = family(draw=draw, answers=answers).generate(np.random.default_rng(0))
+    assert len(seen) == 3 and v.params["h"] == seen[2]
+    rng = np.random.default_rng(0)
+    assert [round_sig(rng.uniform(1.0, 20.0), 3) for _ in range(3)] == seen
+
+
+def test_no_acceptable_draw_is_an_error_naming_the_family():
+    with pytest.raises(RuntimeError, match="drop: no acceptable draw in 7 attempts"):
+        family(draw=lambda rng: None, MAX_ATTEMPTS=7).generate(np.random.default_rng(0))
+
+
+def test_distinguishable_rejects_a_mistake_close_to_the_key():
+    def close():
+        return (Answer("t", "scalar", 1.0, mistakes=(Mistake("near", 1.004, "?"),)),)
+
+    with pytest.raises(IllPosed):
+        distinguishable(close, 5.0)
+    far = distinguishable(lambda: (Answer("t", "scalar", 1.0,
+                                          mistakes=(Mistake("far", 2.0, "?"),)),), 5.0)
+    assert far[0].mistakes[0].name == "far"
+
+
+@pytest.mark.parametrize(("changes", "fragment"), [
+    ({"answers": None}, "must be a function"),
+    ({"NAME": "has space"}, "NAME must be a Python identifier"),
+    ({"TITLE": "two\nlines"}, "TITLE must be one line"),
+    ({"PARAMETERS": {"h": 1.0}}, "must be a Parameter"),
+    ({"PARAMETERS": {"2h": Parameter(low=1.0, high=2.0)}}, "not a Python identifier"),
+    ({"PARAMETERS": {"I1": Parameter(unit="kg m^2")}}, "neither a range nor choices"),
+])
+def test_a_broken_contract_is_a_family_error(changes, fragment):
+    with pytest.raises(FamilyError, match=fragment):
+        family(**changes)
+
+
+def test_missing_names_are_listed():
+    module = types.SimpleNamespace(NAME="x", TITLE="t", SUMMARY="s")
+    with pytest.raises(FamilyError, match="must define PARAMETERS, answers, statement"):
+        Family(module)
+
+
+def test_undeclared_or_bad_drawn_parameters_are_refused():
+    with pytest.raises(ValueError, match=r"not declared in PARAMETERS: \['x'\]"):
+        family(draw=lambda rng: {"h": 1.0, "g": 9.81, "where": "a tower", "x": 1.0}) \
+            .generate(np.random.default_rng(0))
+    with pytest.raises(ValueError, match="'where' must be one of"):
+        family(draw=lambda rng: {"h": 1.0, "g": 9.81, "where": "a cliff"}) \
+            .generate(np.random.default_rng(0))
+
+
+# --------------------------------------------------------------------------------------------
+# What an assignment's settings change
+
+
+def test_a_fixed_parameter_a_range_and_a_narrowed_choice():
+    settings = QuestionSettings(parameters={
+        "h": ParameterSetting(low=5.0, high=6.0),
+        "g": ParameterSetting(value=9.81),
+        "where": ParameterSetting(choices=("a tower",)),
+    })
+    variants = [family().generate(np.random.default_rng(s), settings) for s in range(60)]
+    assert all(5.0 <= v.params["h"] <= 6.0 for v in variants)
+    assert {v.parameters["where"] for v in variants} == {"a tower"}
+    for v in variants:  # the key follows the values shown
+        assert v.answers[0].value == pytest.approx(math.sqrt(2 * v.params["h"] / 9.81),
+                                                   rel=1e-15)
+
+
+def test_answer_settings_points_and_tolerances():
+    answers = (Answer("a", "scalar", 1.0, points=1.0),
+               Answer("b", "scalar", 2.0, points=0.5, mistakes=(Mistake("x2", 4.0, "?"),)),
+               Answer("c", "scalar", 3.0, points=2.0, mistakes=(Mistake("near", 3.03, "?"),)))
+    settings = QuestionSettings(points=7.0, answers={"c": AnswerSetting(points=4.0, rtol=0.02)})
+    a, b, c = settings.adjust_answers(answers)
+    assert (a.points, b.points, c.points) == pytest.approx((2.0, 1.0, 4.0))  # 3 spread 2:1
+    assert c.rtol == 0.02 and c.mistakes == ()  # 3.03 is now right: its feedback is dropped
+    assert b.mistakes == answers[1].mistakes and b.rtol == answers[1].rtol
+
+
+def test_settings_round_trip_through_the_manifest():
+    settings = QuestionSettings(points=4.0, answers={"T": AnswerSetting(points=2.0, rtol=5e-3)},
+                                parameters={"L": ParameterSetting(value=0.75),
+                                            "m": ParameterSetting(low=0.2, high=0.5),
+                                            "top": ParameterSetting(choices=("disc",))})
+    again = QuestionSettings.from_dict(json.loads(json.dumps(settings.to_dict())))
+    assert again == settings

@@ -1,0 +1,208 @@
+"""`eulertop problems test`: a sound family passes every check; each way a family can be wrong is
+caught by its own check, with the seed that reproduces it; every built-in family passes (this is
+how CI runs the command over them)."""
+
+from __future__ import annotations
+
+import math
+import types
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import problems.selftest as selftest
+from eulertop import family_example
+from eulertop.cli import main
+from problems.answers import Answer, Mistake
+from problems.family import Family, Parameter
+from problems.family_files import load_family_file
+from problems.selftest import CHECKS, leaked_values, readings, self_test
+from problems.templates import FAMILIES
+
+from .family_sources import pendulum, write_family
+
+SEEDS = range(12)
+
+
+def falling(**changes) -> Family:
+    """A sound family (a ball dropped from h: t = √(2h/g)), with ``changes`` to break it."""
+    params = {"h": Parameter(unit="m", low=1.0, high=20.0),
+              "g": Parameter(unit="m/s^2", low=9.81, high=9.81)}
+
+    def answers(p):
+        t = math.sqrt(2 * p["h"] / p["g"])
+        return (Answer("t", "scalar", t, unit="s", description="time of the fall",
+                       mistakes=(Mistake("missing_2", math.sqrt(p["h"] / p["g"]),
+                                         "h = g t²/2: the 2 is missing."),)),)
+
+    def statement(p):
+        return (f"A ball is dropped from $h = {p['h']:g}$ m (`h`); $g = {p['g']:g}$ m/s² "
+                "(`g`).\n\n1. `t`: how long it falls.")
+
+    attributes = dict(NAME="falling", TITLE="A dropped ball", SUMMARY="free fall (test)",
+                      PARAMETERS=params, answers=answers, statement=statement)
+    return Family(types.SimpleNamespace(**{**attributes, **changes}), origin="test")
+
+
+def failures(report, check: str) -> tuple[int, tuple[str, ...]]:
+    result = next(c for c in report.checks if c.name == check)
+    return result.failed, result.failures
+
+
+def only_failing(report) -> set[str]:
+    return {c.name for c in report.checks if c.failed}
+
+
+def test_a_sound_family_passes_every_check():
+    report = self_test(falling(), SEEDS)
+    assert report.passed, [c for c in report.checks if c.failed]
+    assert [c.name for c in report.checks] == list(CHECKS)
+    assert all(c.passed == len(SEEDS) for c in report.checks)
+    assert "sandboxed" in report.checks[-1].note
+
+
+def test_the_worked_example_and_an_outside_file_pass_as_written(tmp_path):
+    assert self_test(load_family_file(Path(family_example.__file__)), range(40)).passed
+    path = write_family(tmp_path, "pendulum.py", pendulum())
+    assert self_test(load_family_file(path), range(40)).passed
+
+
+def test_a_draw_from_global_randomness_is_caught():
+    import random
+
+    def draw(rng):
+        return {"h": round(random.uniform(1.0, 20.0), 1), "g": 9.81}
+
+    report = self_test(falling(draw=draw), SEEDS)
+    count, shown = failures(report, "same seed, same variant")
+    assert count > 0 and shown[0].startswith("seed 0: drawn twice, the variants differ")
+
+
+def test_a_statement_using_what_the_draw_left_behind_is_caught():
+    """The statement reads a module variable the draw set, not the parameters: the key cannot
+    be recomputed from the recorded parameters."""
+    left = {}
+
+    def draw(rng):
+        left["where"] = ["a bridge", "a tower"][int(rng.integers(2))]
+        return {"h": round(rng.uniform(1.0, 20.0), 1), "g": 9.81}
+
+    def statement(p):
+        return f"A ball is dropped from {left['where']}, $h = {p['h']:g}$ m (`h`), (`g`)."
+
+    report = self_test(falling(draw=draw, statement=statement), range(20))
+    count, shown = failures(report, "key recomputed from its parameters")
+    assert count > 0 and "'statement' differs" in shown[0]
+    assert only_failing(report) == {"key recomputed from its parameters"}
+
+
+def test_an_answer_written_in_the_statement_is_caught():
+    def statement(p):
+        t = math.sqrt(2 * p["h"] / p["g"])
+        return (f"A ball is dropped from $h = {p['h']:g}$ m (`h`), $g$ (`g`) = {p['g']}; "
+                f"it lands after about {t:.3g} s.")
+
+    report = self_test(falling(statement=statement), SEEDS)
+    count, shown = failures(report, "no answer value in the statement")
+    assert count == len(SEEDS)
+    assert "answer 't' =" in shown[0] and "written in the statement" in shown[0]
+
+
+def test_leaks_are_readings_of_the_answer_not_parameters_or_list_numbers():
+    assert {1.23, 1.235, 1.2, 1.0, 1.2346} <= readings(1.23456)
+    v = falling().generate(np.random.default_rng(0))
+    assert leaked_values(v) == []
+    assert 0.0 not in readings(0.0004)  # zero is never a reading
+
+
+def test_two_mistakes_the_grader_cannot_tell_apart_are_caught():
+    def answers(p):
+        t = math.sqrt(2 * p["h"] / p["g"])
+        return (Answer("t", "scalar", t, unit="s", mistakes=(
+            Mistake("double", 2 * t, "twice"), Mistake("also_double", 2 * t, "twice again"))),)
+
+    report = self_test(falling(answers=answers), SEEDS)
+    count, shown = failures(report, "known mistakes outside the tolerance")
+    assert count == len(SEEDS) and "'also_double' is graded wrong as 'double'" in shown[0]
+
+
+@pytest.mark.parametrize(("changes", "fragment"), [
+    ({"draw": lambda rng: {"h": 50.0, "g": 9.81}}, "parameter h: 50.0 is outside [1.0, 20.0]"),
+    ({"draw": lambda rng: {"h": 2.0, "g": 9.81, "x": 1.0}}, "not declared in PARAMETERS"),
+    ({"draw": lambda rng: None, "MAX_ATTEMPTS": 5}, "no acceptable draw in 5 attempts"),
+    ({"answers": lambda p: (Answer("t", "scalar", p["x"]),)}, "answers() raised KeyError"),
+    ({"answers": lambda p: (Answer("t", "scalar", 1.0,
+                                   mistakes=(Mistake("close", 1.0001, "?"),)),)},
+     "answers() raised ParameterError"),
+    ({"statement": lambda p: 1 / 0}, "statement() raised ZeroDivisionError"),
+])
+def test_a_draw_that_is_neither_well_posed_nor_rejected_is_caught(changes, fragment):
+    report = self_test(falling(**changes), range(3))
+    count, shown = failures(report, "draws well posed or rejected")
+    assert count == 3 and shown[0].startswith("seed 0: ") and fragment in shown[0], shown
+
+
+def test_a_typed_tolerance_is_caught():
+    def statement(p):
+        return "A ball is dropped from $h$ (`h`), $g$ (`g`); answer to a 1 % tolerance."
+
+    count, shown = failures(self_test(falling(statement=statement), SEEDS),
+                            "every tolerance stated in the notebook")
+    assert count == len(SEEDS) and "types a tolerance" in shown[0]
+
+
+def test_a_slow_family_is_caught(monkeypatch):
+    monkeypatch.setattr(selftest, "MAX_SECONDS", 0.0)
+    count, shown = failures(self_test(falling(), range(3)), "time per variant")
+    assert count == 3 and shown[0].startswith("seed 0: took ")
+
+
+def test_a_solutions_notebook_that_loses_marks_is_caught_with_its_seed(monkeypatch):
+    """The sandboxed run really compares: tamper with the second question's answer cell."""
+    real = selftest.build_notebook
+
+    def tampered(*args, **kwargs):
+        nb = real(*args, **kwargs)
+        if kwargs.get("solutions"):  # the notebook that runs, not the one read for its words
+            cell = next(c for c in nb["cells"] if c["id"] == "q2-answer")
+            cell["source"] = ["q2_t = -1.0\n"]
+        return nb
+
+    monkeypatch.setattr(selftest, "build_notebook", tampered)
+    report = self_test(falling(), [4, 5, 6])
+    count, shown = failures(report, "solutions get full marks (sandbox)")
+    assert count == 1 and shown[0].startswith("seed 5: q2_t: wrong")
+    assert only_failing(report) == {"solutions get full marks (sandbox)"}
+
+
+def test_the_command_prints_a_table_and_exits_1_naming_the_seed(tmp_path, capsys):
+    """A family written outside the package whose statement gives the period away."""
+    leak = ("f\"2. `T`: its period for small swings, about "
+            "{2 * math.pi * math.sqrt(2 * p['L'] / (3 * p['g'])):.3g} s.\"")
+    source = pendulum("leaky").replace('"2. `T`: its period for small swings."', leak)
+    assert leak in source
+    path = write_family(tmp_path, "leaky.py", source)
+    assert main(["problems", "test", str(path), "--seeds", "5"]) == 1
+    out = capsys.readouterr().out
+    assert out.startswith(f"eulertop problems test leaky ({path}): 5 seed(s)")
+    row = next(line for line in out.splitlines()
+               if line.startswith("no answer value in the statement"))
+    assert row.split()[-2:] == ["0", "5"]
+    assert "FAILED no answer value in the statement: 5 time(s)" in out
+    assert "  seed 0: answer 'T' = " in out
+
+
+def test_the_command_refuses_an_unknown_family(capsys):
+    assert main(["problems", "test", "no_such_family"]) == 2
+    assert "unknown family 'no_such_family'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name", list(FAMILIES))
+def test_every_built_in_family_passes_the_command(name, capsys):
+    """What CI runs: `eulertop problems test NAME` (100 seeds; every solution in the sandbox)."""
+    assert main(["problems", "test", name]) == 0, capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert out.splitlines()[0] == f"eulertop problems test {name} (built-in): 100 seed(s)"
+    assert out.rstrip().endswith("all checks passed")
+    assert "sandboxed" in out
