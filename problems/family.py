@@ -66,6 +66,26 @@ def distinguishable(build: Callable[[], tuple[Answer, ...]], margin: float) -> t
     return answers
 
 
+def redrawn_until_well_posed(
+    draw_once: Callable[[np.random.Generator], dict | None],
+    answers: Callable[[Mapping[str, Any]], tuple[Answer, ...]],
+    rng: np.random.Generator, tries: int,
+) -> dict | None:
+    """``draw_once(rng)`` repeated until ``answers`` accepts its parameters (at most
+    ``tries``; None if it never does): the ``draw`` of a family that picks its scene once per
+    variant and redraws within that scene."""
+    for _ in range(tries):
+        params = draw_once(rng)
+        if params is None:
+            continue
+        try:
+            answers(params)
+        except IllPosed:
+            continue
+        return params
+    return None
+
+
 @dataclass(frozen=True)
 class Parameter:
     """One parameter of a family: a number (or an array of numbers) or a choice among labels.
