@@ -185,6 +185,9 @@ BAD = {
     "a seed that is text": ('seed = "seven"\n[[questions]]\nfamily = "sleeping_top"\n',
                             ('seed = "seven"',), "seed: must be a whole number"),
     "not TOML": ('[[questions]\nfamily = "x"\n', ("[[questions]",), "not valid TOML"),
+    "a folder of families that is not there": (
+        'families = ["my_problems", "nowhere"]\n[[questions]]\nfamily = "sleeping_top"\n',
+        ("families = [",), "families[2]: "),
 }
 
 
@@ -194,7 +197,8 @@ def test_bad_input_is_one_message_naming_file_line_and_key_and_nothing_is_writte
     body, (marker,), fragment = BAD[case]
     write_family(course / "fams", "projectile.py",
                  Path(family_example.__file__).read_text(encoding="utf-8"))
-    text = ('roster = "roster.csv"\nfamilies = ["my_problems", "fams"]\n' + body)
+    folders = "" if body.startswith("families") else 'families = ["my_problems", "fams"]\n'
+    text = 'roster = "roster.csv"\n' + folders + body
     spec = write_family(course, "bad.toml", text)
     line = next(i for i, t in enumerate(text.splitlines(), 1) if t.startswith(marker))
     before = sorted(os.listdir(course))
