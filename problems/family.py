@@ -297,11 +297,16 @@ class Family:
         params = self.recorded(params)
         if answers is None:
             answers = self.answers(params)
+        if not all(isinstance(a, Answer) for a in answers):
+            raise TypeError(f"{self.where}: answers() must return Answer records")
+        heading, statement = self.heading(params), self.statement(params)
+        for what, text in (("heading()", heading), ("statement()", statement)):
+            if not isinstance(text, str) or not text.strip():
+                raise TypeError(f"{self.where}: {what} must return text, got {text!r}")
         declared = self.module.PARAMETERS
         cell = {k: v for k, v in params.items() if declared[k].in_cell}
         units = {k: declared[k].unit for k in cell if declared[k].unit}
-        return Variant(self.name, self.heading(params), cell, units, self.statement(params),
-                       answers, parameters=params)
+        return Variant(self.name, heading, cell, units, statement, answers, parameters=params)
 
     def recorded(self, params: Mapping[str, Any]) -> dict[str, Any]:
         """``params`` as plain JSON (floats, lists of floats, labels), every name declared in
@@ -374,6 +379,12 @@ def check_contract(module: Any, where: str) -> None:
     for attr in ("answers", "statement", "draw", "heading", "prepare"):
         if hasattr(module, attr) and not callable(getattr(module, attr)):
             raise FamilyError(f"{where}: {attr} must be a function")
+    from problems.conventions import TOPICS
+
+    unknown = [t for t in getattr(module, "CONVENTIONS", ()) if t not in TOPICS]
+    if unknown:
+        raise FamilyError(f"{where}: CONVENTIONS {unknown} are not topics of the notebook's "
+                          f"conventions ({', '.join(TOPICS)})")
     parameters = module.PARAMETERS
     if not isinstance(parameters, Mapping):
         raise FamilyError(f"{where}: PARAMETERS must be a dict of name -> Parameter")

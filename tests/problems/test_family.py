@@ -247,3 +247,12 @@ def test_settings_round_trip_through_the_manifest():
                                             "top": ParameterSetting(choices=("disc",))})
     again = QuestionSettings.from_dict(json.loads(json.dumps(settings.to_dict())))
     assert again == settings
+
+
+def test_what_a_family_returns_is_checked_and_named():
+    with pytest.raises(TypeError, match="statement\\(\\) must return text, got 3"):
+        family(statement=lambda p: 3).generate(np.random.default_rng(0))
+    with pytest.raises(TypeError, match="answers\\(\\) must return Answer records"):
+        family(answers=lambda p: (1.0,)).generate(np.random.default_rng(0))
+    with pytest.raises(FamilyError, match=r"CONVENTIONS \['tennis'\] are not topics"):
+        family(CONVENTIONS=("tennis",))
