@@ -622,6 +622,35 @@ def recorded_families(manifest: Mapping, out: Path,
     return found
 
 
+def recorded_variants(manifest: Mapping, families: Mapping[str, Family],
+                      student_id: str) -> tuple[Variant, ...]:
+    """A student's variants recomputed from what ``assignment.json`` recorded — each question's
+    family and drawn parameters, and a spec's settings — without drawing anything: the key
+    again, from the current families (``key_entry`` of them is the student's key entry while
+    the families and the solver compute what they did).
+
+    Raises
+    ------
+    GenerateError
+        A question of a family not in ``families``, or without recorded parameters (an
+        assignment generated before parameters were recorded).
+    """
+    recorded = manifest.get("questions")
+    variants = []
+    for k, question in enumerate(manifest["students"][student_id]["questions"], start=1):
+        name = question["family"]
+        if name not in families or "parameters" not in question:
+            raise GenerateError(f"{student_id}, question {k}: no family {name!r} or no "
+                                "recorded parameters to recompute it from")
+        family, params = families[name], question["parameters"]
+        settings = None if recorded is None else Question.from_record(recorded[k - 1]).settings
+        answers = family.answers(params)
+        if settings is not None:
+            answers = settings.adjust_answers(answers)
+        variants.append(family.variant(params, answers))
+    return tuple(variants)
+
+
 def reroll_students(
     out: Path,
     student_ids: Sequence[str],

@@ -262,3 +262,32 @@ def test_read_spec_resolves_paths_against_the_spec_file(course):
                                                 ("sleeping_top", "steady_precession")]
     with pytest.raises(SpecError, match="give at least one"):
         read_spec(write_family(course, "empty.toml", 'title = "x"\n'))
+
+
+def test_every_key_is_recomputed_from_the_recorded_parameters_and_settings(course):
+    """What assignment.json records is enough: each student's key entry and manifest entry,
+    recomputed without drawing, are the ones written."""
+    from problems.family_files import catalogue
+    from problems.generate import key_entry, manifest_entry, recorded_variants
+
+    out = course / "HW"
+    assert generate(course / "assignment.toml", out) == 0
+    manifest, key = load(out, "assignment.json"), load(out, "key.json")
+    families = catalogue([course / "my_problems"])
+    for sid in manifest["students"]:
+        variants = recorded_variants(manifest, families, sid)
+        assert key_entry(variants) == key["students"][sid]
+        assert manifest_entry(variants, 0) == manifest["students"][sid]
+
+
+def test_a_plain_assignment_of_every_family_is_recomputed_too(tmp_path):
+    from problems.generate import generate_assignment, key_entry, recorded_variants
+    from problems.roster import Roster
+    from problems.templates import FAMILIES
+
+    out = tmp_path / "HW"
+    generate_assignment(Roster(("id",), ({"id": "a"}, {"id": "b"}, {"id": "c"})), out,
+                        FAMILIES, seed=21)
+    manifest, key = load(out, "assignment.json"), load(out, "key.json")
+    for sid in manifest["students"]:
+        assert key_entry(recorded_variants(manifest, FAMILIES, sid)) == key["students"][sid]
