@@ -30,13 +30,16 @@ import numbers
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from problems.answers import Answer, distinguishable_answers
 from problems.rounding import round_sig
 from problems.variant import Variant, plain_number_tree
+
+if TYPE_CHECKING:
+    from problems.settings import QuestionSettings
 
 MAX_ATTEMPTS = 1000
 """Draws :meth:`Family.generate` makes before it gives up, unless the family says otherwise."""
@@ -328,7 +331,8 @@ class Family:
                 plain[name] = plain_number_tree(value, f"{self.where}, parameter {name!r}")
         return plain
 
-    def generate(self, rng: np.random.Generator, settings: Any = None) -> Variant:
+    def generate(self, rng: np.random.Generator,
+                 settings: QuestionSettings | None = None) -> Variant:
         """A variant drawn from ``rng`` alone: draws until one is well posed.
 
         ``settings`` (an assignment's :class:`problems.settings.QuestionSettings`) fixes or
@@ -348,7 +352,7 @@ class Family:
                 return self.variant(params, answers)
         raise RuntimeError(f"{self.name}: no acceptable draw in {self.max_attempts} attempts")
 
-    def accepted(self, rng: np.random.Generator, settings: Any = None
+    def accepted(self, rng: np.random.Generator, settings: QuestionSettings | None = None
                  ) -> tuple[dict[str, Any], tuple[Answer, ...]] | None:
         """One attempt: ``(params, answers)``, or None when the draw was rejected."""
         try:
