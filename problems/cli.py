@@ -25,6 +25,8 @@ def _families_option(parser: argparse.ArgumentParser, default: object = None) ->
 
 def add_problems_arguments(parser: argparse.ArgumentParser) -> None:
     """``eulertop problems [--families DIR]`` lists; ``test`` and ``preview`` act on one."""
+    parser.description = ("List the problem families, one line each: name, where it comes "
+                          "from, R-ids, summary. 'test' or 'preview' acts on one of them.")
     _families_option(parser)
     actions = parser.add_subparsers(dest="action", metavar="ACTION")
     test = actions.add_parser(
