@@ -27,6 +27,8 @@ def _families_option(parser: argparse.ArgumentParser, default: object = None) ->
 
 def add_problems_arguments(parser: argparse.ArgumentParser) -> None:
     """``eulertop problems [--families DIR]`` lists; ``test`` and ``preview`` act on one."""
+    parser.description = ("List the problem families, one line each: name, where it comes "
+                          "from, R-ids, summary. 'test' or 'preview' acts on one of them.")
     _families_option(parser)
     actions = parser.add_subparsers(dest="action", metavar="ACTION")
     test = actions.add_parser(
@@ -37,11 +39,7 @@ def add_problems_arguments(parser: argparse.ArgumentParser) -> None:
                     "tolerance; no answer value is written in the statement; every tolerance "
                     "is stated in the notebook; time per variant; the solutions notebook, run "
                     "in the sandbox, gets full marks. Exit 1 on any failure.")
-    test.add_argument("family", metavar="NAME|PATH",
-                      help="a family's name, or its file (a .py file or a package folder)")
-    test.add_argument("--seeds", type=_count, default=DEFAULT_TEST_SEEDS, metavar="N",
-                      help=f"test seeds 0 … N−1 (default {DEFAULT_TEST_SEEDS})")
-    test.add_argument("--seed", type=_seed, metavar="S", help="test seed S only")
+    _one_family(test, DEFAULT_TEST_SEEDS)
     test.add_argument("--sandbox-seeds", type=_count, metavar="K",
                       help="run the solutions of the first K seeds in the sandbox "
                            "(default: all of them, in one notebook)")
@@ -50,14 +48,19 @@ def add_problems_arguments(parser: argparse.ArgumentParser) -> None:
         "preview", help="parameters, key and statement of a few variants, as an HTML page",
         description="Write an HTML page with each variant's parameters, key values and "
                     "statement, rendered as the feedback pages render it.")
-    preview.add_argument("family", metavar="NAME|PATH",
-                         help="a family's name, or its file (a .py file or a package folder)")
-    preview.add_argument("--seeds", type=_count, default=DEFAULT_PREVIEW_SEEDS, metavar="N",
-                         help=f"seeds 0 … N−1 (default {DEFAULT_PREVIEW_SEEDS})")
-    preview.add_argument("--seed", type=_seed, metavar="S", help="seed S only")
+    _one_family(preview, DEFAULT_PREVIEW_SEEDS)
     preview.add_argument("--out", type=Path, metavar="FILE",
                          help="the page to write (default: preview-NAME.html here)")
     _families_option(preview, argparse.SUPPRESS)
+
+
+def _one_family(parser: argparse.ArgumentParser, seeds: int) -> None:
+    """The family and seeds ``test`` and ``preview`` act on."""
+    parser.add_argument("family", metavar="NAME|PATH",
+                        help="a family's name, or its file (a .py file or a package folder)")
+    parser.add_argument("--seeds", type=_count, default=seeds, metavar="N",
+                        help=f"seeds 0 … N−1 (default {seeds})")
+    parser.add_argument("--seed", type=_seed, metavar="S", help="seed S only")
 
 
 def _count(text: str) -> int:

@@ -30,13 +30,16 @@ import numbers
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from problems.answers import Answer, distinguishable_answers
 from problems.rounding import round_sig
 from problems.variant import Variant, plain_number_tree
+
+if TYPE_CHECKING:
+    from problems.settings import QuestionSettings
 
 MAX_ATTEMPTS = 1000
 """Draws :meth:`Family.generate` makes before it gives up, unless the family says otherwise."""
@@ -64,6 +67,26 @@ def distinguishable(build: Callable[[], tuple[Answer, ...]], margin: float) -> t
     if answers is None:
         raise IllPosed(f"a known mistake within {margin:g} tolerances of the key or another")
     return answers
+
+
+def redrawn_until_well_posed(
+    draw_once: Callable[[np.random.Generator], dict | None],
+    answers: Callable[[Mapping[str, Any]], tuple[Answer, ...]],
+    rng: np.random.Generator, tries: int,
+) -> dict | None:
+    """``draw_once(rng)`` repeated until ``answers`` accepts its parameters (at most
+    ``tries``; None if it never does): the ``draw`` of a family that picks its scene once per
+    variant and redraws within that scene."""
+    for _ in range(tries):
+        params = draw_once(rng)
+        if params is None:
+            continue
+        try:
+            answers(params)
+        except IllPosed:
+            continue
+        return params
+    return None
 
 
 @dataclass(frozen=True)
@@ -277,11 +300,16 @@ class Family:
         params = self.recorded(params)
         if answers is None:
             answers = self.answers(params)
+        if not all(isinstance(a, Answer) for a in answers):
+            raise TypeError(f"{self.where}: answers() must return Answer records")
+        heading, statement = self.heading(params), self.statement(params)
+        for what, text in (("heading()", heading), ("statement()", statement)):
+            if not isinstance(text, str) or not text.strip():
+                raise TypeError(f"{self.where}: {what} must return text, got {text!r}")
         declared = self.module.PARAMETERS
         cell = {k: v for k, v in params.items() if declared[k].in_cell}
         units = {k: declared[k].unit for k in cell if declared[k].unit}
-        return Variant(self.name, self.heading(params), cell, units, self.statement(params),
-                       answers, parameters=params)
+        return Variant(self.name, heading, cell, units, statement, answers, parameters=params)
 
     def recorded(self, params: Mapping[str, Any]) -> dict[str, Any]:
         """``params`` as plain JSON (floats, lists of floats, labels), every name declared in
@@ -303,7 +331,8 @@ class Family:
                 plain[name] = plain_number_tree(value, f"{self.where}, parameter {name!r}")
         return plain
 
-    def generate(self, rng: np.random.Generator, settings: Any = None) -> Variant:
+    def generate(self, rng: np.random.Generator,
+                 settings: QuestionSettings | None = None) -> Variant:
         """A variant drawn from ``rng`` alone: draws until one is well posed.
 
         ``settings`` (an assignment's :class:`problems.settings.QuestionSettings`) fixes or
@@ -323,7 +352,7 @@ class Family:
                 return self.variant(params, answers)
         raise RuntimeError(f"{self.name}: no acceptable draw in {self.max_attempts} attempts")
 
-    def accepted(self, rng: np.random.Generator, settings: Any = None
+    def accepted(self, rng: np.random.Generator, settings: QuestionSettings | None = None
                  ) -> tuple[dict[str, Any], tuple[Answer, ...]] | None:
         """One attempt: ``(params, answers)``, or None when the draw was rejected."""
         try:
@@ -354,6 +383,12 @@ def check_contract(module: Any, where: str) -> None:
     for attr in ("answers", "statement", "draw", "heading", "prepare"):
         if hasattr(module, attr) and not callable(getattr(module, attr)):
             raise FamilyError(f"{where}: {attr} must be a function")
+    from problems.conventions import TOPICS
+
+    unknown = [t for t in getattr(module, "CONVENTIONS", ()) if t not in TOPICS]
+    if unknown:
+        raise FamilyError(f"{where}: CONVENTIONS {unknown} are not topics of the notebook's "
+                          f"conventions ({', '.join(TOPICS)})")
     parameters = module.PARAMETERS
     if not isinstance(parameters, Mapping):
         raise FamilyError(f"{where}: PARAMETERS must be a dict of name -> Parameter")

@@ -1,18 +1,23 @@
-"""``eulertop generate``: a roster and a list of problem families → one assignment folder.
+"""``eulertop generate``: a roster and a list of problem families (or an assignment spec) → one
+assignment folder.
 
 Layout (``/work/shared/design.md``)::
 
     HW/assignment.json          manifest: title, seed, problems, roster, generator version, and
                                 every student's reroll count and *resolved* questions (params,
-                                statement, public answer spec) — no answer values
+                                every drawn parameter, statement, public answer spec) — no
+                                answer values; with a spec also its questions' settings, the
+                                spec's SHA-256, and the families from outside the package used
+    HW/assignment.toml          with a spec: a copy of it
     HW/key.json                 instructor-only: every student's answers (Answer.to_dict()),
                                 per question, and a content hash per student
     HW/release/<id>.ipynb       what the student gets
     HW/solutions/<id>.ipynb     the same with the key's answers filled in
 
 Seeding
-    Question ``k`` of student ``id`` is ``FAMILIES[family].generate(rng)`` with ``rng`` seeded by
-    SHA-256 of ``(assignment seed, id, k, family, reroll count)`` (:func:`variant_seed`): stable
+    Question ``k`` of student ``id`` is ``families[family].generate(rng, settings)`` with ``rng``
+    seeded by SHA-256 of ``(assignment seed, id, k, family, reroll count)``
+    (:func:`variant_seed`), the family of a pool chosen the same way (:func:`pool_member`): stable
     across runs, machines and Python versions, independent of roster order and of the other
     students. numpy does not promise that every distribution draws the same numbers in every
     future version, and templates change; that is why the manifest stores the resolved
@@ -29,15 +34,17 @@ Atomicity and existing folders
     beside ``HW`` which replaces ``HW`` by ``rename`` at the end; on any failure it is removed,
     so there is never half an assignment. An existing ``HW`` is refused unless ``force``;
     ``force`` replaces only a folder this generator wrote (``assignment.json``, ``key.json``,
-    ``release/``, ``solutions/``) and refuses one holding anything else (``graded/``, or a wrong
-    ``--out``). Replacing keeps the old seed when none is given and keeps every remaining
-    student's reroll count when seed and problems are unchanged — so re-running with a roster
+    ``assignment.toml``, ``release/``, ``solutions/``) and refuses one holding anything else
+    (``graded/``, or a wrong ``--out``). Replacing keeps the old seed when none is given and
+    keeps every remaining student's reroll count when seed and questions are unchanged — so
+    re-running with a roster
     that gained a student adds that student and leaves everybody else's files byte-identical.
 
 Rerolls (:func:`reroll_students`)
     ``--reroll ID`` works on an existing ``HW`` (no ``force`` needed, no roster, seed, problems
     or title: those are the manifest's): it bumps the student's reroll count, draws their
-    questions afresh with the current templates, and rewrites their two notebooks and their
+    questions afresh with the current families (and the spec's recorded settings), and
+    rewrites their two notebooks and their
     entries in ``assignment.json`` and ``key.json``. Every other file and entry — including
     anything else in ``HW`` such as ``graded/`` — is kept byte for byte; the student's key hash
     changes, which tells the grader their results are stale.
@@ -326,7 +333,7 @@ CHUNK = 8
 """Students handed to a worker process at once."""
 
 _FORKED: dict = {}
-"""What worker processes inherit by ``fork`` (template modules cannot be pickled)."""
+"""What worker processes inherit by ``fork`` (family modules cannot be pickled)."""
 
 
 def _student_files(
@@ -613,6 +620,35 @@ def recorded_families(manifest: Mapping, out: Path,
         except FamilyError as e:
             raise GenerateError(f"--reroll: family {name!r} of {out / ASSIGNMENT}: {e}") from None
     return found
+
+
+def recorded_variants(manifest: Mapping, families: Mapping[str, Family],
+                      student_id: str) -> tuple[Variant, ...]:
+    """A student's variants recomputed from what ``assignment.json`` recorded — each question's
+    family and drawn parameters, and a spec's settings — without drawing anything: the key
+    again, from the current families (``key_entry`` of them is the student's key entry while
+    the families and the solver compute what they did).
+
+    Raises
+    ------
+    GenerateError
+        A question of a family not in ``families``, or without recorded parameters (an
+        assignment generated before parameters were recorded).
+    """
+    recorded = manifest.get("questions")
+    variants = []
+    for k, question in enumerate(manifest["students"][student_id]["questions"], start=1):
+        name = question["family"]
+        if name not in families or "parameters" not in question:
+            raise GenerateError(f"{student_id}, question {k}: no family {name!r} or no "
+                                "recorded parameters to recompute it from")
+        family, params = families[name], question["parameters"]
+        settings = None if recorded is None else Question.from_record(recorded[k - 1]).settings
+        answers = family.answers(params)
+        if settings is not None:
+            answers = settings.adjust_answers(answers)
+        variants.append(family.variant(params, answers))
+    return tuple(variants)
 
 
 def reroll_students(

@@ -18,7 +18,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from problems.answers import Answer
-from problems.family import Family
+from problems.family import Family, Parameter
 from problems.notebook import answer_line, comparison_line, python_literal
 from problems.variant import Variant, answer_spec
 
@@ -69,13 +69,22 @@ def _e(text: object) -> str:
 
 def _parameter_table(family: Family, variant: Variant) -> str:
     declared = family.parameters
-    rows = ["<tr><th>parameter</th><th>value</th><th>unit</th><th>where</th></tr>"]
+    rows = ["<tr><th>parameter</th><th>value</th><th>unit</th><th>where</th>"
+            "<th>a spec may set it</th></tr>"]
     for name, value in variant.parameters.items():
         p = declared[name]
         where = "label" if p.is_choice else ("parameter cell" if p.in_cell else "statement")
         rows.append(f"<tr><td><code>{_e(name)}</code></td><td>{_e(_shown(value))}</td>"
-                    f"<td>{_e(p.unit)}</td><td>{where}</td></tr>")
+                    f"<td>{_e(p.unit)}</td><td>{where}</td><td>{_e(_settable(p))}</td></tr>")
     return "<table>" + "".join(rows) + "</table>"
+
+
+def _settable(p: Parameter) -> str:
+    if p.is_choice:
+        return "one or more of " + ", ".join(p.choices)
+    if p.low is not None:
+        return f"within [{p.low:g}, {p.high:g}]"
+    return "no: derived from the others"
 
 
 def _shown(value: object) -> str:

@@ -46,7 +46,7 @@ import math
 import re
 import tempfile
 import time
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -150,17 +150,20 @@ def self_test(family: Family, seeds: Iterable[int],
             continue
         variants[seed] = variant
         start = time.perf_counter()
-        again = family.generate(np.random.default_rng(seed))
+        try:
+            again = family.generate(np.random.default_rng(seed))
+        except Exception as e:  # drawn once, failing the second time: not the same variant
+            again = f"{type(e).__name__}: {e}"
         times.append(time.perf_counter() - start)
-        tallies[CHECKS[1]].record(seed, _same(variant, again))
-        tallies[CHECKS[3]].record(seed, _first(_answer_problem(a) for a in variant.answers))
-        tallies[CHECKS[4]].record(seed, _first(_mistake_problem(a) for a in variant.answers))
-        tallies[CHECKS[5]].record(seed, _first(leaked_values(variant)))
-        tallies[CHECKS[6]].record(seed, _tolerance_problem(family, variant))
+        tallies[CHECKS[1]].record(seed, _safely(_same, variant, again))
+        tallies[CHECKS[3]].record(seed, _safely(_answers_problem, variant))
+        tallies[CHECKS[4]].record(seed, _safely(_mistakes_problem, variant))
+        tallies[CHECKS[5]].record(seed, _safely(lambda v: _first(leaked_values(v)), variant))
+        tallies[CHECKS[6]].record(seed, _safely(_tolerance_problem, family, variant))
         slow = times[-1] > MAX_SECONDS
         tallies[CHECKS[7]].record(seed, f"took {times[-1]:.2f} s" if slow else None)
     for seed, variant in variants.items():  # after every draw: no state of its own draw left
-        tallies[CHECKS[2]].record(seed, _recomputed(family, variant))
+        tallies[CHECKS[2]].record(seed, _safely(_recomputed, family, variant))
     timing = f"max {max(times):.3f} s, mean {sum(times) / len(times):.3f} s" if times else ""
     checks = [tallies[name].result(timing if name == CHECKS[7] else "") for name in CHECKS[:8]]
     chosen = dict(list(variants.items())[:sandbox_seeds])
@@ -200,11 +203,30 @@ def _first(problems: Iterable[str | None]) -> str | None:
     return next((p for p in problems if p is not None), None)
 
 
+def _safely(check: Callable[..., str | None], *args: object) -> str | None:
+    """``check(*args)``, or what it raised as the failure (a family's values the check could
+    not handle fail the check; they never stop the run)."""
+    try:
+        return check(*args)
+    except Exception as e:
+        return f"the check failed on this variant: {type(e).__name__}: {e}"
+
+
+def _answers_problem(variant: Variant) -> str | None:
+    return _first(_answer_problem(a) for a in variant.answers)
+
+
+def _mistakes_problem(variant: Variant) -> str | None:
+    return _first(_mistake_problem(a) for a in variant.answers)
+
+
 def _json(variant: Variant) -> str:
     return json.dumps(variant.to_dict(), sort_keys=True, allow_nan=False)
 
 
-def _same(variant: Variant, again: Variant) -> str | None:
+def _same(variant: Variant, again: Variant | str) -> str | None:
+    if isinstance(again, str):
+        return f"drawn again, the seed failed: {again}"
     if _json(variant) == _json(again):
         return None
     first = next(k for k, v in variant.to_dict().items() if again.to_dict().get(k) != v)

@@ -84,17 +84,20 @@ class QuestionSettings:
                           rng: np.random.Generator) -> dict[str, Any] | None:
         """``params`` with the set parameters applied; None when a label is not allowed.
 
-        Settings apply in the family's declaration order; a parameter this draw does not have
-        (a thickness, for a thin disc) is left out.
+        Settings apply in the family's declaration order. A number this draw does not have (a
+        thickness, for a thin disc) is left out; a draw without a label the spec narrows (no
+        ``box``, for point masses) is rejected, like one with another label.
         """
         declared = family.parameters
         params = dict(params)
-        for name in (n for n in declared if n in self.parameters and n in params):
+        for name in (n for n in declared if n in self.parameters):
             setting, parameter = self.parameters[name], declared[name]
             if parameter.is_choice:
                 allowed = (setting.value,) if setting.value is not None else setting.choices
-                if params[name] not in allowed:
+                if params.get(name) not in allowed:
                     return None
+            elif name not in params:
+                continue
             elif setting.value is not None:
                 params[name] = setting.value
             else:

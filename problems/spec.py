@@ -204,6 +204,8 @@ def read_spec(path: Path) -> Spec:
     for i, folder in enumerate(folders or ()):
         if not isinstance(folder, str):
             raise draft.error(("families", i), f"must be a folder (a string), got {folder!r}")
+        if not (path.parent / folder).is_dir():
+            raise draft.error(("families", i), f"{path.parent / folder}: no such folder")
     entries = document.get("questions")
     if not isinstance(entries, list) or not entries:
         raise draft.error(("questions",), "give at least one [[questions]] table")

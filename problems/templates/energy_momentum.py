@@ -30,7 +30,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from problems.answers import Answer, Mistake
-from problems.family import IllPosed, Parameter, reject_unless
+from problems.family import Parameter, redrawn_until_well_posed, reject_unless
 from problems.rounding import format_sig, latex_sig, round_sig
 from solver.inertia import angular_momentum, kinetic_energy, shape_tensor
 from solver.parameters import principal_moments
@@ -217,19 +217,7 @@ def draw(rng: np.random.Generator) -> dict[str, Any] | None:
     """A scene of :data:`SCENES`, then draws of it until one is well posed (at most
     ``MAX_TRIES``)."""
     scene = SCENES[list(SCENES)[int(rng.integers(len(SCENES)))]][0]
-    for _ in range(MAX_TRIES):
-        params = scene(rng)
-        if params is not None and _well_posed(params):
-            return params
-    return None  # pragma: no cover
-
-
-def _well_posed(params: Mapping[str, Any]) -> bool:
-    try:
-        answers(params)
-    except IllPosed:
-        return False
-    return True
+    return redrawn_until_well_posed(scene, answers, rng, MAX_TRIES)
 
 
 def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:

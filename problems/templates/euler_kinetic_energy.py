@@ -119,7 +119,7 @@ def _expression_answer() -> Answer:
 
 def prepare() -> None:
     """Derive the expression answer (about a third of a second of sympy) before the first
-    :func:`generate`; the generator calls it once, before forking its worker processes."""
+    draw; the generator calls it once, before forking its worker processes."""
     _expression_answer()
 
 

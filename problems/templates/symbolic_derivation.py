@@ -24,7 +24,7 @@ physics — a term dropped by the chain rule, ``β`` taken from the horizontal (
 exchanged) or from the downward vertical (the sign of gravity), ``I1`` and ``I3`` swapped, the
 momenta exchanged, the factor ½ of ``1 − cos β ≈ β²/2`` lost — and the numerical answer has the
 same mistakes evaluated at the state, plus ``β`` read as degrees. The expressions and their
-``lambdify``'d functions are cached per quantity, so ``generate`` does no sympy work beyond that.
+``lambdify``'d functions are cached per quantity, so drawing does no sympy work beyond that.
 
 Tolerances: the expression has ``rtol = 1e-6`` (a right formula agrees to rounding, ~1e-15; the
 margin absorbs decimal coefficients such as ``0.5``; every mistake changes the value by far more
@@ -266,7 +266,7 @@ def _compiled(index: int) -> _Compiled:
 
 
 def prepare() -> None:
-    """Derive and compile every quantity (:func:`_compiled`) before the first :func:`generate`;
+    """Derive and compile every quantity (:func:`_compiled`) before the first draw;
     the generator calls it once, before forking its worker processes."""
     for index in range(len(QUANTITIES)):
         _compiled(index)

@@ -163,7 +163,8 @@ PARAMETERS: dict[str, Parameter] = {
 }
 
 
-def _solve(top: Top, state: State):
+def _solve(top: Top, state: State) -> tuple[dict, np.ndarray, np.ndarray, dict, np.ndarray,
+                                             np.ndarray]:
     """One solver pass for the key and every mistaken state (rows: key first): the mistaken
     states, ``p_α``, ``p_γ``, the states whose turning points move, and those turning points."""
     mistaken = mistaken_states(top, state)

@@ -213,6 +213,22 @@ def test_a_fixed_parameter_a_range_and_a_narrowed_choice():
                                                    rel=1e-15)
 
 
+def test_a_narrowed_label_excludes_draws_without_it_and_a_missing_number_is_left_out():
+    """``box`` narrows inertia_tensor to boxes (point masses have none); ``h`` fixed for a
+    sleeping top applies to the tops that have a thickness and leaves the disc alone."""
+    boxes = QuestionSettings(parameters={"box": ParameterSetting(choices=("book",))})
+    found = [FAMILIES["inertia_tensor"].generate(np.random.default_rng(s), boxes)
+             for s in range(10)]
+    assert {(v.parameters["scene"], v.parameters["box"]) for v in found} == {
+        ("box_corner", "book")}
+    thick = QuestionSettings(parameters={"h": ParameterSetting(value=0.03)})
+    tops = [FAMILIES["sleeping_top"].generate(np.random.default_rng(s), thick)
+            for s in range(30)]
+    assert {v.parameters["top"] for v in tops} == {"disc", "solid_cylinder", "solid_cone"}
+    assert all(v.params.get("h", 0.03) == 0.03 for v in tops)
+    assert all("h" not in v.params for v in tops if v.parameters["top"] == "disc")
+
+
 def test_answer_settings_points_and_tolerances():
     answers = (Answer("a", "scalar", 1.0, points=1.0),
                Answer("b", "scalar", 2.0, points=0.5, mistakes=(Mistake("x2", 4.0, "?"),)),
@@ -231,3 +247,12 @@ def test_settings_round_trip_through_the_manifest():
                                             "top": ParameterSetting(choices=("disc",))})
     again = QuestionSettings.from_dict(json.loads(json.dumps(settings.to_dict())))
     assert again == settings
+
+
+def test_what_a_family_returns_is_checked_and_named():
+    with pytest.raises(TypeError, match="statement\\(\\) must return text, got 3"):
+        family(statement=lambda p: 3).generate(np.random.default_rng(0))
+    with pytest.raises(TypeError, match="answers\\(\\) must return Answer records"):
+        family(answers=lambda p: (1.0,)).generate(np.random.default_rng(0))
+    with pytest.raises(FamilyError, match=r"CONVENTIONS \['tennis'\] are not topics"):
+        family(CONVENTIONS=("tennis",))

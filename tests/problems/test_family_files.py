@@ -154,3 +154,33 @@ def test_an_installed_family_that_cannot_be_imported_is_named(installed):
     with pytest.raises(FamilyError, match=r"entry point broken \(swing-dist\): "
                                           r"swing_dist.broken cannot be imported"):
         catalogue()
+
+
+def test_an_outside_family_is_graded_like_a_built_in(tmp_path, folder, write_roster, capsys):
+    """Its solutions notebooks, handed in, get full marks from `eulertop grade`; a wrong period
+    is recognised as the family's own known mistake."""
+    import csv
+    import shutil
+
+    out, subs = tmp_path / "HW", tmp_path / "subs"
+    roster = write_roster("id\nann\nbob\n")
+    assert main(["generate", "--roster", str(roster), "--out", str(out), "--seed", "5",
+                 "--families", str(folder), "--problems", "physical_pendulum,sleeping_top"]) == 0
+    subs.mkdir()
+    shutil.copy(out / "solutions" / "ann.ipynb", subs / "ann.ipynb")
+    nb = json.loads((out / "solutions" / "bob.ipynb").read_text())
+    cell = next(c for c in nb["cells"] if c["id"] == "q1-answer")
+    L = json.loads((out / "assignment.json").read_text())["students"]["bob"]["questions"][0][
+        "params"]["L"]
+    point_mass = 2 * math.pi * math.sqrt(L / 9.81)  # the simple pendulum's period
+    cell["source"] = [line if not line.startswith("q1_T") else f"q1_T = {point_mass!r}\n"
+                      for line in cell["source"]]
+    (subs / "bob.ipynb").write_text(json.dumps(nb), encoding="utf-8")
+    assert main(["grade", str(out), str(subs)]) == 0
+    with open(out / "graded" / "grades.csv", newline="") as f:
+        rows = {r["id"]: r for r in csv.DictReader(f)}
+    assert rows["ann"]["total"] == rows["ann"]["maximum"] == "3.5"  # 1 + 1, then 1 + 0.5
+    assert rows["bob"]["total"] == "2.5"
+    bob = json.loads((out / "graded" / "results" / "bob.json").read_text())
+    verdict = next(a for a in bob["answers"] if a["variable"] == "q1_T")["verdict"]
+    assert (verdict["status"], verdict["mistake"]) == ("wrong", "simple_pendulum")

@@ -32,6 +32,8 @@ def test_preview_shows_parameters_key_and_the_rendered_statement(tmp_path, capsy
                     f"{comparison_line(v.answers, 1)}")
         assert statement_html(question) in page  # the feedback pages' own rendering
     assert page.count("<math") >= 4 and not re.search(r"\$\\omega", page)
+    assert "<td>within [0.03, 0.5]</td>" in page  # what a spec may do with M
+    assert "<td>no: derived from the others</td>" in page  # and with omega3
     assert "Content-Security-Policy" in page and "<script" not in page
     assert printed.rstrip().endswith(f"wrote {out}")
 

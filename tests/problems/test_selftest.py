@@ -136,6 +136,7 @@ def test_two_mistakes_the_grader_cannot_tell_apart_are_caught():
                                    mistakes=(Mistake("close", 1.0001, "?"),)),)},
      "answers() raised ParameterError"),
     ({"statement": lambda p: 1 / 0}, "statement() raised ZeroDivisionError"),
+    ({"statement": lambda p: None}, "statement() must return text, got None"),
 ])
 def test_a_draw_that_is_neither_well_posed_nor_rejected_is_caught(changes, fragment):
     report = self_test(falling(**changes), range(3))

@@ -185,6 +185,9 @@ BAD = {
     "a seed that is text": ('seed = "seven"\n[[questions]]\nfamily = "sleeping_top"\n',
                             ('seed = "seven"',), "seed: must be a whole number"),
     "not TOML": ('[[questions]\nfamily = "x"\n', ("[[questions]",), "not valid TOML"),
+    "a folder of families that is not there": (
+        'families = ["my_problems", "nowhere"]\n[[questions]]\nfamily = "sleeping_top"\n',
+        ("families = [",), "families[2]: "),
 }
 
 
@@ -194,7 +197,8 @@ def test_bad_input_is_one_message_naming_file_line_and_key_and_nothing_is_writte
     body, (marker,), fragment = BAD[case]
     write_family(course / "fams", "projectile.py",
                  Path(family_example.__file__).read_text(encoding="utf-8"))
-    text = ('roster = "roster.csv"\nfamilies = ["my_problems", "fams"]\n' + body)
+    folders = "" if body.startswith("families") else 'families = ["my_problems", "fams"]\n'
+    text = 'roster = "roster.csv"\n' + folders + body
     spec = write_family(course, "bad.toml", text)
     line = next(i for i, t in enumerate(text.splitlines(), 1) if t.startswith(marker))
     before = sorted(os.listdir(course))
@@ -258,3 +262,32 @@ def test_read_spec_resolves_paths_against_the_spec_file(course):
                                                 ("sleeping_top", "steady_precession")]
     with pytest.raises(SpecError, match="give at least one"):
         read_spec(write_family(course, "empty.toml", 'title = "x"\n'))
+
+
+def test_every_key_is_recomputed_from_the_recorded_parameters_and_settings(course):
+    """What assignment.json records is enough: each student's key entry and manifest entry,
+    recomputed without drawing, are the ones written."""
+    from problems.family_files import catalogue
+    from problems.generate import key_entry, manifest_entry, recorded_variants
+
+    out = course / "HW"
+    assert generate(course / "assignment.toml", out) == 0
+    manifest, key = load(out, "assignment.json"), load(out, "key.json")
+    families = catalogue([course / "my_problems"])
+    for sid in manifest["students"]:
+        variants = recorded_variants(manifest, families, sid)
+        assert key_entry(variants) == key["students"][sid]
+        assert manifest_entry(variants, 0) == manifest["students"][sid]
+
+
+def test_a_plain_assignment_of_every_family_is_recomputed_too(tmp_path):
+    from problems.generate import generate_assignment, key_entry, recorded_variants
+    from problems.roster import Roster
+    from problems.templates import FAMILIES
+
+    out = tmp_path / "HW"
+    generate_assignment(Roster(("id",), ({"id": "a"}, {"id": "b"}, {"id": "c"})), out,
+                        FAMILIES, seed=21)
+    manifest, key = load(out, "assignment.json"), load(out, "key.json")
+    for sid in manifest["students"]:
+        assert key_entry(recorded_variants(manifest, FAMILIES, sid)) == key["students"][sid]
