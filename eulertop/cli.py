@@ -15,7 +15,8 @@ from importlib import metadata
 # `run_<name>(args) -> int` (exit status), so one module may serve several subcommands.
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "solve": ("solver.cli", "answer one rigid-body scene, or a JSON-lines batch of them"),
-    "problems": ("problems.cli", "list the problem families, one line each"),
+    "problems": ("eulertop.problems_cli",
+                 "list the problem families; 'test' or 'preview' one of them"),
     "new-family": ("eulertop.new_family", "write a working, commented example family to edit"),
     "generate": ("eulertop.generate",
                  "generate an assignment: one notebook per student, and the key"),

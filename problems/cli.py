@@ -9,8 +9,9 @@ the file system failed (nothing written either), or a self-test found a failure.
 from __future__ import annotations
 
 import argparse
+import html
 import sys
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -77,17 +78,21 @@ def _seed(text: str) -> int:
     return value
 
 
-def run_problems(args: argparse.Namespace) -> int:
-    """List the families (name, where it comes from, R-ids, summary), or test or preview one."""
+def run_problems(args: argparse.Namespace, grade_solutions: Callable | None = None,
+                 render: Callable[[str], str] | None = None) -> int:
+    """List the families (name, where it comes from, R-ids, summary), or test or preview one.
+    ``grade_solutions`` runs a solutions notebook for the self-test, ``render`` turns a
+    statement into HTML for the preview: the grader's, handed in by the front end
+    (:mod:`eulertop.problems_cli`)."""
     from problems.family import FamilyError
 
     action = getattr(args, "action", None)
     command = "eulertop problems" + (f" {action}" if action else "")
     try:
         if action == "test":
-            return _test(args)
+            return _test(args, grade_solutions)
         if action == "preview":
-            return _preview(args)
+            return _preview(args, render)
         return _list(args)
     except FamilyError as e:
         print(f"{command}: {e}", file=sys.stderr)
@@ -141,11 +146,12 @@ def _seeds(args: argparse.Namespace) -> range:
     return range(args.seed, args.seed + 1) if args.seed is not None else range(args.seeds)
 
 
-def _test(args: argparse.Namespace) -> int:
+def _test(args: argparse.Namespace, grade_solutions: Callable | None) -> int:
     from problems.selftest import report_lines, self_test
 
     family = _family(args)
-    report = self_test(family, _seeds(args), sandbox_seeds=args.sandbox_seeds)
+    report = self_test(family, _seeds(args), sandbox_seeds=args.sandbox_seeds,
+                       grade_solutions=grade_solutions)
     print(f"eulertop problems test {family.name} ({family.origin}): "
           f"{len(report.seeds)} seed(s)")
     for line in report_lines(report):
@@ -153,14 +159,14 @@ def _test(args: argparse.Namespace) -> int:
     return 0 if report.passed else 1
 
 
-def _preview(args: argparse.Namespace) -> int:
+def _preview(args: argparse.Namespace, render: Callable[[str], str] | None) -> int:
     from problems.files import write_text_atomically
     from problems.preview import preview_page, preview_text
 
     family = _family(args)
     seeds = _seeds(args)
     out = args.out if args.out is not None else Path(f"preview-{family.name}.html")
-    page, variants = preview_page(family, seeds)
+    page, variants = preview_page(family, seeds, render or html.escape)
     for line in preview_text(family, seeds, variants):
         print(line)
     write_text_atomically(out, page)

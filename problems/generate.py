@@ -622,6 +622,24 @@ def recorded_families(manifest: Mapping, out: Path,
     return found
 
 
+def recorded_questions(manifest: Mapping, out: Path, families: Mapping[str, Family]
+                       ) -> tuple[dict[str, Family], tuple[Question, ...]]:
+    """The families (``families`` with those from outside the package the manifest records)
+    and the questions an assignment was generated with — its spec's pools and settings, or its
+    problems — to generate more of it alike (a reroll, a hosted package's variants).
+    GenerateError when one of its families is not to be had here."""
+    families = recorded_families(manifest, out, families)
+    if "questions" in manifest:
+        questions = tuple(Question.from_record(q) for q in manifest["questions"])
+        missing = [n for q in questions for n in q.pool if n not in families]
+        if missing:
+            raise GenerateError(f"--reroll: unknown problem {', '.join(map(repr, missing))}")
+    else:
+        questions = tuple(Question.of(n) for n in resolve_problems(manifest["problems"],
+                                                                     families))
+    return families, questions
+
+
 def recorded_variants(manifest: Mapping, families: Mapping[str, Family],
                       student_id: str) -> tuple[Variant, ...]:
     """A student's variants recomputed from what ``assignment.json`` recorded — each question's
@@ -673,15 +691,7 @@ def reroll_students(
     unknown = [sid for sid in student_ids if sid not in rows]
     if unknown:
         raise GenerateError(f"--reroll: not in the assignment's roster: {', '.join(unknown)}")
-    families = recorded_families(manifest, out, families)
-    if "questions" in manifest:
-        questions = tuple(Question.from_record(q) for q in manifest["questions"])
-        missing = [n for q in questions for n in q.pool if n not in families]
-        if missing:
-            raise GenerateError(f"--reroll: unknown problem {', '.join(map(repr, missing))}")
-    else:
-        questions = tuple(Question.of(n) for n in resolve_problems(manifest["problems"],
-                                                                     families))
+    families, questions = recorded_questions(manifest, out, families)
     problems = tuple(q.label for q in questions)
     seed, title = manifest["seed"], manifest["title"]
     ids = tuple(dict.fromkeys(student_ids))  # once each, in the order given

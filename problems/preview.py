@@ -4,8 +4,8 @@ For each seed (``numpy.random.default_rng(seed)``, as ``eulertop problems test``
 parameters (every recorded one: labels, and numbers the statement alone shows), the key's
 values with their tolerances, points and known mistakes, and the question as the student
 reads it — heading, statement and the line saying how each answer is compared, rendered by the
-feedback pages' renderer (:func:`grader.statement_html.statement_html`, imported here only:
-``problems/`` sits below ``grader/``) — then the answer cell.
+feedback pages' renderer (:func:`grader.statement_html.statement_html`, handed in by the front
+end as ``render``: ``problems/`` sits below ``grader/``) — then the answer cell.
 
 The page is one self-contained HTML file (no script, nothing loaded).
 """
@@ -13,7 +13,7 @@ The page is one self-contained HTML file (no script, nothing loaded).
 from __future__ import annotations
 
 import html
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -39,10 +39,10 @@ def variants_of(family: Family, seeds: Sequence[int]) -> list[Variant]:
     return [family.generate(np.random.default_rng(seed)) for seed in seeds]
 
 
-def preview_page(family: Family, seeds: Sequence[int]) -> tuple[str, list[Variant]]:
-    """The HTML page for ``seeds``, and the variants it shows."""
-    from grader.statement_html import statement_html
-
+def preview_page(family: Family, seeds: Sequence[int],
+                 render: Callable[[str], str]) -> tuple[str, list[Variant]]:
+    """The HTML page for ``seeds`` (each statement's Markdown and LaTeX as HTML by ``render``),
+    and the variants it shows."""
     variants = variants_of(family, seeds)
     title = f"{family.name}: {family.title}"
     parts = ["<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">",
@@ -57,7 +57,7 @@ def preview_page(family: Family, seeds: Sequence[int]) -> tuple[str, list[Varian
         parts += [f"<section><h2>seed {seed}</h2>", "<h3>Parameters</h3>",
                   _parameter_table(family, variant), "<h3>Key</h3>", _key_table(variant),
                   "<h3>As the student reads it</h3>",
-                  f"<div class=\"statement\">{statement_html(question)}</div>",
+                  f"<div class=\"statement\">{render(question)}</div>",
                   f"<pre>{_e(cell)}</pre></section>"]
     parts.append("</body></html>\n")
     return "\n".join(parts), variants

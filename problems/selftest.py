@@ -32,11 +32,10 @@ seed that reproduces it and what failed:
     Drawing a variant takes at most :data:`MAX_SECONDS`.
 ``solutions get full marks (sandbox)``
     One solutions notebook holding the variants of the first ``sandbox_seeds`` seeds as its
-    questions is run as a submission (:func:`grader.execute.execute_submission`, in the sandbox
-    where this machine has one) and compared with their key (:func:`grader.compare.compare`):
-    every answer must be correct.
-
-The grader is imported inside :func:`full_marks` only (``problems/`` sits below ``grader/``).
+    questions is run as a submission and compared with their key by ``grade`` — the grader's
+    :func:`grader.selftest_run.grade_solutions` (in the sandbox where this machine has one),
+    handed in by the front end (``problems/`` sits below ``grader/``): every answer must be
+    correct. Without ``grade`` the check fails, saying it was not run.
 """
 
 from __future__ import annotations
@@ -131,12 +130,13 @@ class _Tally:
         return CheckResult(self.name, self.passed, self.failed, tuple(self.failures), note)
 
 
-def self_test(family: Family, seeds: Iterable[int],
-              sandbox_seeds: int | None = None) -> Report:
+def self_test(family: Family, seeds: Iterable[int], sandbox_seeds: int | None = None,
+              grade_solutions: GradeSolutions | None = None) -> Report:
     """Run every check of :data:`CHECKS` on ``family`` over ``seeds``.
 
     ``sandbox_seeds``: how many of the seeds (the first ones) the full-marks check runs (one
-    notebook); default all.
+    notebook); default all. ``grade_solutions``: what runs that notebook and compares it with
+    its key (:data:`GradeSolutions`; the grader's, handed in by the front end).
     """
     seeds = tuple(seeds)
     family.prepare()
@@ -167,7 +167,7 @@ def self_test(family: Family, seeds: Iterable[int],
     timing = f"max {max(times):.3f} s, mean {sum(times) / len(times):.3f} s" if times else ""
     checks = [tallies[name].result(timing if name == CHECKS[7] else "") for name in CHECKS[:8]]
     chosen = dict(list(variants.items())[:sandbox_seeds])
-    checks.append(full_marks(family, chosen) if chosen else
+    checks.append(full_marks(family, chosen, grade_solutions) if chosen else
                   CheckResult(CHECKS[8], 0, 1, ("no variant to run",)))
     return Report(family.name, seeds, tuple(checks))
 
@@ -339,33 +339,50 @@ def _tolerance_problem(family: Family, variant: Variant) -> str | None:
     return None
 
 
-def full_marks(family: Family, variants: dict[int, Variant]) -> CheckResult:
+@dataclass(frozen=True)
+class SolutionsRun:
+    """What ``grade`` (:func:`full_marks`) tells of the solutions notebook it ran: its
+    execution's status and message, each answer's verdict as ``(question, variable, status,
+    message)``, whether it ran sandboxed, and how long it took (s)."""
+
+    status: str
+    message: str
+    verdicts: tuple[tuple[int, str, str, str], ...]
+    sandboxed: bool
+    duration: float
+
+
+GradeSolutions = Callable[[Path, dict, float], SolutionsRun]
+"""``grade(notebook, key_entry, seconds) -> SolutionsRun``: run the notebook as a submission
+within ``seconds`` and compare it with the key entry (``key.json``'s form for one student)."""
+
+
+def full_marks(family: Family, variants: dict[int, Variant],
+               grade_solutions: GradeSolutions | None = None) -> CheckResult:
     """Run one solutions notebook of ``variants`` (seed → variant, one question each) as a
-    submission and compare it with their key; every answer must be correct."""
-    from grader.compare import compare, key_answers
-    from grader.execute import execute_submission
-    from grader.limits import Limits
+    submission and compare it with their key (``grade_solutions``); every answer must be
+    correct."""
     from problems.generate import key_entry
 
     seeds, chosen = list(variants), list(variants.values())
+    if grade_solutions is None:
+        return CheckResult(CHECKS[8], 0, len(seeds), ("not run: no grader was given to run "
+                                                      "the solutions notebook",))
     tally = _Tally(CHECKS[8])
     nb = build_notebook(f"{family.name} self-test", {"id": "selftest"}, chosen,
                         solutions=True, families={family.name: family})
-    expected = key_answers({"students": {"selftest": key_entry(chosen)}}, "selftest")
     with tempfile.TemporaryDirectory(prefix="eulertop-selftest-") as folder:
         path = Path(folder) / "selftest.ipynb"
         path.write_text(notebook_text(nb), encoding="utf-8")
-        run = execute_submission(path, [k.variable for k in expected],
-                                 Limits(total_timeout=120 + 2 * len(chosen)))
+        run = grade_solutions(path, key_entry(chosen), 120 + 2 * len(chosen))
     if run.status != "ok":
         return CheckResult(CHECKS[8], 0, len(seeds),
                            (f"seeds {seeds[0]}–{seeds[-1]}: the solutions notebook did not run: "
                             f"{run.status}: {run.message}",))
-    results = compare(expected, run.answers)
     for k, seed in enumerate(seeds, start=1):
-        wrong = [r for r in results if r.question == k and r.verdict.status != "correct"]
+        wrong = [v for v in run.verdicts if v[0] == k and v[2] != "correct"]
         tally.record(seed, None if not wrong else
-                     f"{wrong[0].variable}: {wrong[0].verdict.status}: {wrong[0].verdict.message}")
+                     f"{wrong[0][1]}: {wrong[0][2]}: {wrong[0][3]}")
     where = "sandboxed" if run.sandboxed else "NOT sandboxed (no sandbox on this machine)"
     return tally.result(f"{where}, {run.duration:.1f} s")
 

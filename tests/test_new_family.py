@@ -9,8 +9,15 @@ import math
 import pytest
 
 from eulertop.cli import main
+from grader.selftest_run import grade_solutions
 from problems.family_files import load_family_file
 from problems.selftest import self_test
+
+
+def self_test_graded(family, seeds, **options):
+    """The self-test as `eulertop problems test` runs it: its solutions notebook run and
+    graded by the grader (handed in as the front end does)."""
+    return self_test(family, seeds, grade_solutions=grade_solutions, **options)
 
 
 def test_the_written_family_passes_the_self_test_and_generates(tmp_path, capsys):
@@ -22,7 +29,7 @@ def test_the_written_family_passes_the_self_test_and_generates(tmp_path, capsys)
     assert 'NAME = "pendulum_hw"' in source and "from eulertop.family import" in source
     assert source.count("\n#") >= 5  # commented: it explains itself
     family = load_family_file(path)
-    report = self_test(family, range(30))
+    report = self_test_graded(family, range(30))
     assert report.passed, [c for c in report.checks if c.failed]
     # the key is the projectile's, checked here from the shown values
     v = family.generate(__import__("numpy").random.default_rng(3))

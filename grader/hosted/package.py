@@ -262,15 +262,22 @@ def variant_ids(count: int) -> list[str]:
 
 
 def pool_assignment(a: Assignment, count: int, dest: Path) -> Path:
-    """``count`` variants of ``a`` (its seed and problems) generated into ``dest``."""
-    from problems.generate import generate_assignment
+    """``count`` variants of ``a`` generated into ``dest``: its seed, and its questions as it
+    was generated with them — a spec's pools and settings, families from outside the package
+    (:func:`problems.generate.recorded_questions`) — or its problems."""
+    from problems.generate import GenerateError, generate_assignment, recorded_questions
     from problems.roster import Roster
     from problems.templates import FAMILIES
 
     manifest = json.loads((a.folder / "assignment.json").read_text(encoding="utf-8"))
+    try:
+        families, questions = recorded_questions(manifest, a.folder, FAMILIES)
+    except GenerateError as e:
+        raise PackageError(f"{a.folder}: its variants cannot be generated here: "
+                           f"{str(e).removeprefix('--reroll: ')}") from None
     roster = Roster(("id",), tuple({"id": v} for v in variant_ids(count)))
-    generate_assignment(roster, dest, FAMILIES, problems=manifest["problems"],
-                        seed=manifest["seed"], title=a.title)
+    generate_assignment(roster, dest, families, questions=questions, seed=manifest["seed"],
+                        title=a.title)
     return dest
 
 

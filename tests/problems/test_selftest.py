@@ -14,6 +14,7 @@ import pytest
 import problems.selftest as selftest
 from eulertop import family_example
 from eulertop.cli import main
+from grader.selftest_run import grade_solutions
 from problems.answers import Answer, Mistake
 from problems.family import Family, Parameter
 from problems.family_files import load_family_file
@@ -21,6 +22,13 @@ from problems.selftest import CHECKS, leaked_values, readings, self_test
 from problems.templates import FAMILIES
 
 from .family_sources import pendulum, write_family
+
+
+def self_test_graded(family, seeds, **options):
+    """The self-test as `eulertop problems test` runs it: its solutions notebook run and
+    graded by the grader (handed in as the front end does)."""
+    return self_test(family, seeds, grade_solutions=grade_solutions, **options)
+
 
 SEEDS = range(12)
 
@@ -55,7 +63,7 @@ def only_failing(report) -> set[str]:
 
 
 def test_a_sound_family_passes_every_check():
-    report = self_test(falling(), SEEDS)
+    report = self_test_graded(falling(), SEEDS)
     assert report.passed, [c for c in report.checks if c.failed]
     assert [c.name for c in report.checks] == list(CHECKS)
     assert all(c.passed == len(SEEDS) for c in report.checks)
@@ -63,9 +71,9 @@ def test_a_sound_family_passes_every_check():
 
 
 def test_the_worked_example_and_an_outside_file_pass_as_written(tmp_path):
-    assert self_test(load_family_file(Path(family_example.__file__)), range(40)).passed
+    assert self_test_graded(load_family_file(Path(family_example.__file__)), range(40)).passed
     path = write_family(tmp_path, "pendulum.py", pendulum())
-    assert self_test(load_family_file(path), range(40)).passed
+    assert self_test_graded(load_family_file(path), range(40)).passed
 
 
 def test_a_draw_from_global_randomness_is_caught():
@@ -74,7 +82,7 @@ def test_a_draw_from_global_randomness_is_caught():
     def draw(rng):
         return {"h": round(random.uniform(1.0, 20.0), 1), "g": 9.81}
 
-    report = self_test(falling(draw=draw), SEEDS)
+    report = self_test_graded(falling(draw=draw), SEEDS)
     count, shown = failures(report, "same seed, same variant")
     assert count > 0 and shown[0].startswith("seed 0: drawn twice, the variants differ")
 
@@ -91,7 +99,7 @@ def test_a_statement_using_what_the_draw_left_behind_is_caught():
     def statement(p):
         return f"A ball is dropped from {left['where']}, $h = {p['h']:g}$ m (`h`), (`g`)."
 
-    report = self_test(falling(draw=draw, statement=statement), range(20))
+    report = self_test_graded(falling(draw=draw, statement=statement), range(20))
     count, shown = failures(report, "key recomputed from its parameters")
     assert count > 0 and "'statement' differs" in shown[0]
     assert only_failing(report) == {"key recomputed from its parameters"}
@@ -103,7 +111,7 @@ def test_an_answer_written_in_the_statement_is_caught():
         return (f"A ball is dropped from $h = {p['h']:g}$ m (`h`), $g$ (`g`) = {p['g']}; "
                 f"it lands after about {t:.3g} s.")
 
-    report = self_test(falling(statement=statement), SEEDS)
+    report = self_test_graded(falling(statement=statement), SEEDS)
     count, shown = failures(report, "no answer value in the statement")
     assert count == len(SEEDS)
     assert "answer 't' =" in shown[0] and "written in the statement" in shown[0]
@@ -122,7 +130,7 @@ def test_two_mistakes_the_grader_cannot_tell_apart_are_caught():
         return (Answer("t", "scalar", t, unit="s", mistakes=(
             Mistake("double", 2 * t, "twice"), Mistake("also_double", 2 * t, "twice again"))),)
 
-    report = self_test(falling(answers=answers), SEEDS)
+    report = self_test_graded(falling(answers=answers), SEEDS)
     count, shown = failures(report, "known mistakes outside the tolerance")
     assert count == len(SEEDS) and "'also_double' is graded wrong as 'double'" in shown[0]
 
@@ -139,7 +147,7 @@ def test_two_mistakes_the_grader_cannot_tell_apart_are_caught():
     ({"statement": lambda p: None}, "statement() must return text, got None"),
 ])
 def test_a_draw_that_is_neither_well_posed_nor_rejected_is_caught(changes, fragment):
-    report = self_test(falling(**changes), range(3))
+    report = self_test_graded(falling(**changes), range(3))
     count, shown = failures(report, "draws well posed or rejected")
     assert count == 3 and shown[0].startswith("seed 0: ") and fragment in shown[0], shown
 
@@ -148,14 +156,14 @@ def test_a_typed_tolerance_is_caught():
     def statement(p):
         return "A ball is dropped from $h$ (`h`), $g$ (`g`); answer to a 1 % tolerance."
 
-    count, shown = failures(self_test(falling(statement=statement), SEEDS),
+    count, shown = failures(self_test_graded(falling(statement=statement), SEEDS),
                             "every tolerance stated in the notebook")
     assert count == len(SEEDS) and "types a tolerance" in shown[0]
 
 
 def test_a_slow_family_is_caught(monkeypatch):
     monkeypatch.setattr(selftest, "MAX_SECONDS", 0.0)
-    count, shown = failures(self_test(falling(), range(3)), "time per variant")
+    count, shown = failures(self_test_graded(falling(), range(3)), "time per variant")
     assert count == 3 and shown[0].startswith("seed 0: took ")
 
 
@@ -171,7 +179,7 @@ def test_a_solutions_notebook_that_loses_marks_is_caught_with_its_seed(monkeypat
         return nb
 
     monkeypatch.setattr(selftest, "build_notebook", tampered)
-    report = self_test(falling(), [4, 5, 6])
+    report = self_test_graded(falling(), [4, 5, 6])
     count, shown = failures(report, "solutions get full marks (sandbox)")
     assert count == 1 and shown[0].startswith("seed 5: q2_t: wrong")
     assert only_failing(report) == {"solutions get full marks (sandbox)"}
@@ -207,3 +215,11 @@ def test_every_built_in_family_passes_the_command(name, capsys):
     assert out.splitlines()[0] == f"eulertop problems test {name} (built-in): 100 seed(s)"
     assert out.rstrip().endswith("all checks passed")
     assert "sandboxed" in out
+
+
+def test_without_a_grader_the_full_marks_check_fails_as_not_run():
+    """``problems/`` cannot run a notebook itself (the grader is a floor above it): without the
+    grader handed in, the sandbox check is never counted as passed."""
+    report = self_test(falling(), range(3))
+    check = next(c for c in report.checks if c.name == CHECKS[8])
+    assert not report.passed and check.failed and "not run" in " ".join(check.failures)

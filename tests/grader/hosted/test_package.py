@@ -85,3 +85,25 @@ def test_no_assignment_folder_is_named(tmp_path, capsys):
     assert main(["package", str(tmp_path / "nope"), "--for", "gradescope", "--out",
                  str(tmp_path / "a.zip")]) == 2
     assert "no such assignment folder" in capsys.readouterr().err
+
+
+def test_a_spec_s_pools_and_points_reach_the_prairielearn_variants(tmp_path, fake_wheel):
+    """A question's variants are generated as the assignment was — from its spec (a pool, the
+    points it sets), not from its problems' names alone (a pool's label, ``a|b``, is no
+    family)."""
+    (tmp_path / "roster.csv").write_text("id\nann\nbob\n")
+    (tmp_path / "hw.toml").write_text(
+        'title = "Tops"\nseed = 3\nroster = "roster.csv"\n\n'
+        '[[questions]]\npool = ["sleeping_top", "steady_precession"]\npoints = 5\n')
+    assert main(["generate", "--spec", str(tmp_path / "hw.toml"), "--out",
+                 str(tmp_path / "HW")]) == 0
+    out = tmp_path / "course"
+    assert main(["package", str(tmp_path / "HW"), "--for", "prairielearn", "--out", str(out),
+                 "--wheel", str(fake_wheel), "--variants", "4"]) == 0
+    key = json.loads((out / "questions" / "HW" / "tests" / "assignment" / "key.json")
+                     .read_text())
+    families = {q["family"] for s in key["students"].values() for q in s["questions"]}
+    points = {sum(a["points"] for q in s["questions"] for a in q["answers"])
+              for s in key["students"].values()}
+    assert len(key["students"]) == 4
+    assert families <= {"sleeping_top", "steady_precession"} and points == {5}
