@@ -106,7 +106,8 @@ def client_cost(hw: Path, graded: Path) -> tuple[float, float]:
     the final rebuild of the gradebook and every page (``_rebuild``), into a scratch folder."""
     from grader.assignment import load_assignment
     from grader.graded_folder import FEEDBACK, RESULTS
-    from grader.pipeline import _publish, _rebuild
+    from grader.publish import publish_record as _publish
+    from grader.publish import rebuild as _rebuild
     from grader.results import StudentResult, read_result
 
     a = load_assignment(hw)

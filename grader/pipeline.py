@@ -53,7 +53,7 @@ import os
 import shutil
 import sys
 import threading
-from collections.abc import Callable, Iterator, Mapping, Sequence, Set
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import ExitStack, contextmanager, suppress
 from dataclasses import dataclass
 from functools import partial
@@ -66,33 +66,27 @@ from grader.executors import Interrupted
 from grader.executors.local import run_local, warm_kernels
 from grader.grade_one import Execute, submission_bytes, ungraded_result, unreadable
 from grader.gradebook import (
-    answers_rows,
-    feedback_html,
     gradebook_csv,
-    gradebook_rows,
     ran_code,
 )
 from grader.graded_folder import (
-    ANSWERS,
     DOWNLOAD,
     FEEDBACK,
-    GRADES,
     LMS_SUBMISSIONS,
-    REPORT,
     RESULTS,
     graded_folder,
     run_lock,
 )
 from grader.lms.classlist import merge_rows
+from grader.publish import class_report, prepare_report, publish_all, publish_record, rebuild
 from grader.results import (
     StudentResult,
     atomic_write_text,
     read_result,
     remove_stale_temporaries,
-    write_result,
 )
 from grader.submission_file import DEFAULT_MAX_BYTES, InvalidSubmission, read_submission
-from grader.submissions import Problem, Submission
+from grader.submissions import Problem
 
 
 @dataclass(frozen=True)
@@ -216,15 +210,6 @@ def _plan(a: Assignment, found, out: Path, force: bool, sandboxed: bool = False,
     return to_run, to_write, kept, packages
 
 
-def _publish(a: Assignment, out: Path, result: StudentResult, reveal: bool) -> None:
-    write_result(out / RESULTS, result)
-    key = None
-    if reveal:
-        key = {k.variable: k.answer.value for k in a.expected(result.student_id)}
-    page = feedback_html(a.title, result, a.students[result.student_id]["questions"], key)
-    atomic_write_text(out / FEEDBACK / f"{result.student_id}.html", page)
-
-
 def grade_assignment(
     hw: Path,
     submissions: Path,
@@ -326,7 +311,7 @@ def grade_assignment(
 
         # the kernels' zygotes start first: they import while this process writes
         def publish(result: StudentResult) -> None:  # the one writer of records
-            _publish(a, out, result, reveal)
+            publish_record(a, out, result, reveal)
             if progress:
                 progress(result)
 
@@ -342,19 +327,19 @@ def grade_assignment(
                 (out / LMS_SUBMISSIONS).unlink(missing_ok=True)
             if on_plan is not None:
                 progress = on_plan(len(to_run) + len(to_write)) or progress
-            _publish_all(a, out, to_write, reveal, progress)
+            publish_all(a, out, to_write, reveal, progress)
             if cluster is not None:
                 _run_on_cluster(cluster, to_run, execute, limits, publish, sandbox=sandbox,
                                 cold=cold_kernels, preload=preload_for(packages))
             else:
                 if to_run:
-                    _prepare_report()
+                    prepare_report()
                 run_local(to_run, run, limits, jobs, publish)
         results = {sid: read_result(out / RESULTS / f"{sid}.json") for sid in a.ids}
         graded_now = (tuple(t[0].student_id for t in to_run)
                       + tuple(r.student_id for r in to_write))
-        _rebuild(a, out, results, reveal, published=set(graded_now))
-        _class_report(a, out, results, found.submissions)
+        rebuild(a, out, results, reveal, published=set(graded_now))
+        class_report(a, out, results, found.submissions)
     return RunReport(tuple(results[s] for s in a.ids), graded_now, tuple(kept), found.problems,
                      found.notes)
 
@@ -526,52 +511,3 @@ def _run_on_cluster(cluster, to_run, execute, limits, publish, *, sandbox: bool,
         raise UsageError(str(e)) from None
 
 
-def _publish_all(a: Assignment, out: Path, results: Sequence[StudentResult], reveal: bool,
-                 progress: Callable[[StudentResult], None] | None) -> None:
-    """Publish the records that need no kernel (missing, invalid, unchanged-but-rewritten)."""
-    for result in results:
-        _publish(a, out, result, reveal)
-        if progress:
-            progress(result)
-
-
-def _prepare_report() -> None:
-    """Import what the class report draws with (matplotlib: about a second) in a thread of
-    its own, while the kernels' zygotes start — when the grader has nothing else to do."""
-    def load() -> None:
-        with suppress(Exception):
-            import grader.report.page  # noqa: F401
-
-    threading.Thread(target=load, name="eulertop-report-imports", daemon=True).start()
-
-
-def _class_report(a: Assignment, out: Path, results: Mapping[str, StudentResult | None],
-                  submissions: Sequence[Submission]) -> None:
-    """``OUT/report.html`` (:mod:`grader.report`); a fault there is reported, never fatal to
-    the grades already written."""
-    from grader.report import build_report, write_report
-    from grader.report.classdata import class_data
-
-    try:
-        report = build_report(class_data(a, results), {s.student_id: s.path for s in submissions})
-        write_report(report, out / REPORT)
-    except Exception as e:
-        sys.stderr.write(f"eulertop grade: the class report could not be written "
-                         f"({type(e).__name__}: {e}); the grades are complete\n")
-
-
-def _rebuild(a: Assignment, out: Path, results: Mapping[str, StudentResult | None],
-             reveal: bool, published: Set[str] = frozenset()) -> None:
-    """The gradebook and every feedback page, from the records on disk; but the pages of
-    ``published`` (written by :func:`_publish` in this run, from these same records)."""
-    present = {sid: r for sid, r in results.items() if r is not None}
-    unsandboxed = any(ran_code(r) and not r.sandboxed for r in present.values())
-    table = gradebook_rows(a.columns, a.rows, a.questions, present, sandbox_column=unsandboxed)
-    atomic_write_text(out / GRADES, gradebook_csv(table))
-    atomic_write_text(out / ANSWERS, gradebook_csv(answers_rows(a.rows, present)))
-    for sid, r in present.items():
-        if sid in published:
-            continue
-        key = ({k.variable: k.answer.value for k in a.expected(sid)} if reveal else None)
-        page = feedback_html(a.title, r, a.students[sid]["questions"], key)
-        atomic_write_text(out / FEEDBACK / f"{sid}.html", page)

@@ -219,16 +219,16 @@ def test_each_feedback_page_is_rendered_once_and_a_rerun_still_writes_them(hw, s
     """A page written when its record is published is not rendered again at the end of the
     same run (the same record, the same page); a run that grades nothing rebuilds every
     page from the records, equal to what the first run wrote."""
-    import grader.pipeline as pipeline
+    import grader.publish as publish
 
     rendered = []
-    real = pipeline.feedback_html
+    real = publish.feedback_html
 
     def counting(title, result, questions, key=None):
         rendered.append(result.student_id)
         return real(title, result, questions, key)
 
-    monkeypatch.setattr(pipeline, "feedback_html", counting)
+    monkeypatch.setattr(publish, "feedback_html", counting)
     _run(hw, subs, FakeExecute())
     assert sorted(rendered) == sorted(ROSTER)  # once each
     pages = {p.name: p.read_bytes() for p in (hw / "graded" / "feedback").iterdir()}
