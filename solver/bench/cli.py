@@ -104,14 +104,16 @@ def _plot_turning_points(plt, rows, path: Path) -> None:
 
 
 def add_bench_arguments(parser: argparse.ArgumentParser) -> None:
-    """``eulertop bench [--out DIR] [--quick]`` or ``eulertop bench --fuzz N [--seed S]``."""
+    """``eulertop bench [--out DIR] [--quick] [--page FILE]`` or ``eulertop bench --fuzz N
+    [--seed S]``."""
     parser.add_argument("--out", type=Path, default=Path("bench-results"),
                         help="directory for the PNG charts, their CSV data and summary.md "
                         "(with --fuzz: for fuzz.md)")
-    parser.add_argument("--readme", type=Path, metavar="FILE",
-                        help="also write the measured text into FILE between the lines "
-                        "'<!-- eulertop bench: begin -->' and '<!-- eulertop bench: end -->' "
-                        "(the same text opens summary.md)")
+    parser.add_argument("--page", type=Path, metavar="FILE",
+                        help="also write the measured text into the Markdown page FILE between "
+                        "the lines '<!-- eulertop bench: begin -->' and "
+                        "'<!-- eulertop bench: end -->' (the documentation site's "
+                        "docs/speed.md; the same text opens summary.md)")
     parser.add_argument("--quick", action="store_true",
                         help="a reduced sweep (< 1 min; what the tests run)")
     parser.add_argument("--fuzz", type=int, metavar="N",
@@ -136,18 +138,18 @@ def run_bench(args: argparse.Namespace) -> int:
 
     from solver.bench import summary as bench_summary
 
-    readme = getattr(args, "readme", None)
-    if readme is not None:  # fail before minutes of measuring, not after
+    page = getattr(args, "page", None)
+    if page is not None:  # fail before minutes of measuring, not after
         try:
-            bench_summary.replace_block(readme.read_text(encoding="utf-8"), "", str(readme))
+            bench_summary.replace_block(page.read_text(encoding="utf-8"), "", str(page))
         except (OSError, UnicodeDecodeError, bench_summary.BlockError) as exc:
-            print(f"eulertop bench: --readme {readme}: {exc}", file=sys.stderr)
+            print(f"eulertop bench: --page {page}: {exc}", file=sys.stderr)
             return 2
     config = BenchConfig.quick() if args.quick else BenchConfig.full()
     out: Path = args.out
     out.mkdir(parents=True, exist_ok=True)
     command = " ".join(["eulertop bench", "--out", str(out), *(["--quick"] if args.quick else []),
-                        *(["--readme", str(readme)] if readme is not None else [])])
+                        *(["--page", str(page)] if page is not None else [])])
     load_before = os.getloadavg()
     start = time.perf_counter()
     free_period = float(asymmetric_top_period(FREE_SCENE.I1, FREE_SCENE.I2, FREE_SCENE.I3,
@@ -193,11 +195,11 @@ def run_bench(args: argparse.Namespace) -> int:
     results, record = bench_summary.load_results(out)
     (out / "summary.md").write_text(bench_summary.summary_markdown(results, record))
     written = f"{out}/summary.md and charts"
-    if readme is not None:
-        block = bench_summary.readme_block(results, record, _relative_dir(out, readme))
-        text = readme.read_text(encoding="utf-8")
-        readme.write_text(bench_summary.replace_block(text, block, str(readme)), encoding="utf-8")
-        written += f", and its block in {readme}"
+    if page is not None:
+        block = bench_summary.page_block(results, record, _relative_dir(out, page))
+        text = page.read_text(encoding="utf-8")
+        page.write_text(bench_summary.replace_block(text, block, str(page)), encoding="utf-8")
+        written += f", and its block in {page}"
     print(f"eulertop bench: wrote {written} in {record['wall_seconds']:.0f} s")
     return 0
 
@@ -208,9 +210,9 @@ def _stability_battery() -> list[dict]:
     return stability_battery()
 
 
-def _relative_dir(out: Path, readme: Path) -> str:
-    """``out`` as a link prefix from ``readme``'s folder (``"docs/bench/"``)."""
-    relative = os.path.relpath(out.resolve(), readme.resolve().parent)
+def _relative_dir(out: Path, page: Path) -> str:
+    """``out`` as a link prefix from ``page``'s folder (``"bench/"`` from ``docs/speed.md``)."""
+    relative = os.path.relpath(out.resolve(), page.resolve().parent)
     return "" if relative == "." else Path(relative).as_posix() + "/"
 
 

@@ -422,7 +422,7 @@ def fuzz_markdown(report: FuzzReport, n: int, seed: int, jobs: int, wall: float,
              "reference).", ""]
     header = "| region | " + " | ".join(QUANTITIES) + " |"
     for path in PATHS:
-        lines += [f"### Through the {'Python API' if path == 'api' else 'batch CLI'}", "",
+        lines += [f"## Through the {'Python API' if path == 'api' else 'batch CLI'}", "",
                   "Each cell: worst error (worst error ÷ allowed) failures/cases. β1, β2 "
                   "absolute (rad); period and ⟨α̇⟩ relative; motion: 1 = a wrong label.", "",
                   header, "|" + "---|" * (len(QUANTITIES) + 1)]
@@ -433,7 +433,7 @@ def fuzz_markdown(report: FuzzReport, n: int, seed: int, jobs: int, wall: float,
             lines.append(f"| {region} | " + " | ".join(_cell_text(c) for c in cells) + " |")
         lines.append("")
     if report.failures:
-        lines += ["### Failing cases (first 20)", ""]
+        lines += ["## Failing cases (first 20)", ""]
         lines += [f"- {json.dumps(f)}" for f in report.failures[:20]]
         lines.append("")
     return "\n".join(lines)

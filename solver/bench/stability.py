@@ -2,7 +2,7 @@
 
 Each stage returns rows ``{"case", "parameter", "method", "error", "nfev", "note"}`` (``error``
 NaN and ``note`` the reason where a method fails outright); ``eulertop bench`` writes them to
-``stability.csv`` and the README's table is rendered from it. References are independent of the
+``stability.csv`` and the site's table is rendered from it. References are independent of the
 code under test: mpmath at 40 digits (the cubic's roots, ``2K/λ``, ``4K/√(B(u3 − u1))``, R20),
 or a closed form (a sleeping top keeps ``u ≡ 1``). ``tests/solver/test_stability.py`` asserts
 the same phenomena (it fails; it loses more than N digits), not these measured margins.

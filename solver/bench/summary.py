@@ -1,8 +1,9 @@
-"""The text of ``eulertop bench``: ``summary.md`` and the README block, rendered from its files.
+"""The text of ``eulertop bench``: ``summary.md`` and the site's page, rendered from its files.
 
 Pipeline: the bench writes its CSVs and ``run.json`` (command, date, machine, wall time) →
-:func:`load_results` reads them back → :func:`readme_block` / :func:`summary_markdown` render
-the text → :func:`replace_block` puts the block between ``BEGIN`` and ``END`` in a README.
+:func:`load_results` reads them back → :func:`page_block` / :func:`summary_markdown` render
+the text → :func:`replace_block` puts the block between ``BEGIN`` and ``END`` of a Markdown page
+(``docs/speed.md``, the documentation site's "Speed against accuracy").
 Rendering only from the files (never from the measurements in memory) is what lets a test
 re-render the committed block from the committed CSVs and catch a hand edit: every number in the
 text is one of the run's, formatted here. Where a method never reaches an accuracy the text says
@@ -44,7 +45,7 @@ __all__ = [
     "TARGETS",
     "BlockError",
     "load_results",
-    "readme_block",
+    "page_block",
     "replace_block",
     "run_record",
     "summary_markdown",
@@ -60,7 +61,7 @@ TARGETS = (1e-6, 1e-10, 1e-12)  # accuracies at which the methods are ranked
 
 
 class BlockError(ValueError):
-    """A README has no well-formed ``BEGIN`` … ``END`` block (the message names the file)."""
+    """A page has no well-formed ``BEGIN`` … ``END`` block (the message names the file)."""
 
 
 # --- the run's record and the files read back -----------------------------------------------
@@ -179,7 +180,7 @@ def _moments(scene: FreeBody | HeavyBody) -> str:
             f"β̇0 = {num(scene.beta_dot0)}, γ̇0 = {num(scene.gamma_dot0)}`")
 
 
-# --- the README block ------------------------------------------------------------------------
+# --- the page's block -------------------------------------------------------------------------
 
 
 def _header(run: dict, config: BenchConfig) -> list[str]:
@@ -337,7 +338,7 @@ def _scenes(results: dict, config: BenchConfig) -> list[str]:
 def _turning(results: dict) -> list[str]:
     rows = results["turning"]
     methods = list(TURNING_POINT_METHODS)
-    lines = ["### Turning points (max error of β1, β2 in rad, against mpmath; median time)", "",
+    lines = ["## Turning points (max error of β1, β2 in rad, against mpmath; median time)", "",
              "| top | " + " | ".join(methods) + " |",
              "|---|" + "---|" * len(methods)]
     for case in dict.fromkeys(r["case"] for r in rows):
@@ -350,7 +351,7 @@ def _turning(results: dict) -> list[str]:
 
 def _drift(results: dict, config: BenchConfig) -> list[str]:
     rows = results["drift"]
-    lines = [f"### Invariant drift, free asymmetric top (adaptive at rtol {_g(config.drift_rtol)}, "
+    lines = [f"## Invariant drift, free asymmetric top (adaptive at rtol {_g(config.drift_rtol)}, "
              f"fixed step period/{config.drift_steps_per_period})", "",
              f"Sampled {SAMPLE_PHASE:.3f} of a period past log-spaced whole periods (at whole "
              "periods a periodic energy error vanishes and would read as zero); Radau only to "
@@ -373,7 +374,7 @@ def _drift(results: dict, config: BenchConfig) -> list[str]:
 
 def _stability(results: dict) -> list[str]:
     rows = results["stability"]
-    lines = ["### Stability battery", "",
+    lines = ["## Stability battery", "",
              "Where a naive method fails and the project's does not, measured by "
              "`solver/bench/stability.py` against mpmath (40 digits) or a closed form; "
              "`tests/solver/test_stability.py` asserts the same phenomena.", "",
@@ -408,7 +409,7 @@ def _fast_top(results: dict) -> list[str]:
     rows = results["fast_top"]
     betas = list(dict.fromkeys(r["beta0"] for r in rows))
     head = " | ".join(f"{kind}, β0 = {b}" for b in betas for kind in ("slow", "fast"))
-    lines = ["### When is the fast-top approximation good enough? (R21)", "",
+    lines = ["## When is the fast-top approximation good enough? (R21)", "",
              "Relative error of `fast_top_rates` against the exact steady rates "
              "(`solver.scenes.fast_top_error`), against `ε = 2 I1 Mgl/(I3 ω3)²` "
              "(`fast_top_parameter`). To first order both errors are `∓ ε cos β0 / 2`: an answer "
@@ -424,18 +425,18 @@ def _fast_top(results: dict) -> list[str]:
     return [*lines, ""]
 
 
-def readme_block(results: dict[str, list[dict]], run: dict, image_dir: str) -> str:
-    """The measured part of README's "Speed against accuracy" section, between ``BEGIN`` and
-    ``END`` (markers included); ``image_dir`` prefixes the chart paths (``"docs/bench/"`` in the
-    README, ``""`` in ``summary.md``)."""
+def page_block(results: dict[str, list[dict]], run: dict, image_dir: str) -> str:
+    """The measured part of the page "Speed against accuracy", between ``BEGIN`` and ``END``
+    (markers included), its sections at heading level 2; ``image_dir`` prefixes the chart paths
+    (``"bench/"`` in ``docs/speed.md``, ``""`` in ``summary.md``)."""
     config = _config(run)
     lines = [BEGIN,
-             "<!-- Written by `eulertop bench --readme`: edit the code in "
+             "<!-- Written by `eulertop bench --page`: edit the code in "
              "solver/bench/summary.py, not this text (tests/solver/test_bench_summary.py "
              "re-renders it from docs/bench and fails on a difference). -->", ""]
     lines += _header(run, config)
     lines += _model_table(results, config)
-    lines += ["### At equal accuracy", ""]
+    lines += ["## At equal accuracy", ""]
     lines += _equal_accuracy(results["free"], "Free asymmetric top",
                              f"{config.free_periods} periods of ω", FREE_SCENE, "free")
     lines += _equal_accuracy(results["heavy"], "Heavy symmetric top",
@@ -467,10 +468,10 @@ def _table(rows: list[dict], keys: list[str]) -> str:
 
 
 def summary_markdown(results: dict[str, list[dict]], run: dict) -> str:
-    """``summary.md``: the README block's text (charts beside it), then the full tables."""
+    """``summary.md``: the page block's text (charts beside it), then the full tables."""
     config = _config(run)
     out = [f"# eulertop bench — {'quick' if config.free_periods < 100 else 'full'} run", "",
-           readme_block(results, run, ""), "## Every table in full", ""]
+           page_block(results, run, ""), "## Every table in full", ""]
     for key, title in (("free", "free asymmetric top"), ("heavy", "heavy symmetric top")):
         rows = results[key]
         out += [f"### Ranking at equal accuracy — {title}", ""]
@@ -500,10 +501,10 @@ def summary_markdown(results: dict[str, list[dict]], run: dict) -> str:
     return "\n".join(out)
 
 
-# --- the README ------------------------------------------------------------------------------
+# --- the page --------------------------------------------------------------------------------
 
 
-def replace_block(text: str, block: str, name: str = "README") -> str:
+def replace_block(text: str, block: str, name: str = "the page") -> str:
     """``text`` with everything from ``BEGIN`` to ``END`` (markers included) replaced by
     ``block``; raises :class:`BlockError` naming ``name`` unless each marker occurs once, in
     order, each on a line of its own."""
@@ -517,8 +518,8 @@ def replace_block(text: str, block: str, name: str = "README") -> str:
     return "".join(lines[:starts[0]]) + block + "".join(lines[ends[0] + 1:])
 
 
-def current_block(text: str, name: str = "README") -> str:
-    """The ``BEGIN`` … ``END`` block of ``text``, markers included (as :func:`readme_block`)."""
+def current_block(text: str, name: str = "the page") -> str:
+    """The ``BEGIN`` … ``END`` block of ``text``, markers included (as :func:`page_block`)."""
     lines = text.splitlines(keepends=True)
     replace_block(text, "", name)  # validates
     start = next(i for i, line in enumerate(lines) if line.strip() == BEGIN)

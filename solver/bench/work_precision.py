@@ -4,7 +4,7 @@ ranking, against independent references (composed in :func:`solver.bench.cli.run
 Pipeline (one stage, one input, one output):
 measure (``work_precision``, ``scenes_table``, ``turning_point_methods``, ``invariant_drift``,
 ``solver.bench.stability``, ``fast_top_errors``) → rows (dicts) → CSV + PNG per chart and
-``run.json`` → ``summary.md`` and, with ``--readme FILE``, FILE's block, both rendered by
+``run.json`` → ``summary.md`` and, with ``--page FILE``, FILE's block, both rendered by
 ``solver.bench.summary`` from those files alone (so a test can render them again).
 
 Errors are against references computed *independently* of the code under test: mpmath at 40

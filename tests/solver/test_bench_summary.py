@@ -1,5 +1,6 @@
-"""The bench's text is written by the bench: README's block and docs/bench/summary.md are what
-the committed CSVs render to, and no measured number stands outside the block."""
+"""The bench's text is written by the bench: the block of the site's page ``docs/speed.md`` and
+``docs/bench/summary.md`` are what the committed CSVs render to, and no measured number stands
+outside the block."""
 
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ from solver.bench.summary import (
     BlockError,
     current_block,
     load_results,
-    readme_block,
+    page_block,
     replace_block,
     summary_markdown,
 )
@@ -24,8 +25,7 @@ from solver.bench.work_precision import BenchConfig
 
 ROOT = Path(__file__).resolve().parents[2]
 BENCH = ROOT / "docs" / "bench"
-README = (ROOT / "README.md").read_text(encoding="utf-8")
-SECTION = "## Speed against accuracy: a model per scene"
+PAGE = (ROOT / "docs" / "speed.md").read_text(encoding="utf-8")
 
 
 @pytest.fixture(scope="module")
@@ -33,38 +33,35 @@ def committed():
     return load_results(BENCH)
 
 
-def test_readme_block_is_what_the_committed_csvs_render_to(committed):
-    """A hand edit of any number in README's block (or of a CSV) fails here."""
+def test_page_block_is_what_the_committed_csvs_render_to(committed):
+    """A hand edit of any number in the page's block (or of a CSV) fails here."""
     results, run = committed
-    assert current_block(README) == readme_block(results, run, "docs/bench/")
+    assert current_block(PAGE) == page_block(results, run, "bench/")
 
 
 def test_summary_md_is_what_the_committed_csvs_render_to(committed):
     results, run = committed
     summary = (BENCH / "summary.md").read_text(encoding="utf-8")
     assert summary == summary_markdown(results, run)
-    assert readme_block(results, run, "") in summary  # the README's text, charts beside it
+    assert page_block(results, run, "") in summary  # the page's text, charts beside it
 
 
 def test_committed_run_is_the_documented_full_run(committed):
     _, run = committed
-    assert run["command"] == "eulertop bench --out docs/bench --readme README.md"
+    assert run["command"] == "eulertop bench --out docs/bench --page docs/speed.md"
     full = dataclasses.asdict(BenchConfig.full())
     assert run["config"] == {k: list(v) if isinstance(v, tuple) else v for k, v in full.items()}
     assert run["wall_seconds"] > 0 and run["cpu_count"] >= 1
-    block = current_block(README)
+    block = current_block(PAGE)
     for fact in (run["command"], run["date"], run["python"], run["numpy"],
                  f"{run['wall_seconds']:.0f} s"):
         assert fact in block
 
 
 def test_no_measured_number_outside_the_block():
-    """The section's hand-written prose states no measurement: numbers live in the block."""
-    start = README.index(SECTION)
-    end = README.index("\n## ", start + len(SECTION))
-    section = README[start:end]
-    block = current_block(section, "README section")  # one marker line each, in order
-    prose = section.replace(block, "")
+    """The page's hand-written prose states no measurement: numbers live in the block."""
+    block = current_block(PAGE, "docs/speed.md")  # one marker line each, in order
+    prose = PAGE.replace(block, "")
     prose = re.sub(r"`[^`]*`", "", prose)  # code spans: commands and names
     measured = re.findall(r"\d+\.\d+|\d(?:\.\d+)?e[-+]?\d+|\d+\s?(?:ms|µs|s|×|%)(?!\w)", prose)
     assert measured == []
@@ -80,8 +77,8 @@ def test_replace_block_replaces_only_between_the_markers():
 @pytest.mark.parametrize("text", ["no markers\n", f"{BEGIN}\nx\n", f"{END}\n{BEGIN}\n",
                                   f"{BEGIN}\n{BEGIN}\n{END}\n"])
 def test_replace_block_names_the_file_when_markers_are_wrong(text):
-    with pytest.raises(BlockError, match=re.escape("notes/README.md")):
-        replace_block(text, "", "notes/README.md")
+    with pytest.raises(BlockError, match=re.escape("notes/speed.md")):
+        replace_block(text, "", "notes/speed.md")
 
 
 def _sweep(method, floor, tightest=1e-14):

@@ -12,16 +12,18 @@ import pytest
 from eulertop.cli import main
 from solver.bench.work_precision import rank_at_accuracy
 
-README_BEFORE = "# Notes\n\nprose 1.5 s\n\n<!-- eulertop bench: begin -->\nstale 9.9 s\n"
-README_AFTER = "<!-- eulertop bench: end -->\n\n## Next\n"
+PAGE_BEFORE = "# Notes\n\nprose 1.5 s\n\n<!-- eulertop bench: begin -->\nstale 9.9 s\n"
+PAGE_AFTER = "<!-- eulertop bench: end -->\n\n## Next\n"
 
 
 @pytest.fixture(scope="module")
 def bench_dir(tmp_path_factory):
     root = tmp_path_factory.mktemp("bench")
-    (root / "README.md").write_text(README_BEFORE + README_AFTER)
+    (root / "docs").mkdir()
+    (root / "docs" / "speed.md").write_text(PAGE_BEFORE + PAGE_AFTER)
     out = root / "docs" / "bench"
-    assert main(["bench", "--quick", "--out", str(out), "--readme", str(root / "README.md")]) == 0
+    assert main(["bench", "--quick", "--out", str(out), "--page",
+                 str(root / "docs" / "speed.md")]) == 0
     return out
 
 
@@ -103,31 +105,32 @@ def test_scenes_table_covers_states_and_horizons(bench_dir):
     assert sep["10"] > sep["1"]
 
 
-def test_readme_block_is_written_from_the_run_files(bench_dir):
-    """--readme replaces only the block, with the text the run's files render to (chart links
-    relative to the README), and summary.md opens with the same text."""
-    from solver.bench.summary import load_results, readme_block
+def test_page_block_is_written_from_the_run_files(bench_dir):
+    """--page replaces only the block, with the text the run's files render to (chart links
+    relative to the page), and summary.md opens with the same text."""
+    from solver.bench.summary import load_results, page_block
 
-    readme = (bench_dir.parents[1] / "README.md").read_text()
+    page = (bench_dir.parent / "speed.md").read_text()
     results, run = load_results(bench_dir)
-    block = readme_block(results, run, "docs/bench/")
-    assert readme == "# Notes\n\nprose 1.5 s\n\n" + block + "\n## Next\n"
-    assert "stale" not in readme and "](docs/bench/wp_free_time.png)" in readme
+    block = page_block(results, run, "bench/")
+    assert page == "# Notes\n\nprose 1.5 s\n\n" + block + "\n## Next\n"
+    assert "stale" not in page and "](bench/wp_free_time.png)" in page
     assert run["command"].startswith("eulertop bench --out ") and "--quick" in run["command"]
-    assert readme_block(results, run, "") in (bench_dir / "summary.md").read_text()
+    assert run["command"].endswith("--page " + str(bench_dir.parent / "speed.md"))
+    assert page_block(results, run, "") in (bench_dir / "summary.md").read_text()
 
 
-def test_bad_readme_stops_before_measuring(tmp_path, capsys):
-    """A README without the markers: exit 2 and a message naming it, before minutes of work."""
-    readme = tmp_path / "README.md"
-    readme.write_text("# no markers\n")
+def test_bad_page_stops_before_measuring(tmp_path, capsys):
+    """A page without the markers: exit 2 and a message naming it, before minutes of work."""
+    page = tmp_path / "speed.md"
+    page.write_text("# no markers\n")
     out = tmp_path / "out"
-    assert main(["bench", "--quick", "--out", str(out), "--readme", str(readme)]) == 2
+    assert main(["bench", "--quick", "--out", str(out), "--page", str(page)]) == 2
     err = capsys.readouterr().err
-    assert str(readme) in err and "eulertop bench: end" in err
+    assert str(page) in err and "eulertop bench: end" in err
     assert not out.exists()
     missing = tmp_path / "nope.md"
-    assert main(["bench", "--out", str(out), "--readme", str(missing)]) == 2
+    assert main(["bench", "--out", str(out), "--page", str(missing)]) == 2
     assert str(missing) in capsys.readouterr().err
 
 
