@@ -251,7 +251,7 @@ def solve_free_top(
     -------
     dict
         ``omega``: ω(t), shape broadcast(...) + (3,), e.g. (3,) or (n, 3) (rad/s);
-        ``T``: kinetic energy (J); ``L``: |L| (kg m²/s);
+        ``T``: kinetic energy (J); ``L``: ``|L|`` (kg m²/s);
         ``period``: period of ω(t) (s): ``4K/λ``, ``2π/|Ω|`` for a symmetric top, ``inf`` on
         the separatrix and for steady rotation (spherical top, spin about a principal axis);
         ``stability``: bool array (..., 3), spin about principal axis 1, 2, 3 stable (R9).

@@ -4,7 +4,7 @@ The exact solutions (R8, R10, R20) need no integration; this module is what the 
 them against, and what a scene with no closed form (a torqued asymmetric body) falls back on.
 
 Right-hand sides (built once from validated parameters, then called without re-validation)
------------------------------------------------------------------------------------------
+------------------------------------------------------------------------------------------
 =========================  =================================================================
 ``free_body_rhs``          Euler's equations ``I ω̇ = (Iω) × ω`` (R7), state ω (3,)
 ``heavy_body_rhs``         heavy rigid body on a fixed tip, centre of mass on ``ê3``: Euler's

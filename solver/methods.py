@@ -8,21 +8,22 @@ trajectory of the scene's observable and what it cost (right-hand-side evaluatio
 Observables: ``"omega"`` (body ω, shape (n, 3), rad/s) for a free body — what R8 and R10 give
 exactly; ``"cos_beta"`` (``u = cos β``, shape (n,)) for a heavy body — what R20 gives exactly.
 
-==============  =========  ====================================================  ==============
-method          control    what                                                  scenes
-==============  =========  ====================================================  ==============
-RK45, DOP853,   rtol       scipy's adaptive solvers (``solve_ivp``'s classes);    all
+==============  =========  ========================================================  ==============
+method          control    what                                                      scenes
+==============  =========  ========================================================  ==============
+RK45, DOP853,   rtol       scipy's adaptive solvers (``solve_ivp``'s classes);       all
 Radau, LSODA               free body: Euler's equations (R7) in ω; heavy body:
-                           quaternion + ω (:func:`~solver.integrators.heavy_body_rhs`)
-RK4             step       classical Runge–Kutta, fixed step, same equations      all
-LiePoisson2     step       McLachlan's explicit Lie–Poisson splitting (2nd order) free bodies
-LiePoisson4     step       its Yoshida triple jump (4th order)                    free bodies
-EulerAngles     rtol       DOP853 on R14 in Euler angles (naive: ÷ sin β)         heavy symmetric
-R8              —          closed form of the free symmetric top                  I1 = I2 free
-R10             —          Jacobi elliptic functions (exact, any moments)         free bodies
-R20             —          ``u = u1 + (u2 − u1) sn²`` with Carlson's roots        heavy symmetric
-sleeping        —          ``u ≡ 1`` (the vertical is an equilibrium)             sleeping top
-==============  =========  ====================================================  ==============
+                           quaternion + ω
+                           (:func:`~solver.integrators.heavy_body_rhs`)
+RK4             step       classical Runge–Kutta, fixed step, same equations         all
+LiePoisson2     step       McLachlan's explicit Lie–Poisson splitting (2nd order)    free bodies
+LiePoisson4     step       its Yoshida triple jump (4th order)                       free bodies
+EulerAngles     rtol       DOP853 on R14 in Euler angles (naive: ÷ sin β)            heavy symmetric
+R8              —          closed form of the free symmetric top                     I1 = I2 free
+R10             —          Jacobi elliptic functions (exact, any moments)            free bodies
+R20             —          ``u = u1 + (u2 − u1) sn²`` with Carlson's roots           heavy symmetric
+sleeping        —          ``u ≡ 1`` (the vertical is an equilibrium)                sleeping top
+==============  =========  ========================================================  ==============
 
 Absolute tolerances of the adaptive methods are ``rtol`` times each component's natural scale
 (``|ω0|`` for angular velocities, 1 for quaternion components and angles). A numerical failure is
