@@ -19,7 +19,7 @@ A free body with another pair of equal moments (``I2 = I3``, ``I1 = I3``) is sym
 different axis; R10 covers it exactly (it reduces to R8 relabelled), so it is ``free_asymmetric``
 by the rule above, not a special case. Equalities are exact comparisons of the given moments:
 the caller decides whether ``I1 = 1.0000001 I2`` is symmetric. Measured costs and accuracies of
-each model are in ``docs/performance_tables.md`` (``eulertop bench``).
+each model are on the documentation site's page ``docs/speed.md`` (written by ``eulertop bench``).
 
 The fast-top approximation of R21 is a model choice too: :func:`fast_top_error` gives its
 relative error against the exact steady rates, a function of ``ε = 2 I1 Mgl/(I3 ω3)²``.
