@@ -22,6 +22,13 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
                  "generate an assignment: one notebook per student, and the key"),
     "check": ("grader.cli", "run a notebook as the grader would: are its answers well formed?"),
     "grade": ("grader.cli", "grade every submission against the key: gradebook, feedback, summary"),
+    "rescore": ("grader.amend", "every verdict again from the stored answers and the key as it "
+                "is now: no notebook runs"),
+    "key": ("grader.amend", "change the key after grading ('key set'), then rescore"),
+    "rekey": ("grader.amend", "recompute the key from the recorded parameters with today's "
+              "solver, then rescore"),
+    "override": ("grader.amend", "give one student's answer (or total) points, with a reason; "
+                 "kept through every regrade"),
     "export": ("grader.lms.export", "write the gradebook Canvas, Moodle, Blackboard or Gradescope "
                "imports, and answers.csv"),
     "report": ("grader.report.cli", "the class report: item statistics, common wrong answers, "

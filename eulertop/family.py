@@ -3,8 +3,10 @@
 A family is one Python file (or package) that defines ``NAME``, ``TITLE``, ``SUMMARY``,
 ``PARAMETERS`` (a dict of :class:`Parameter`), ``answers(params)`` (a tuple of :class:`Answer`,
 each with its known :class:`Mistake` s) and ``statement(params)``, and optionally ``draw(rng)``
-(default: :func:`draw_parameters`). ``eulertop new-family NAME --out DIR`` writes a working,
-commented example; ``eulertop problems test FILE`` checks one.
+(default: :func:`draw_parameters`). An answer the statement asks to compute from earlier ones
+is declared with :func:`follows_from`, and ``follow(name, params, earlier)`` recomputes it from
+a student's own earlier values (follow-through credit). ``eulertop new-family NAME --out DIR``
+writes a working, commented example; ``eulertop problems test FILE`` checks one.
 
 Examples
 --------
@@ -16,6 +18,6 @@ True
 from __future__ import annotations
 
 from problems.answers import Answer, Mistake
-from problems.family import IllPosed, Parameter, draw_parameters
+from problems.family import IllPosed, Parameter, draw_parameters, follows_from
 
-__all__ = ["Answer", "IllPosed", "Mistake", "Parameter", "draw_parameters"]
+__all__ = ["Answer", "IllPosed", "Mistake", "Parameter", "draw_parameters", "follows_from"]

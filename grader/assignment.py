@@ -38,8 +38,18 @@ class Assignment:
         """``student_id``'s key answers (:func:`grader.compare.key_answers`), derived once per
         loaded assignment: the key does not change while it is loaded."""
         if student_id not in self._expected:
-            self._expected[student_id] = tuple(key_answers(self.key, student_id))
+            try:
+                self._expected[student_id] = tuple(key_answers(self.key, student_id))
+            except (KeyError, TypeError, ValueError) as e:  # a key edited by hand, badly
+                raise UsageError(f"{self.folder / 'key.json'}: {student_id}'s entry cannot be "
+                                 f"read: {e}") from None
         return self._expected[student_id]
+
+    def check_key(self) -> None:
+        """Every student's key can be read (:class:`UsageError` naming the first that cannot):
+        checked before a run writes anything."""
+        for student_id in self.ids:
+            self.expected(student_id)
 
     def key_hash(self, student_id: str) -> str:
         return self.key["students"][student_id]["hash"]

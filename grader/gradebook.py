@@ -64,13 +64,16 @@ def gradebook_rows(
     questions: Sequence[int],
     results: Mapping[str, StudentResult],
     sandbox_column: bool = False,
+    override_column: bool | None = None,
 ) -> list[list[str]]:
     """The gradebook as rows of strings, header first.
 
     Columns: ``id``, the roster's other columns (as in the roster), ``q1`` … ``qN`` (points per
     question), ``total``, ``maximum``, ``status``, ``reason``; with ``sandbox_column`` (the
     pipeline sets it when some submission was graded without a sandbox, ``--no-sandbox``) a last
-    column ``sandboxed``: ``yes`` / ``no`` (``""`` when nothing was executed).
+    column ``sandboxed``: ``yes`` / ``no`` (``""`` when nothing was executed); and, when some
+    record holds an instructor's override (``override_column``, default: whether one does), a
+    last column ``overridden``: what was, ``q3_T_nut; total`` (``""`` for the others).
 
     ``status`` keeps three kinds of student apart: ``graded`` (the notebook ran and its answers
     were compared; ``reason`` is empty, or a note such as a cell that raised), ``missing`` (no
@@ -80,8 +83,11 @@ def gradebook_rows(
     free of control characters (:func:`csv_cell`).
     """
     others = [c for c in columns if c != "id"]
+    if override_column is None:
+        override_column = any(r.overridden for r in results.values())
     table = [["id", *others, *(f"q{k}" for k in questions), "total", "maximum", "status",
-              "reason", *(["sandboxed"] if sandbox_column else [])]]
+              "reason", *(["sandboxed"] if sandbox_column else []),
+              *(["overridden"] if override_column else [])]]
     for row in rows:
         r = results.get(row["id"])
         if r is None:
@@ -93,6 +99,8 @@ def gradebook_rows(
         if sandbox_column:
             cells.append("" if r is None else "yes" if r.sandboxed else "no" if ran_code(r)
                          else "")
+        if override_column:
+            cells.append("" if r is None else "; ".join(r.overridden))
         table.append([csv_cell(c) for c in [row["id"], *(row.get(c, "") for c in others),
                                             *cells]])
     return table
@@ -189,7 +197,8 @@ table { border-collapse: collapse; margin: 0.5em 0 1.5em; }
 td, th { border: 1px solid #bbb; padding: 0.25em 0.6em; text-align: left; vertical-align: top; }
 .statement { background: #f6f6f6; padding: 0.1em 0.8em; }
 math[display="block"] { margin: 0.6em 0; }
-.correct { color: #165c16; } .wrong, .invalid, .missing { color: #9c1c1c; }
+.correct, .follows { color: #165c16; } .wrong, .invalid, .missing { color: #9c1c1c; }
+.override { background: #fff6d6; padding: 0.3em 0.8em; }
 code { white-space: pre-wrap; word-break: break-all; }
 """
 
@@ -272,6 +281,12 @@ def feedback_html(
     ]
     if result.message:
         parts.append(f"<p class=\"message\">{_e(_cut(result.message, 4 * MAX_SHOWN))}</p>")
+    if result.overridden:
+        items = "".join(
+            f"<li><code>{_e(what)}</code>: {number(o['was'])} → {number(o['points'])} points "
+            f"— {_e(_cut(o['reason']))}</li>" for what, o in result.overridden.items())
+        parts.append(f"<div class=\"override\"><p>Changed by your instructor:</p><ul>{items}"
+                     "</ul></div>")
     errors = result.execution.get("cell_errors") or []
     if errors:
         items = "".join(f"<li><code>{_e(_cut(line))}</code></li>" for line in errors)
@@ -309,9 +324,11 @@ def summary_table(results: Sequence[StudentResult], problems: Sequence[Problem] 
     return "\n".join(out) + "\n"
 
 
-OUTCOMES = ("correct", "wrong", "known mistake", "invalid", "unanswered")
-"""The columns of :func:`answer_counts`: a wrong answer matching a known mistake is counted
-as ``known mistake`` (not also as ``wrong``); ``unanswered`` is the verdict ``missing``."""
+OUTCOMES = ("correct", "follows", "wrong", "known mistake", "invalid", "unanswered")
+"""The columns of :func:`answer_counts`: ``follows`` is a wrong answer credited because it
+follows from the student's own earlier answers (:mod:`grader.follow_through`); a wrong answer
+matching a known mistake is counted as ``known mistake`` (not also as ``wrong``);
+``unanswered`` is the verdict ``missing``."""
 
 
 def outcome(verdict: Any) -> str:
@@ -335,9 +352,11 @@ def answer_counts(results: Sequence[StudentResult]) -> list[str]:
             row = counts.setdefault(a.variable, dict.fromkeys(OUTCOMES, 0))
             row[outcome(a.verdict)] += 1
     width = max(len("answer"), *map(len, counts))
-    head = "  ".join(f"{c:>{len(c)}}" for c in OUTCOMES)
+    shown = [c for c in OUTCOMES  # follow-through only where some answer earned it
+             if c != "follows" or any(row[c] for row in counts.values())]
+    head = "  ".join(f"{c:>{len(c)}}" for c in shown)
     lines = ["", f"per answer, over {len(graded)} graded submission(s):",
              f"{'answer':<{width}}  {head}"]
     for variable, row in counts.items():
-        lines.append(f"{variable:<{width}}  " + "  ".join(f"{row[c]:>{len(c)}}" for c in OUTCOMES))
+        lines.append(f"{variable:<{width}}  " + "  ".join(f"{row[c]:>{len(c)}}" for c in shown))
     return lines

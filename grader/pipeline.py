@@ -61,9 +61,11 @@ from pathlib import Path
 from typing import Any
 
 from grader.assignment import Assignment, UsageError, load_assignment
+from grader.audit import record_event
 from grader.discover import discover
 from grader.executors import Interrupted
 from grader.executors.local import run_local, warm_kernels
+from grader.follow_through import FollowThrough
 from grader.grade_one import Execute, submission_bytes, ungraded_result, unreadable
 from grader.gradebook import (
     gradebook_csv,
@@ -78,6 +80,7 @@ from grader.graded_folder import (
     run_lock,
 )
 from grader.lms.classlist import merge_rows
+from grader.overrides import apply_overrides, check_overrides, read_overrides
 from grader.publish import class_report, prepare_report, publish_all, publish_record, rebuild
 from grader.results import (
     StudentResult,
@@ -295,6 +298,9 @@ def grade_assignment(
         from grader.limits import Limits
 
         limits = Limits()
+    a.check_key()  # a bad key or override stops the run before anything is written
+    overrides = read_overrides(out)
+    check_overrides(a, overrides)
     made = _make_out(out)
     with _unmade_on(NoKernel, made), run_lock(out), ExitStack() as private:
         if container:  # kernels run as other users of this machine: nothing of ours for them
@@ -309,11 +315,22 @@ def grade_assignment(
         jobs = jobs or os.cpu_count() or 1
         from grader.kernels.preload import preload_for
 
+        follow = FollowThrough.of(a)
+        if follow is not None:
+            private.callback(follow.close)  # its worker, if one was started
+        before = {sid: read_result(out / RESULTS / f"{sid}.json") for sid in a.ids}
+
+        def finished(result: StudentResult) -> StudentResult:  # credit, then overrides: last
+            if follow is not None:
+                result = follow.apply(result, a.expected(result.student_id))
+            return apply_overrides(result, overrides)
+
         # the kernels' zygotes start first: they import while this process writes
         def publish(result: StudentResult) -> None:  # the one writer of records
+            result = finished(result)
             publish_record(a, out, result, reveal)
             if progress:
-                progress(result)
+                progress(result)  # the points as recorded: credit and overrides in
 
         with warm_kernels(warm and bool(to_run) and cluster is None, min(jobs, len(to_run)),
                           found_sandbox, preload_for(packages)) as f:
@@ -327,7 +344,7 @@ def grade_assignment(
                 (out / LMS_SUBMISSIONS).unlink(missing_ok=True)
             if on_plan is not None:
                 progress = on_plan(len(to_run) + len(to_write)) or progress
-            publish_all(a, out, to_write, reveal, progress)
+            publish_all(a, out, [finished(r) for r in to_write], reveal, progress)
             if cluster is not None:
                 _run_on_cluster(cluster, to_run, execute, limits, publish, sandbox=sandbox,
                                 cold=cold_kernels, preload=preload_for(packages))
@@ -335,13 +352,50 @@ def grade_assignment(
                 if to_run:
                     prepare_report()
                 run_local(to_run, run, limits, jobs, publish)
-        results = {sid: read_result(out / RESULTS / f"{sid}.json") for sid in a.ids}
         graded_now = (tuple(t[0].student_id for t in to_run)
                       + tuple(r.student_id for r in to_write))
+        graded_now += _overrides_kept(a, out, kept, overrides, reveal)
+        results = {sid: read_result(out / RESULTS / f"{sid}.json") for sid in a.ids}
         rebuild(a, out, results, reveal, published=set(graded_now))
-        class_report(a, out, results, found.submissions)
+        notebooks = {s.student_id: s.path for s in found.submissions}
+        class_report(a, out, results, notebooks)
+        record_event(out, "grade", _grade_changes(before, results, graded_now),
+                     why="eulertop grade", graded=len(graded_now), kept=len(kept),
+                     notebooks={sid: str(Path(p).resolve()) for sid, p in notebooks.items()})
     return RunReport(tuple(results[s] for s in a.ids), graded_now, tuple(kept), found.problems,
                      found.notes)
+
+
+def _overrides_kept(a: Assignment, out: Path, kept: Sequence[str], overrides: Sequence[Any],
+                    reveal: bool) -> tuple[str, ...]:
+    """The records kept unchanged by this run, with the overrides as they are now (added or
+    taken back since they were written); those it rewrote."""
+    rewritten = []
+    for sid in kept:
+        record = read_result(out / RESULTS / f"{sid}.json")
+        if record is None:
+            continue
+        now_overridden = apply_overrides(record, overrides)
+        if now_overridden.overridden != record.overridden or \
+                now_overridden.points != record.points:
+            publish_record(a, out, now_overridden, reveal)
+            rewritten.append(sid)
+    return tuple(rewritten)
+
+
+def _grade_changes(before: Mapping[str, StudentResult | None],
+                   after: Mapping[str, StudentResult | None],
+                   graded: Sequence[str]) -> list[dict]:
+    """The audit trail's lines of a grading run: each student graded, points before → after."""
+    changes = []
+    for sid in dict.fromkeys(graded):
+        old, new = before.get(sid), after.get(sid)
+        if new is None:
+            continue
+        changes.append({"student": sid, "answer": "total",
+                        "before": None if old is None else old.points, "after": new.points,
+                        "why": new.status if old is None else f"regraded ({new.status})"})
+    return changes
 
 
 def _unpack(archive: Path, out: Path) -> tuple[Path, dict[Path, str]]:

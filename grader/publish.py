@@ -18,7 +18,6 @@ from grader.assignment import Assignment
 from grader.gradebook import answers_rows, feedback_html, gradebook_csv, gradebook_rows, ran_code
 from grader.graded_folder import ANSWERS, FEEDBACK, GRADES, REPORT, RESULTS
 from grader.results import StudentResult, atomic_write_text, write_result
-from grader.submissions import Submission
 
 
 def publish_record(a: Assignment, out: Path, result: StudentResult, reveal: bool) -> None:
@@ -50,14 +49,15 @@ def prepare_report() -> None:
 
 
 def class_report(a: Assignment, out: Path, results: Mapping[str, StudentResult | None],
-                  submissions: Sequence[Submission]) -> None:
-    """``OUT/report.html`` (:mod:`grader.report`); a fault there is reported, never fatal to
-    the grades already written."""
+                 notebooks: Mapping[str, Path]) -> None:
+    """``OUT/report.html`` (:mod:`grader.report`), its code comparison over ``notebooks``
+    (student id → the notebook graded); a fault there is reported, never fatal to the grades
+    already written."""
     from grader.report import build_report, write_report
     from grader.report.classdata import class_data
 
     try:
-        report = build_report(class_data(a, results), {s.student_id: s.path for s in submissions})
+        report = build_report(class_data(a, results), dict(notebooks))
         write_report(report, out / REPORT)
     except Exception as e:
         sys.stderr.write(f"eulertop grade: the class report could not be written "
@@ -79,3 +79,14 @@ def rebuild(a: Assignment, out: Path, results: Mapping[str, StudentResult | None
         key = ({k.variable: k.answer.value for k in a.expected(sid)} if reveal else None)
         page = feedback_html(a.title, r, a.students[sid]["questions"], key)
         atomic_write_text(out / FEEDBACK / f"{sid}.html", page)
+
+
+def report_notebooks(out: Path) -> dict[str, Path]:
+    """The notebooks the last grading run of ``out`` graded (from its audit trail), those still
+    there: what a rescore's class report compares, as that run's did."""
+    from grader.audit import read_trail
+
+    for line in reversed(read_trail(out)):
+        if line.get("event") == "grade" and "notebooks" in line:
+            return {sid: Path(p) for sid, p in line["notebooks"].items() if Path(p).is_file()}
+    return {}

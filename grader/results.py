@@ -35,7 +35,7 @@ import math
 import os
 import tempfile
 from collections.abc import Mapping
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -141,6 +141,10 @@ class StudentResult:
     graded_at : str
         ISO 8601 time (UTC) the record was made — the record's one volatile field: grading
         the same submissions again gives records equal in everything else.
+    overridden : dict
+        The instructor's overrides applied to this record (:mod:`grader.overrides`): answer
+        variable, or ``"total"`` → ``{"points", "was", "reason", "by", "at"}``; ``{}`` when
+        none (then absent from the file, which reads as before).
     """
 
     student_id: str
@@ -154,6 +158,7 @@ class StudentResult:
     execution: dict
     sandboxed: bool
     graded_at: str
+    overridden: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.status not in STATUSES:
@@ -162,6 +167,7 @@ class StudentResult:
         object.__setattr__(self, "points", float(self.points))
         object.__setattr__(self, "max_points", float(self.max_points))
         object.__setattr__(self, "execution", plain_json(self.execution))
+        object.__setattr__(self, "overridden", plain_json(self.overridden))
         record = self.to_dict()
         kept = _storable(record)
         if kept != record:  # rebuilt from the storable text, saying so (module docstring)
@@ -181,6 +187,8 @@ class StudentResult:
         """Plain JSON; ``StudentResult.from_dict(r.to_dict()) == r``."""
         d = {f.name: getattr(self, f.name) for f in fields(self)}
         d["answers"] = [a.to_dict() for a in self.answers]
+        if not d["overridden"]:
+            del d["overridden"]
         return d
 
     @classmethod
@@ -190,7 +198,7 @@ class StudentResult:
         unknown = sorted(set(d) - names)
         if unknown:
             raise ValueError(f"unknown fields {unknown} in a result record")
-        kw = {name: d[name] for name in names}
+        kw = {name: d[name] for name in names if name in d or name != "overridden"}
         kw["answers"] = tuple(AnswerResult.from_dict(a) for a in d["answers"])
         return cls(**kw)
 

@@ -83,7 +83,10 @@ __all__ = [
 ]
 
 KINDS = ("scalar", "vector", "angle", "boolean", "choice", "expression")
-STATUSES = ("correct", "wrong", "invalid", "missing")
+STATUSES = ("correct", "follows", "wrong", "invalid", "missing")
+"""``follows``: wrong against the key, right against what the student's own earlier answers
+give (follow-through credit, :mod:`grader.follow_through`); the grader sets it, never
+:func:`grade`."""
 
 N_SAMPLE_CANDIDATES = 32
 """Sample points drawn for an expression answer (those where the key is undefined are dropped)."""
@@ -150,6 +153,17 @@ class Answer:
         ``angle`` only: compare modulo this (e.g. 2π) when set.
     description : str
         One line shown next to the answer variable.
+    accepted : tuple
+        Other values accepted as correct, compared under the same rule (an instructor's key
+        change, ``eulertop key set --accept``: another sign convention, say); of the answer's
+        kind and form, as ``value``.
+    depends_on : tuple of str
+        Names of earlier answers of the same question this one is computed from (the statement
+        asks for it from them): a wrong value that follows from the student's own earlier
+        answers earns follow-through credit (:mod:`grader.follow_through`).
+
+    ``accepted`` and ``depends_on`` are written to the key file only when set, so a key without
+    them reads, and hashes, as before.
 
     Raises
     ------
@@ -171,6 +185,8 @@ class Answer:
     symbols: tuple[str, ...] = ()
     period: float | None = None
     description: str = ""
+    accepted: tuple[Any, ...] = ()
+    depends_on: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         _validate_fields(self)
@@ -178,6 +194,13 @@ class Answer:
         key = _read_key(form, self.value, "value")
         object.__setattr__(self, "value", _to_json(key))
         _require_gradable_key(self)
+        object.__setattr__(self, "accepted", tuple(
+            _to_json(_read_key(form, v, "accepted")) for v in self.accepted))
+        depends = tuple(self.depends_on)
+        if not all(isinstance(n, str) and n.isidentifier() and n != self.name for n in depends):
+            raise ParameterError("depends_on", f"answer {self.name!r}: names of other answers, "
+                                 f"got {depends!r}")
+        object.__setattr__(self, "depends_on", depends)
         if self.mistakes:  # read in the graded form once, for all of them
             form = _Form.of(self)
             key = _read_key(form, self.value, "value")
@@ -201,6 +224,11 @@ class Answer:
         d["mistakes"] = [{f.name: _json_copy(getattr(m, f.name)) for f in fields(m)}
                          for m in self.mistakes]
         d["options"], d["symbols"] = list(self.options), list(self.symbols)
+        for optional in ("accepted", "depends_on"):  # only when set: older keys hash as before
+            if d[optional]:
+                d[optional] = list(d[optional])
+            else:
+                del d[optional]
         return d
 
     @classmethod
@@ -337,8 +365,10 @@ def grade(answer: Answer, submitted: Any) -> Verdict:
     value, unreadable = _reading(form, submitted)
     if unreadable:
         return unreadable
-    if _matches(answer, value, _read_key(form, answer.value, "value")):
-        return Verdict("correct", answer.points, answer.points, f"correct: {_show(form, value)}")
+    for key in (answer.value, *answer.accepted):
+        if _matches(answer, value, _read_key(form, key, "value")):
+            return Verdict("correct", answer.points, answer.points,
+                           f"correct: {_show(form, value)}")
     for mistake in answer.mistakes:
         if _matches(answer, value, _read_key(form, mistake.value, "mistakes")):
             return _verdict(form, "wrong", mistake.feedback, mistake=mistake.name)

@@ -277,6 +277,7 @@ def _generate(args: argparse.Namespace, class_lists: Mapping[str, Any] | None = 
     return generate_assignment(
         roster, args.out, families, problems=problems, questions=questions,
         spec_file=None if spec is None else spec.path, seed=seed, title=title,
+        follow_through=None if spec is None else spec.follow_through,
         force=args.force, progress=_progress,
     )
 

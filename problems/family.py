@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 import numbers
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -52,6 +52,13 @@ class IllPosed(Exception):
 
 class FamilyError(ValueError):
     """A family that does not keep the contract; the message names its file."""
+
+
+def follows_from(answer: Answer | None, *names: str) -> Answer | None:
+    """``answer`` declared as computed from the earlier answers ``names`` of its question
+    (``Answer.depends_on``; the family's ``follow`` recomputes it from them), None left None
+    (a rejected draw's answer)."""
+    return None if answer is None else replace(answer, depends_on=tuple(names))
 
 
 def reject_unless(condition: bool, reason: str) -> None:
@@ -288,6 +295,16 @@ class Family:
     def statement(self, params: Mapping[str, Any]) -> str:
         return self.module.statement(dict(params))
 
+    def follow(self, name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> Any:
+        """Answer ``name`` recomputed from the parameters and the values ``earlier`` gives the
+        answers it depends on (``Answer.depends_on``): the family's ``follow``, what
+        follow-through credit compares a student's answer with; LookupError where the family
+        has none."""
+        own = getattr(self.module, "follow", None)
+        if own is None:
+            raise LookupError(f"{self.where}: no follow() for answer {name!r}")
+        return own(name, dict(params), dict(earlier))
+
     def heading(self, params: Mapping[str, Any]) -> str:
         """The question's title for ``params``: the family's ``heading``, else ``TITLE``."""
         own = getattr(self.module, "heading", None)
@@ -380,7 +397,7 @@ def check_contract(module: Any, where: str) -> None:
         text = getattr(module, attr)
         if not isinstance(text, str) or not text.strip() or "\n" in text:
             raise FamilyError(f"{where}: {attr} must be one line of text, got {text!r}")
-    for attr in ("answers", "statement", "draw", "heading", "prepare"):
+    for attr in ("answers", "statement", "draw", "heading", "prepare", "follow"):
         if hasattr(module, attr) and not callable(getattr(module, attr)):
             raise FamilyError(f"{where}: {attr} must be a function")
     from problems.conventions import TOPICS

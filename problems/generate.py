@@ -486,6 +486,7 @@ def generate_assignment(
     spec_file: Path | None = None,
     seed: int | None = None,
     title: str | None = None,
+    follow_through: float | None = None,
     force: bool = False,
     progress: Progress | None = None,
     jobs: int | None = None,
@@ -495,6 +496,10 @@ def generate_assignment(
     The questions are ``problems`` (family names; default: every family), or ``questions``
     (from an assignment spec, :mod:`problems.spec`: pools, parameters, points, tolerances),
     whose file ``spec_file`` is copied into ``out`` as :data:`SPEC_COPY`.
+
+    ``follow_through`` (0 to 1; the spec's setting) is recorded in the manifest as the fraction
+    of points an answer that follows from the student's own wrong earlier answer earns
+    (:mod:`grader.follow_through`; absent: 1.0, 0: none).
 
     ``jobs`` processes draw the students' questions and write their notebooks (default: one
     per usable core, from :data:`PARALLEL_MIN` students on); the files are byte-identical to
@@ -543,6 +548,8 @@ def generate_assignment(
     }
     if planned is not None:
         manifest["questions"] = planned
+    if follow_through is not None:
+        manifest["follow_through"] = follow_through
     outside = _outside_families(families, questions, out)
     if outside:
         manifest["families"] = outside

@@ -30,6 +30,12 @@ seed that reproduces it and what failed:
     tolerance), and the statement never types a tolerance itself.
 ``time per variant``
     Drawing a variant takes at most :data:`MAX_SECONDS`.
+``follow-through gives back the key``
+    An answer that declares ``depends_on`` names other answers of its question, and the
+    family's ``follow`` given the recorded parameters and the key's values of those answers
+    recomputes it to within its own tolerance (the consistency follow-through credit relies
+    on: a student whose earlier answers are right is judged as by the key). A family without
+    such answers passes it trivially.
 ``solutions get full marks (sandbox)``
     One solutions notebook holding the variants of the first ``sandbox_seeds`` seeds as its
     questions is run as a submission and compared with their key by ``grade`` — the grader's
@@ -72,6 +78,7 @@ CHECKS = (
     "no answer value in the statement",
     "every tolerance stated in the notebook",
     "time per variant",
+    "follow-through gives back the key",
     "solutions get full marks (sandbox)",
 )
 
@@ -164,11 +171,12 @@ def self_test(family: Family, seeds: Iterable[int], sandbox_seeds: int | None = 
         tallies[CHECKS[7]].record(seed, f"took {times[-1]:.2f} s" if slow else None)
     for seed, variant in variants.items():  # after every draw: no state of its own draw left
         tallies[CHECKS[2]].record(seed, _safely(_recomputed, family, variant))
+        tallies[CHECKS[8]].record(seed, _safely(_follow_problem, family, variant))
     timing = f"max {max(times):.3f} s, mean {sum(times) / len(times):.3f} s" if times else ""
-    checks = [tallies[name].result(timing if name == CHECKS[7] else "") for name in CHECKS[:8]]
+    checks = [tallies[name].result(timing if name == CHECKS[7] else "") for name in CHECKS[:-1]]
     chosen = dict(list(variants.items())[:sandbox_seeds])
     checks.append(full_marks(family, chosen, grade_solutions) if chosen else
-                  CheckResult(CHECKS[8], 0, 1, ("no variant to run",)))
+                  CheckResult(CHECKS[-1], 0, 1, ("no variant to run",)))
     return Report(family.name, seeds, tuple(checks))
 
 
@@ -242,6 +250,28 @@ def _recomputed(family: Family, variant: Variant) -> str | None:
     if _json(again) != _json(variant):
         first = next(k for k, v in variant.to_dict().items() if again.to_dict().get(k) != v)
         return f"recomputed from its recorded parameters, {first!r} differs"
+    return None
+
+
+def _follow_problem(family: Family, variant: Variant) -> str | None:
+    names = {a.name for a in variant.answers}
+    recorded = json.loads(json.dumps(variant.parameters))
+    key = {a.name: a.value for a in variant.answers}
+    for answer in variant.answers:
+        if not answer.depends_on:
+            continue
+        unknown = [n for n in answer.depends_on if n not in names or n == answer.name]
+        if unknown:
+            return f"answer {answer.name!r} depends on {', '.join(map(repr, unknown))}, " \
+                   "not another answer of its question"
+        try:
+            value = family.follow(answer.name, recorded, {n: key[n] for n in answer.depends_on})
+        except Exception as e:
+            return f"follow({answer.name!r}) from the key raised {type(e).__name__}: {e}"
+        verdict = grade(answer, value.tolist() if hasattr(value, "tolist") else value)
+        if verdict.status != "correct":
+            return f"follow({answer.name!r}) from the key's own values is graded " \
+                   f"{verdict.status}: {verdict.message}"
     return None
 
 
@@ -366,9 +396,9 @@ def full_marks(family: Family, variants: dict[int, Variant],
 
     seeds, chosen = list(variants), list(variants.values())
     if grade_solutions is None:
-        return CheckResult(CHECKS[8], 0, len(seeds), ("not run: no grader was given to run "
+        return CheckResult(CHECKS[-1], 0, len(seeds), ("not run: no grader was given to run "
                                                       "the solutions notebook",))
-    tally = _Tally(CHECKS[8])
+    tally = _Tally(CHECKS[-1])
     nb = build_notebook(f"{family.name} self-test", {"id": "selftest"}, chosen,
                         solutions=True, families={family.name: family})
     with tempfile.TemporaryDirectory(prefix="eulertop-selftest-") as folder:
@@ -376,7 +406,7 @@ def full_marks(family: Family, variants: dict[int, Variant],
         path.write_text(notebook_text(nb), encoding="utf-8")
         run = grade_solutions(path, key_entry(chosen), 120 + 2 * len(chosen))
     if run.status != "ok":
-        return CheckResult(CHECKS[8], 0, len(seeds),
+        return CheckResult(CHECKS[-1], 0, len(seeds),
                            (f"seeds {seeds[0]}–{seeds[-1]}: the solutions notebook did not run: "
                             f"{run.status}: {run.message}",))
     for k, seed in enumerate(seeds, start=1):

@@ -59,7 +59,7 @@ PROBE_ATTEMPTS = 400
 """Draws :func:`check_spec` tries per family of a question before it calls the settings
 ill-posed (and the most it keeps to learn the answers' names from)."""
 
-_TOP_KEYS = ("title", "seed", "roster", "families", "questions")
+_TOP_KEYS = ("title", "seed", "roster", "families", "follow_through", "questions")
 _QUESTION_KEYS = ("family", "pool", "points", "answers", "parameters")
 _ANSWER_KEYS = ("points", "rtol", "atol")
 
@@ -92,6 +92,7 @@ class Spec:
     roster: Path | None
     families: tuple[Path, ...]
     questions: tuple[QuestionSpec, ...]
+    follow_through: float | None = None  # fraction of points follow-through earns (issue 26)
 
     def error(self, key: Sequence[str | int], problem: str) -> SpecError:
         """A :class:`SpecError` for ``key`` (a path into the TOML document)."""
@@ -206,13 +207,16 @@ def read_spec(path: Path) -> Spec:
             raise draft.error(("families", i), f"must be a folder (a string), got {folder!r}")
         if not (path.parent / folder).is_dir():
             raise draft.error(("families", i), f"{path.parent / folder}: no such folder")
+    follow = _positive(draft, document, ("follow_through",), zero=True)
+    if follow is not None and follow > 1:
+        raise draft.error(("follow_through",), f"must be a fraction from 0 to 1, got {follow!r}")
     entries = document.get("questions")
     if not isinstance(entries, list) or not entries:
         raise draft.error(("questions",), "give at least one [[questions]] table")
     questions = tuple(_question(draft, q, i) for i, q in enumerate(entries))
     base = path.parent
     return Spec(path, text, title, seed, None if roster is None else base / roster,
-                tuple(base / f for f in folders or ()), questions)
+                tuple(base / f for f in folders or ()), questions, follow)
 
 
 def _known(spec: Spec, table: Any, key: tuple, allowed: Sequence[str]) -> None:

@@ -36,12 +36,14 @@ FLOORS = {
     "grader.execute": 23, "grader.compare": 23,
     # 4: the unit, and what it is graded against, and where its records go
     "grader.assignment": 24, "grader.graded_folder": 24, "grader.grade_one": 24,
+    "grader.overrides": 24, "grader.audit": 24, "grader.follow_through": 24,
+    "grader.key_edit": 24,
     # 5: views of records, and file formats
     "grader.gradebook": 25, "grader.progress": 25, "grader.lms": 25, "grader.report": 25,
     # 6: where grade_one runs; where submissions come from
     "grader.executors": 26, "grader.discover": 26, "grader.publish": 26,
     # 7: the class run
-    "grader.pipeline": 27,
+    "grader.pipeline": 27, "grader.rescore": 27,
     # 8: front ends
     "grader": 28, "grader.cli": 28, "grader.check": 28, "grader.doctor": 28,
     "grader.report.cli": 28, "grader.lms.export": 28, "grader.hosted": 28,

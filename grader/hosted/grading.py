@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from grader.assignment import Assignment, load_assignment
+from grader.follow_through import FollowThrough
 from grader.grade_one import grade_one
 from grader.limits import Limits
 from grader.results import StudentResult
@@ -142,9 +143,18 @@ def find_notebook(folder: Path, preferred: str | None = None) -> tuple[Path | No
 
 def grade_notebook(a: Assignment, student_id: str, path: Path, limits: Limits,
                    isolation: Isolation) -> StudentResult:
-    """Grade ``path`` as ``student_id``'s submission (their variant's key): its record."""
-    return grade_one(Submission(student_id, Path(path)), a.expected(student_id),
-                     a.key_hash(student_id), limits, isolation.execute)
+    """Grade ``path`` as ``student_id``'s submission (their variant's key): its record, with
+    follow-through credit where the assignment gives it (:mod:`grader.follow_through`)."""
+    expected = a.expected(student_id)
+    result = grade_one(Submission(student_id, Path(path)), expected, a.key_hash(student_id),
+                       limits, isolation.execute)
+    follow = FollowThrough.of(a)
+    if follow is None:
+        return result
+    try:
+        return follow.apply(result, expected)
+    finally:
+        follow.close()
 
 
 def env_root(variable: str, default: str) -> Path:

@@ -163,7 +163,9 @@ def _item_matches(data: ClassData, item: Item) -> list[Match]:
                if item.variable in data.keys[s]}  # a variant may not ask for it
     keys = {s: numeric(a.value) for s, a in answers.items()}
     values = submitted_values(data, item)
-    wrong = {s: x for s, (a, _, x) in values.items() if a.verdict.status == "wrong"}
+    # an answer that follows from a wrong earlier one is not the key's value either: the same
+    # one in two notebooks is as telling as the same wrong one
+    wrong = {s: x for s, (a, _, x) in values.items() if a.verdict.status in ("wrong", "follows")}
     out = []
     for shape in {x.shape for x in wrong.values()}:
         ids = [s for s, v in keys.items() if v is not None and v.shape == shape]

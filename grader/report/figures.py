@@ -21,6 +21,7 @@ from matplotlib.figure import Figure
 
 COLOURS = {
     "correct": "#2ca02c",
+    "follows": "#98df8a",
     "known mistake": "#ff7f0e",
     "wrong": "#d62728",
     "invalid": "#9467bd",
@@ -52,14 +53,17 @@ def score_histogram(percent: Sequence[float]) -> str:
 
 
 def outcomes(labels: Sequence[str], counts: Sequence[Mapping[str, int]]) -> str:
-    """Stacked horizontal bars: per answer, how many students were correct, made a known
-    mistake, were otherwise wrong, invalid or left it unanswered."""
+    """Stacked horizontal bars: per answer, how many students were correct, followed through
+    from their own earlier answers, made a known mistake, were otherwise wrong, invalid or
+    left it unanswered."""
     fig = Figure(figsize=(7, 0.8 + 0.28 * len(labels)), layout="constrained")
     ax = fig.add_subplot()
     y = np.arange(len(labels))[::-1]
     left = np.zeros(len(labels))
-    for name in ("correct", "known mistake", "wrong", "invalid", "unanswered"):
-        width = np.array([c[name] for c in counts], dtype=float)
+    for name in ("correct", "follows", "known mistake", "wrong", "invalid", "unanswered"):
+        width = np.array([c.get(name, 0) for c in counts], dtype=float)
+        if name == "follows" and not width.any():
+            continue  # in the legend only where some answer earned follow-through credit
         ax.barh(y, width, left=left, color=COLOURS[name], label=name, height=0.75)
         left += width
     ax.set_yticks(y, labels)

@@ -31,7 +31,7 @@ import numpy as np
 
 from grader.report.classdata import ClassData
 
-CATEGORIES = ("correct", "known mistake", "wrong", "invalid", "unanswered")
+CATEGORIES = ("correct", "follows", "known mistake", "wrong", "invalid", "unanswered")
 """How one answer is counted (in this order in tables and figures)."""
 
 BROKEN_FACILITY = 0.05

@@ -30,7 +30,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from problems.answers import Answer, Mistake
-from problems.family import Parameter, redrawn_until_well_posed, reject_unless
+from problems.family import Parameter, follows_from, redrawn_until_well_posed, reject_unless
 from problems.rounding import format_sig, latex_sig, round_sig
 from solver.inertia import angular_momentum, kinetic_energy, shape_tensor
 from solver.parameters import principal_moments
@@ -88,9 +88,9 @@ def _answers(tensor, omega, T_naive, L_naive, naive, extra_angle=()) -> tuple | 
                 "J", "kinetic energy"),
         _answer("L", "vector", L, [(name, L_naive, L_feedback)], "kg m^2/s",
                 "angular momentum (same axes as ω)"),
-        _answer("angle", "angle", angle,
-                [("degrees", np.degrees(angle), _DEGREES), *extra_angle], "rad",
-                "angle between L and ω"),
+        follows_from(_answer("angle", "angle", angle,
+                             [("degrees", np.degrees(angle), _DEGREES), *extra_angle], "rad",
+                             "angle between L and ω"), "L"),
     )
     return None if None in answers else answers
 
@@ -237,3 +237,14 @@ def heading(params: Mapping[str, Any]) -> str:
 
 def statement(params: Mapping[str, Any]) -> str:
     return SCENES[params["scene"]][2](params)
+
+
+def follow(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> Any:
+    """``angle`` between the student's own ``L`` and the given ω (along the axle, for the disc
+    askew)."""
+    if name != "angle":
+        raise LookupError(name)
+    omega = params["omega"]
+    omega = np.array(omega if params["scene"] == "tumbling_satellite" else [0.0, 0.0, omega],
+                     dtype=float)
+    return _angle(np.array(earlier["L"], dtype=float), omega)

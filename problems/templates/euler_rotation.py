@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from problems.answers import Answer, Mistake
-from problems.family import Parameter, reject_unless
+from problems.family import Parameter, follows_from, reject_unless
 from problems.rounding import format_sig, latex_sig, round_sig
 from solver.euler_angles import omega_body, rotation_matrix, to_body, to_inertial
 
@@ -181,7 +181,7 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     """
     alpha, beta, gamma = (params[n] for n in _ANGLES)
     rates = np.array([params[n] for n in _RATES])
-    found = (_matrix_answer(alpha, beta, gamma), _vector_answer(params)[0],
+    found = (_matrix_answer(alpha, beta, gamma), follows_from(_vector_answer(params)[0], "R"),
              _omega_answer(alpha, beta, gamma, rates))
     reject_unless(None not in found, "a known mistake close to the key")
     return found
@@ -204,3 +204,15 @@ def statement(params: Mapping[str, Any]) -> str:
         f"2. {_vector_answer(params)[1]}\n"
         "3. `omega_body`: the body components of the angular velocity."
     )
+
+
+def follow(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> Any:
+    """``r_lab`` or ``F_body`` with the student's own rotation matrix ``R`` (its 9 entries row
+    by row): ``Rᵀ r'`` or ``R F`` (R11, :func:`solver.euler_angles.to_inertial`,
+    :func:`~solver.euler_angles.to_body`)."""
+    R = np.array(earlier["R"], dtype=float).reshape(3, 3)
+    if name == "r_lab" and "r_body" in params:
+        return to_inertial(R, np.array(params["r_body"])).tolist()
+    if name == "F_body" and "F_lab" in params:
+        return to_body(R, np.array(params["F_lab"])).tolist()
+    raise LookupError(name)

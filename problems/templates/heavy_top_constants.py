@@ -458,7 +458,7 @@ def _answers(top: Top, state: State) -> tuple[Answer, ...] | None:
         Answer("p_alpha", "scalar", pa, unit="kg m^2/s", rtol=RTOL, mistakes=mistakes[1],
                description="p_α, the momentum conjugate to α"),
         Answer("E_prime", "scalar", e, unit="J", rtol=RTOL, mistakes=mistakes[2],
-               description="E' = E − p_γ²/(2 I3)"),
+               description="E' = E − p_γ²/(2 I3)", depends_on=("p_gamma",)),
     )
     return answers
 
@@ -501,3 +501,15 @@ def heading(params: Mapping[str, Any]) -> str:
 
 def statement(params: Mapping[str, Any]) -> str:
     return _statement(top_from_params(params), state_from_params(params))
+
+
+def follow(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> Any:
+    """``E_prime`` from the student's own ``p_gamma``, as the statement defines it:
+    ``E − p_γ²/(2 I3)``, E the top's energy (R15, :func:`solver.heavy_top.constants_of_motion`)."""
+    if name != "E_prime":
+        raise LookupError(name)
+    top, state = top_from_params(params), state_from_params(params)
+    _, p_gamma, e_prime = (float(np.atleast_1d(x)[0])
+                           for x in constants_of_motion(*state_args(top, state)))
+    energy = e_prime + p_gamma**2 / (2 * top.I3)
+    return energy - float(earlier["p_gamma"]) ** 2 / (2 * top.I3)

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from problems.answers import Answer, Mistake
-from problems.family import Parameter, redrawn_until_well_posed, reject_unless
+from problems.family import Parameter, follows_from, redrawn_until_well_posed, reject_unless
 from problems.rounding import format_sig, latex_sig, round_sig
 from solver.inertia import parallel_axis, point_mass_tensor, principal_axes, shape_tensor
 
@@ -123,10 +123,12 @@ def _tensor_answers(tensor: np.ndarray, mistaken: dict[str, np.ndarray]) -> list
                        "diagonal (I_xx, I_yy, I_zz) of the inertia tensor about O"),
         _vector_answer("I_offdiag", tensor[iu], off_mistakes, "kg m^2",
                        "products of inertia (I_xy, I_xz, I_yz) about O"),
-        _vector_answer("moments", moments, moment_mistakes, "kg m^2",
-                       "principal moments about O, ascending"),
-        _vector_answer("axis_max", axis, axis_mistakes, "",
-                       "unit principal axis of the largest moment, z component > 0"),
+        follows_from(_vector_answer("moments", moments, moment_mistakes, "kg m^2",
+                                    "principal moments about O, ascending"),
+                     "I_diag", "I_offdiag"),
+        follows_from(_vector_answer("axis_max", axis, axis_mistakes, "",
+                                    "unit principal axis of the largest moment, z component > 0"),
+                     "I_diag", "I_offdiag"),
     ]
 
 
@@ -271,3 +273,17 @@ def heading(params: Mapping[str, Any]) -> str:
 
 def statement(params: Mapping[str, Any]) -> str:
     return SCENES[params["scene"]][2](params)
+
+
+def follow(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> Any:
+    """``moments`` or ``axis_max`` from the student's own tensor (their diagonal and products
+    of inertia, as the statement defines them): its eigenvalues ascending, or the unit axis of
+    the largest with a positive z component (R4, :func:`solver.inertia.principal_axes`)."""
+    (xx, yy, zz), (xy, xz, yz) = earlier["I_diag"], earlier["I_offdiag"]
+    tensor = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]], dtype=float)
+    moments, axes = principal_axes(tensor)
+    if name == "moments":
+        return moments.tolist()
+    if name == "axis_max":
+        return _positive_z(axes[:, 2]).tolist()
+    raise LookupError(name)

@@ -165,7 +165,8 @@ def _figure_answer(figure: str) -> Answer:
     mistakes = tuple(Mistake(f"said_{other}", other, _FIGURE_FEEDBACK[figure, other])
                      for other in OPTIONS if other != figure)
     return Answer("motion", "choice", figure, options=OPTIONS, mistakes=mistakes,
-                  description='the figure the axis traces: "waves", "loops" or "cusps"')
+                  description='the figure the axis traces: "waves", "loops" or "cusps"',
+                  depends_on=("alpha_dot1", "alpha_dot2"))
 
 
 def _statement(top: Top, state: State) -> str:
@@ -211,3 +212,16 @@ def heading(params: Mapping[str, Any]) -> str:
 
 def statement(params: Mapping[str, Any]) -> str:
     return _statement(top_from_params(params), state_from_params(params))
+
+
+def follow(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> Any:
+    """``motion`` from the student's own precession rates at the turning points (R18): a rate
+    zero (within the answers' own tolerance, ``RTOL`` of the larger) makes cusps; rates of
+    opposite signs, loops; else waves."""
+    if name != "motion":
+        raise LookupError(name)
+    rates = (float(earlier["alpha_dot1"]), float(earlier["alpha_dot2"]))
+    scale = max(abs(r) for r in rates)
+    if scale == 0 or min(abs(r) for r in rates) <= RTOL * scale:
+        return "cusps"
+    return "loops" if rates[0] * rates[1] < 0 else "waves"

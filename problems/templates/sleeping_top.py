@@ -223,7 +223,8 @@ def _stable_answer(top: Top, omega3: float) -> Answer:
            "2 √(M g l I1)/I3 (R19, with I1 about the tip): compare the given spin with it.")
     return Answer("stable", "boolean", stable, points=0.5,
                   mistakes=(Mistake("wrong_side", not stable, why),),
-                  description="does the top sleep (stay vertical) at the given spin?")
+                  description="does the top sleep (stay vertical) at the given spin?",
+                  depends_on=("omega3_c",))
 
 
 def _statement(top: Top, omega3: float) -> str:
@@ -275,3 +276,10 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
 
 def statement(params: Mapping[str, Any]) -> str:
     return _statement(top_from_params(params), params["omega3"])
+
+
+def follow(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> Any:
+    """``stable`` from the student's own critical spin: the given spin at least it (R19)."""
+    if name != "stable":
+        raise LookupError(name)
+    return bool(params["omega3"] >= float(earlier["omega3_c"]))

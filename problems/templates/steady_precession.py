@@ -137,7 +137,8 @@ def _answers(M, arm, Icm, I3, g, beta0, omega3) -> tuple[Answer, ...]:
                 "percent."),
     )
     answers.append(Answer("slow_error", "scalar", error, rtol=RTOL, mistakes=mistakes,
-                          description="(slow_approx − slow)/slow"))
+                          description="(slow_approx − slow)/slow",
+                          depends_on=("slow", "slow_approx")))
     return tuple(answers)
 
 
@@ -201,3 +202,12 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
 def statement(params: Mapping[str, Any]) -> str:
     noun = next(k.noun for k in TOP_KINDS if k.shape == params["top"])
     return _statement(noun, params)
+
+
+def follow(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> Any:
+    """``slow_error`` from the student's own slow rate and its approximation, as the statement
+    defines it: (``slow_approx`` − ``slow``)/``slow``."""
+    if name != "slow_error":
+        raise LookupError(name)
+    slow, approx = float(earlier["slow"]), float(earlier["slow_approx"])
+    return (approx - slow) / slow

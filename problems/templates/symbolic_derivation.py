@@ -297,7 +297,8 @@ def _number_answer(q: Quantity, c: _Compiled, values: list[float]) -> Answer:
                                 "β is in radians; this value comes from reading it as degrees."))
     return Answer(q.name, "scalar", float(c.key(*values)), unit=q.unit, rtol=RTOL,
                   mistakes=tuple(m for m in mistakes if math.isfinite(m.value)),
-                  description=f"{q.name} for the given top and state")
+                  description=f"{q.name} for the given top and state",
+                  depends_on=(f"{q.name}_expr",))
 
 
 def _statement(q: Quantity, params: dict[str, float]) -> str:
@@ -356,3 +357,15 @@ def heading(params: Mapping[str, Any]) -> str:
 def statement(params: Mapping[str, Any]) -> str:
     q, _ = _quantity(params)
     return _statement(q, {n: params[n] for n in q.symbols})
+
+
+def follow(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> Any:
+    """The value from the student's own expression, evaluated at the given parameters
+    (:func:`problems.expressions.evaluate_expression`: parsed within its limits, never run)."""
+    from problems.expressions import evaluate_expression
+
+    q, _ = _quantity(params)
+    if name != q.name:
+        raise LookupError(name)
+    points = {n: np.array([float(params[n])]) for n in q.symbols}
+    return float(evaluate_expression(str(earlier[f"{q.name}_expr"]), q.symbols, points)[0])

@@ -203,7 +203,7 @@ def _answers(d: Draw) -> tuple[Answer, ...]:
         Answer("Omega", "scalar", Omega, unit="rad/s", rtol=RTOL, mistakes=tuple(omega_m),
                description="Ω, body-frame precession rate of ω about ê3 (signed)"),
         Answer("T_body", "scalar", period, unit="s", rtol=RTOL, mistakes=tuple(period_m),
-               description="period of the body-frame precession"),
+               description="period of the body-frame precession", depends_on=("Omega",)),
         Answer("omega_t", "vector", symmetric_top_omega(d.I1, d.I3, d.omega0, d.t).tolist(),
                unit="rad/s", rtol=RTOL, mistakes=tuple(vector_m),
                description="[ω1, ω2, ω3] at time t, body frame"),
@@ -253,3 +253,10 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
 
 def statement(params: Mapping[str, Any]) -> str:
     return _statement(_draw_of(params))
+
+
+def follow(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> Any:
+    """``T_body`` from the student's own precession rate: the period 2π/|Ω| (R8)."""
+    if name != "T_body":
+        raise LookupError(name)
+    return 2 * math.pi / abs(float(earlier["Omega"]))

@@ -192,8 +192,8 @@ def test_records_round_trip_and_the_gradebook_is_built_from_them(hw, first_run):
     for row, r in zip(rows, report.results, strict=True):
         assert float(row["total"]) == r.points == float(row["q1"]) + float(row["q2"])
         assert (float(row["maximum"]), row["status"]) == (r.max_points, r.status)
-    assert sorted(p.name for p in out.iterdir()) == ["answers.csv", "feedback", "grades.csv",
-                                                     "report.csv", "report.html",
+    assert sorted(p.name for p in out.iterdir()) == ["answers.csv", "audit.jsonl", "feedback",
+                                                     "grades.csv", "report.csv", "report.html",
                                                      "report_items.csv", "results"]
 
 

@@ -1,0 +1,153 @@
+"""Benchmark ``eulertop rescore`` on a class of ``--students`` (300): how long a key fix takes to
+reach the gradebook when no notebook runs again (issue 26).
+
+Makes an assignment of every built-in family (14 questions a student) for the class, and
+records of a graded class without running a kernel: each student's answers are literals in a
+notebook's code cell, read back by the tests' fake execution stage (``LiteralExecute``). What
+is measured is what happens after the answers are extracted: comparing them with the key,
+follow-through, overrides, writing the records, ``grades.csv``, ``answers.csv``, every feedback
+page and the class report. A third of the students get an earlier answer of every
+follow-through chain wrong and the later one right from it (so each rescore recomputes those),
+every fifth one answer 10 % off. Then, in one run:
+
+* ``eulertop rescore HW`` as a fresh process (start-up included) after a key change (every
+  scalar answer's ``rtol`` widened), the median of ``--runs`` runs, and the same with
+  ``--dry-run`` (compare and count, write nothing);
+* the time the first grading of the class with that fake execution stage took in-process, for
+  scale (a real grading run adds every notebook's execution to it:
+  ``benchmarks/bench_grade.py``).
+
+Run from the repository root: ``PYTHONPATH=. python benchmarks/bench_rescore.py [--students 300]
+[--runs 3]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def submissions(hw: Path, folder: Path) -> int:
+    """Each student's notebook (see the module docstring); how many chained answers follow
+    from a wrong earlier one."""
+    import nbformat
+    import numpy as np
+
+    from problems.templates import FAMILIES
+
+    key = json.loads((hw / "key.json").read_text())
+    manifest = json.loads((hw / "assignment.json").read_text())
+    folder.mkdir(parents=True)
+    chained = 0
+    for n, (sid, entry) in enumerate(key["students"].items()):
+        answers = {}
+        for k, (q, question) in enumerate(zip(entry["questions"],
+                                              manifest["students"][sid]["questions"],
+                                              strict=True), start=1):
+            values = {a["name"]: a["value"] for a in q["answers"]}
+            for a in q["answers"]:
+                answers[f"q{k}_{a['name']}"] = a["value"]
+            if n % 3 == 1:
+                for a in q["answers"]:
+                    first = (a.get("depends_on") or [None])[0]
+                    if first is None or not isinstance(values[first], float):
+                        continue
+                    earlier = dict(values, **{first: values[first] * 1.2})
+                    value = FAMILIES[question["family"]].follow(
+                        a["name"], question["parameters"],
+                        {d: earlier[d] for d in a["depends_on"]})
+                    answers[f"q{k}_{first}"] = earlier[first]
+                    answers[f"q{k}_{a['name']}"] = np.asarray(value).tolist()
+                    chained += 1
+        if n % 5 == 0:
+            name = next(v for v, x in answers.items() if isinstance(x, float))
+            answers[name] *= 1.1
+        code = "\n".join(f"{name} = {value!r}" for name, value in answers.items())
+        nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(code)])
+        (folder / f"{sid}.ipynb").write_text(nbformat.writes(nb))
+    return chained
+
+
+def widen(hw: Path, rtol: float) -> None:
+    """Every scalar answer's relative tolerance set to ``rtol`` (its known mistakes kept only
+    where still told apart), as ``eulertop key set`` does."""
+    from dataclasses import replace
+
+    from grader.assignment import load_assignment
+    from grader.key_edit import set_answer, write_key
+
+    a = load_assignment(hw)
+    names = {f"q{q['question']}_{x['name']}" for e in a.key["students"].values()
+             for q in e["questions"] for x in q["answers"] if x["kind"] == "scalar"}
+    for name in sorted(names):
+        key, _ = set_answer(a, name, rtol=rtol)
+        a = replace(a, key=key)
+    write_key(hw, a.key)
+
+
+def timed(command: list[str]) -> tuple[float, str]:
+    start = time.perf_counter()
+    done = subprocess.run(command, capture_output=True, text=True, cwd=ROOT, check=False)
+    seconds = time.perf_counter() - start
+    if done.returncode != 0:
+        raise SystemExit(f"{' '.join(command)} failed:\n{done.stdout}\n{done.stderr}")
+    return seconds, done.stdout
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--students", type=int, default=300)
+    parser.add_argument("--runs", type=int, default=3)
+    args = parser.parse_args()
+    sys.path.insert(0, str(ROOT))
+    from benchmarks.bench_grade import machine
+    from grader.pipeline import grade_assignment
+    from problems.generate import generate_assignment
+    from problems.roster import Roster
+    from problems.templates import FAMILIES
+    from tests.grader.report.synthetic_class import LiteralExecute
+
+    print(f"machine: {machine()}")
+    with tempfile.TemporaryDirectory() as tmp:
+        hw = Path(tmp) / "HW"
+        roster = Roster(("id", "name"), tuple({"id": f"s{i:03d}", "name": f"Student {i}"}
+                                               for i in range(args.students)))
+        start = time.perf_counter()
+        generate_assignment(roster, hw, FAMILIES, seed=26)
+        print(f"generated {args.students} students x {len(FAMILIES)} questions in "
+              f"{time.perf_counter() - start:.1f} s")
+        chained = submissions(hw, Path(tmp) / "subs")
+        start = time.perf_counter()
+        grade_assignment(hw, Path(tmp) / "subs", limits="LIMITS", execute=LiteralExecute())
+        graded = time.perf_counter() - start
+        print(f"graded (fake execution stage, in-process): {graded:.1f} s; {chained} answers "
+              "follow from a wrong earlier one")
+        widen(hw, 0.05)
+        command = [sys.executable, "-m", "eulertop", "rescore", str(hw)]
+        dry, wet = [], []
+        for run in range(args.runs):
+            seconds, out = timed([*command, "--dry-run"])
+            dry.append(seconds)
+            seconds, out = timed(command)
+            wet.append(seconds)
+            if run == 0:
+                print("first rescore said: " + out.strip().splitlines()[-1])
+        print(f"eulertop rescore, {args.students} students (fresh process, median of "
+              f"{args.runs}): {statistics.median(wet):.2f} s "
+              f"(runs: {', '.join(f'{s:.2f}' for s in wet)})")
+        print(f"eulertop rescore --dry-run (median of {args.runs}): "
+              f"{statistics.median(dry):.2f} s "
+              f"(runs: {', '.join(f'{s:.2f}' for s in dry)})")
+        print(f"ratio grading run (no kernels) / rescore: {graded / statistics.median(wet):.2f}")
+
+
+if __name__ == "__main__":
+    main()
