@@ -216,11 +216,11 @@ def run_override(args: argparse.Namespace) -> int:
         out = graded_folder(a.folder, args.out)
         if args.student not in a.ids:
             raise UsageError(f"no student {args.student!r} in the assignment's roster")
-        kept = [o for o in read_overrides(out)
-                if (o.student, o.answer) != (args.student, args.answer)]
+        existing = read_overrides(out)
+        kept = [o for o in existing if (o.student, o.answer) != (args.student, args.answer)]
         what = args.answer or "total"
         if args.remove:
-            if len(kept) == len(read_overrides(out)):
+            if len(kept) == len(existing):
                 raise UsageError(f"no override of {args.student}'s {what} to remove")
             overrides, why, event = kept, f"override of {args.student}'s {what} removed", \
                 "override removed"
@@ -229,11 +229,10 @@ def run_override(args: argparse.Namespace) -> int:
                 raise UsageError("give --points P and --reason TEXT (or --remove)")
             new = Override(args.student, args.answer, args.points, args.reason, who(), now())
             overrides, why, event = [*kept, new], args.reason, "override"
+        _check(a, out, overrides)  # before the file is written: a bad one is refused whole
         if args.dry_run:
-            _check(a, out, overrides)
             print(f"{command}: {args.student}'s {what}: {why}; nothing written (--dry-run)")
             return 0
-        _check(a, out, overrides)  # before the file is written: a bad one is refused whole
         write_overrides(out, overrides)
         _say_rescore(command, rescore(a, out, reveal=args.reveal, why=why, event=event))
         return 0

@@ -26,13 +26,18 @@ class Assignment:
     columns: tuple[str, ...]
     rows: tuple[dict, ...]
     questions: tuple[int, ...]
-    students: dict  # assignment.json "students": id -> {"questions": [public question, ...]}
+    manifest: dict  # assignment.json
     key: dict       # key.json
     _expected: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def ids(self) -> tuple[str, ...]:
         return tuple(r["id"] for r in self.rows)
+
+    @property
+    def students(self) -> dict:
+        """assignment.json's ``students``: id → {"questions": [public question, ...]}."""
+        return self.manifest["students"]
 
     def expected(self, student_id: str) -> tuple[KeyAnswer, ...]:
         """``student_id``'s key answers (:func:`grader.compare.key_answers`), derived once per
@@ -86,4 +91,4 @@ def load_assignment(hw: Path) -> Assignment:
     if absent:
         raise UsageError(f"{hw}: key.json has no entry for {', '.join(absent)}; regenerate "
                          "the assignment")
-    return Assignment(hw, title, columns, rows, questions, students, key)
+    return Assignment(hw, title, columns, rows, questions, manifest, key)

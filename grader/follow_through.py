@@ -37,6 +37,7 @@ from typing import Any
 
 from grader.assignment import Assignment
 from grader.compare import KeyAnswer
+from grader.plain_text import value_text
 from grader.results import AnswerResult, StudentResult
 from problems.answers import Verdict, check_form, grade
 
@@ -48,16 +49,6 @@ a busy machine), apart from the recomputations' own limit."""
 
 FRACTION_KEY = "follow_through"
 """The setting in ``assignment.json`` (from the spec): the fraction of points it earns."""
-
-
-def _shown(value: Any) -> str:
-    if isinstance(value, bool) or value is None:
-        return str(value)
-    if isinstance(value, float):
-        return f"{value:.4g}"
-    if isinstance(value, list):
-        return "[" + ", ".join(_shown(v) for v in value) + "]"
-    return repr(value) if isinstance(value, str) else str(value)
 
 
 _loaded: dict[tuple[str, str | None], Any] = {}
@@ -159,14 +150,14 @@ class FollowThrough:
     @classmethod
     def of(cls, a: Assignment) -> FollowThrough | None:
         """``a``'s follow-through, or None when its setting turns it off (0)."""
-        manifest = json.loads((a.folder / "assignment.json").read_text(encoding="utf-8"))
+        manifest = a.manifest
         fraction = float(manifest.get(FRACTION_KEY, 1.0))
         if fraction <= 0:
             return None
         sources = {name: (None if where.get("file") is None
                           else str(Path(a.folder) / where["file"]))
                    for name, where in manifest.get("families", {}).items()}
-        return cls(manifest["students"], sources, min(fraction, 1.0), FOLLOW_SECONDS)
+        return cls(a.students, sources, min(fraction, 1.0), FOLLOW_SECONDS)
 
     # -- the worker
 
@@ -239,7 +230,7 @@ class FollowThrough:
         if verdict.status != "correct":
             return None
         points = round(self.fraction * k.answer.points, 12)
-        source = ", ".join(f"{v} = {_shown(g.submitted)}" for v, g in shown)
+        source = ", ".join(f"{v} = {value_text(g.submitted)}" for v, g in shown)
         return replace(a, verdict=Verdict("follows", points, k.answer.points,
                                           f"follows from your {source} (right for that "
                                           "value; the key's differs)"))

@@ -16,7 +16,6 @@ Floor 4 of grader/ (the unit, what it is graded against, where its records go; g
 from __future__ import annotations
 
 import copy
-import json
 import math
 import os
 from collections.abc import Mapping, Sequence
@@ -26,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from grader.assignment import Assignment, UsageError
+from grader.plain_text import value_text
 from grader.results import atomic_write_text
 from problems.answers import Answer
 from problems.generate import json_text, key_hash
@@ -52,15 +52,7 @@ class KeyChange:
     def line(self, width: int = 0) -> str:
         """``ada  q3_T_nut  rtol: 0.001 → 0.005``, the student's id padded to ``width``."""
         return (f"{self.student:<{width}}  {self.variable}  {self.field}: "
-                f"{_text(self.before)} → {_text(self.after)}")
-
-
-def _text(value: Any) -> str:
-    if isinstance(value, float):
-        return f"{value:.6g}"
-    if isinstance(value, list):
-        return "[" + ", ".join(_text(v) for v in value) + "]"
-    return json.dumps(value, ensure_ascii=False) if isinstance(value, str) else str(value)
+                f"{value_text(self.before)} → {value_text(self.after)}")
 
 
 def _answers(entry: Mapping) -> dict[str, dict]:
@@ -152,7 +144,7 @@ def rekeyed(a: Assignment, families: Mapping[str, Any]) -> tuple[dict, list[KeyC
     """
     from problems.generate import GenerateError, key_entry, recorded_questions, recorded_variants
 
-    manifest = json.loads((a.folder / "assignment.json").read_text(encoding="utf-8"))
+    manifest = a.manifest
     try:
         families, _ = recorded_questions(manifest, a.folder, families)
         fresh = {sid: key_entry(recorded_variants(manifest, families, sid)) for sid in a.ids}

@@ -17,7 +17,9 @@ Floor 0 of grader/ (records and pure helpers; grader/API.md).
 
 from __future__ import annotations
 
+import json
 import re
+from typing import Any
 
 _CONTROL = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u061c\u200e\u200f\u202a-\u202e\u2066-\u2069"
                       "\ud800-\udfff]")
@@ -56,3 +58,19 @@ def storable(text: str) -> str:
     'x\\\\ud800 \\n é'
     """
     return _SURROGATE.sub(_escape, text)
+
+
+def value_text(value: Any) -> str:
+    """A plain JSON value in a line of text: numbers to 6 significant figures, lists of them in
+    brackets, strings quoted as JSON.
+
+    Examples
+    --------
+    >>> value_text([221.123456, True, "loops", None])
+    '[221.123, True, "loops", None]'
+    """
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    if isinstance(value, list):
+        return "[" + ", ".join(value_text(v) for v in value) + "]"
+    return json.dumps(value, ensure_ascii=False) if isinstance(value, str) else str(value)

@@ -38,10 +38,9 @@ from grader.grade_one import now
 from grader.graded_folder import RESULTS, graded_folder, run_lock
 from grader.overrides import TOTAL, apply_overrides, read_overrides, without_overrides
 from grader.publish import class_report, publish_record, rebuild, report_notebooks
-from grader.results import StudentResult, read_result
+from grader.results import StudentResult, non_finite_read, read_result
 
 NUMERIC = ("scalar", "angle", "vector")
-_NON_FINITE = {"NaN": float("nan"), "Infinity": float("inf"), "-Infinity": float("-inf")}
 
 
 @dataclass(frozen=True)
@@ -70,16 +69,6 @@ class Rescore:
     dry_run: bool
 
 
-def numeric(value: Any) -> Any:
-    """``value`` with the record's spellings of NaN and ±inf read back as numbers (module
-    docstring), in a list too."""
-    if isinstance(value, str) and value in _NON_FINITE:
-        return _NON_FINITE[value]
-    if isinstance(value, list):
-        return [numeric(v) for v in value]
-    return value
-
-
 def rescored(a: Assignment, old: StudentResult,
              follow: FollowThrough | None = None) -> StudentResult:
     """``old`` compared again with ``a``'s key (the module docstring's rules), before
@@ -88,7 +77,7 @@ def rescored(a: Assignment, old: StudentResult,
     expected = a.expected(sid)
     if old.status == "graded":
         kinds = {k.variable: k.answer.kind for k in expected}
-        extracted = {x.variable: numeric(x.submitted) if kinds.get(x.variable) in NUMERIC
+        extracted = {x.variable: non_finite_read(x.submitted) if kinds.get(x.variable) in NUMERIC
                      else x.submitted for x in old.answers}
         for k in expected:
             extracted.setdefault(k.variable, None)

@@ -73,6 +73,22 @@ def plain_json(value: Any) -> Any:
     return repr(value)
 
 
+def non_finite_read(value: Any) -> Any:
+    """``value`` (a number or a list of them, as stored) with :func:`plain_json`'s spellings of
+    NaN and ±inf read back as floats; anything else as it is.
+
+    Examples
+    --------
+    >>> non_finite_read(["NaN", 1.5, "-Infinity"]), non_finite_read("loops")
+    ([nan, 1.5, -inf], 'loops')
+    """
+    if isinstance(value, str) and value in _NON_FINITE:
+        return _NON_FINITE[value]
+    if isinstance(value, list):
+        return [non_finite_read(v) for v in value]
+    return value
+
+
 @dataclass(frozen=True)
 class AnswerResult:
     """One answer of one question, as graded.
