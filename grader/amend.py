@@ -16,8 +16,9 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from dataclasses import replace
 from pathlib import Path
+
+from grader.transaction import LOCK_WAIT
 
 SHOWN = 50
 """Changes printed at most (the audit trail has them all)."""
@@ -30,6 +31,9 @@ def _common(parser: argparse.ArgumentParser) -> None:
                         help="grading output folder (default: HW/graded)")
     parser.add_argument("--dry-run", action="store_true",
                         help="say what would change; write nothing")
+    parser.add_argument("--wait", type=float, default=LOCK_WAIT, metavar="SECONDS",
+                        help="wait this long for another command on the class to finish "
+                             f"(default {LOCK_WAIT:g})")
     parser.add_argument("--reveal", action="store_true",
                         help="show each student their own key values in their feedback page "
                              "(as 'eulertop grade --reveal')")
@@ -87,6 +91,12 @@ def _say_rescore(command: str, report) -> None:
     print(f"{command}: {len(report.rescored)} student(s) rescored, {len(students)} {verb}, "
           f"{report.unchanged} unchanged" + ("; nothing written (--dry-run)"
                                              if report.dry_run else ""))
+    if report.unread:
+        answers = sorted({v for vs in report.unread.values() for v in vs})
+        print(f"{command}: {len(report.unread)} student(s) answered before the key had "
+              f"{', '.join(answers)}: those answers are unread until their notebooks run "
+              f"again; 'eulertop grade HW SUBMISSIONS' runs exactly these: "
+              f"{', '.join(sorted(report.unread))}")
 
 
 def _run(command: str, body) -> int:
@@ -99,16 +109,32 @@ def _run(command: str, body) -> int:
         return 2
 
 
-def run_rescore(args: argparse.Namespace) -> int:
-    """Run ``eulertop rescore``."""
+def _rescore(args: argparse.Namespace, command: str, change=None) -> int:
+    """Rescore (after ``change``, worked out under the class's lock), and say what happened."""
     from grader.rescore import rescore
 
     def body() -> int:
-        _say_rescore("eulertop rescore", rescore(args.hw, args.out, dry_run=args.dry_run,
-                                                 reveal=args.reveal))
+        report = rescore(args.hw, args.out, change=change, dry_run=args.dry_run,
+                         reveal=args.reveal, wait=args.wait, command=command)
+        amendment = report.amendment
+        for line in amendment.lines[:SHOWN]:
+            print(f"  {line}")
+        if len(amendment.lines) > SHOWN:
+            print(f"  … and {len(amendment.lines) - SHOWN} more")
+        if amendment.unchanged:
+            print(f"{command}: {amendment.unchanged}; nothing changed")
+            return 0
+        if amendment.key is not None and not args.dry_run:
+            print(f"{command}: wrote {Path(args.hw) / 'key.json'} (the old one kept beside it)")
+        _say_rescore(command, report)
         return 0
 
-    return _run("eulertop rescore", body)
+    return _run(command, body)
+
+
+def run_rescore(args: argparse.Namespace) -> int:
+    """Run ``eulertop rescore``."""
+    return _rescore(args, "eulertop rescore")
 
 
 def _accepted(texts: list[str]) -> list:
@@ -125,130 +151,83 @@ def _accepted(texts: list[str]) -> list:
     return values
 
 
-def _with_key(args: argparse.Namespace, command: str, key: dict, lines: list[str],
-              event: str, why: str, details: dict) -> int:
-    """Rescore against ``key`` (written first unless ``--dry-run``)."""
-    from grader.assignment import load_assignment
-    from grader.key_edit import write_key
-    from grader.rescore import rescore
-
-    for line in lines[:SHOWN]:
-        print(f"  {line}")
-    if len(lines) > SHOWN:
-        print(f"  … and {len(lines) - SHOWN} more")
-    a = load_assignment(args.hw)
-    changed = replace(a, key=key)
-    if args.dry_run:
-        _say_rescore(command, rescore(changed, args.out, dry_run=True))
-        return 0
-    old = write_key(args.hw, key)
-    print(f"{command}: wrote {Path(args.hw) / 'key.json'} (the old one kept as {old.name})")
-    report = rescore(load_assignment(args.hw), args.out, reveal=args.reveal, why=why,
-                     event=event, **details, old_key=old.name)
-    _say_rescore(command, report)
-    return 0
-
-
-def _lines(changes) -> list[str]:
+def _lines(changes) -> tuple[str, ...]:
     width = max((len(c.student) for c in changes), default=0)
-    return [c.line(width) for c in changes]
+    return tuple(c.line(width) for c in changes)
+
+
+def key_change(args: argparse.Namespace):
+    """``eulertop key set``'s change: the key with one answer changed (UsageError: refused)."""
+    from grader.key_edit import set_answer
+    from grader.rescore import Amendment
+
+    def change(a, overrides) -> Amendment:
+        key, changes = set_answer(a, args.answer, rtol=args.rtol, atol=args.atol,
+                                  points=args.points, accept=_accepted(args.accept))
+        if not changes:
+            return Amendment(unchanged=f"{args.answer} is already so")
+        fields = sorted({f"{c.field} {c.after!r}" for c in changes})
+        students = len({c.student for c in changes})
+        return Amendment("key set", f"key set {args.answer}: {', '.join(fields)}", key=key,
+                         details={"key_changes": [c.as_dict() for c in changes]},
+                         lines=(f"{args.answer} of {students} student(s):",
+                                *_lines(changes)))
+
+    return change
 
 
 def run_key(args: argparse.Namespace) -> int:
     """Run ``eulertop key set``."""
-    from grader.assignment import load_assignment
-    from grader.key_edit import set_answer
+    return _rescore(args, "eulertop key set", key_change(args))
 
-    command = "eulertop key set"
 
-    def body() -> int:
-        a = load_assignment(args.hw)
-        key, changes = set_answer(a, args.answer, rtol=args.rtol, atol=args.atol,
-                                  points=args.points, accept=_accepted(args.accept))
-        if not changes:
-            print(f"{command}: {args.answer} is already so; nothing changed")
-            return 0
-        fields = sorted({f"{c.field} {c.after!r}" for c in changes})
-        print(f"{command}: {args.answer} of {len({c.student for c in changes})} student(s):")
-        return _with_key(args, command, key, _lines(changes), "key set",
-                         f"key set {args.answer}: {', '.join(fields)}",
-                         {"key_changes": [c.as_dict() for c in changes]})
+def rekey_change(a, overrides):
+    """``eulertop rekey``'s change: the key recomputed from the recorded parameters."""
+    from grader.key_edit import rekeyed
+    from grader.rescore import Amendment
+    from problems.templates import FAMILIES
 
-    return _run(command, body)
+    key, changes = rekeyed(a, FAMILIES)
+    head = (f"{len(changes)} value(s) of the key differ from what today's solver gives",)
+    if not changes:
+        return Amendment(unchanged="the key is as the families compute it", lines=head)
+    return Amendment("rekey", "rekey: the key recomputed from the recorded parameters",
+                     key=key, details={"key_changes": [c.as_dict() for c in changes]},
+                     lines=head + _lines(changes))
 
 
 def run_rekey(args: argparse.Namespace) -> int:
     """Run ``eulertop rekey``."""
-    from grader.assignment import load_assignment
-    from grader.key_edit import rekeyed
-    from problems.templates import FAMILIES
-
-    command = "eulertop rekey"
-
-    def body() -> int:
-        a = load_assignment(args.hw)
-        key, changes = rekeyed(a, FAMILIES)
-        print(f"{command}: {len(changes)} value(s) of the key differ from what today's "
-              "solver gives" + (":" if changes else ""))
-        if not changes:
-            print(f"{command}: the key is as the families compute it; nothing changed")
-            return 0
-        return _with_key(args, command, key, _lines(changes), "rekey",
-                         "rekey: the key recomputed from the recorded parameters",
-                         {"key_changes": [c.as_dict() for c in changes]})
-
-    return _run(command, body)
+    return _rescore(args, "eulertop rekey", rekey_change)
 
 
-def run_override(args: argparse.Namespace) -> int:
-    """Run ``eulertop override``."""
-    from grader.assignment import UsageError, load_assignment
+def override_change(args: argparse.Namespace):
+    """``eulertop override``'s change: the overrides with one added, replaced or removed, from
+    the overrides as they are under the lock (so that none is lost)."""
+    from grader.assignment import UsageError
     from grader.audit import who
     from grader.grade_one import now
-    from grader.graded_folder import graded_folder
-    from grader.overrides import Override, read_overrides, write_overrides
-    from grader.rescore import rescore
+    from grader.overrides import Override
+    from grader.rescore import Amendment
 
-    command = "eulertop override"
-
-    def body() -> int:
-        a = load_assignment(args.hw)
-        out = graded_folder(a.folder, args.out)
+    def change(a, existing) -> Amendment:
         if args.student not in a.ids:
             raise UsageError(f"no student {args.student!r} in the assignment's roster")
-        existing = read_overrides(out)
-        kept = [o for o in existing if (o.student, o.answer) != (args.student, args.answer)]
+        kept = tuple(o for o in existing if (o.student, o.answer) != (args.student, args.answer))
         what = args.answer or "total"
         if args.remove:
             if len(kept) == len(existing):
                 raise UsageError(f"no override of {args.student}'s {what} to remove")
-            overrides, why, event = kept, f"override of {args.student}'s {what} removed", \
-                "override removed"
-        else:
-            if args.points is None or not args.reason:
-                raise UsageError("give --points P and --reason TEXT (or --remove)")
-            new = Override(args.student, args.answer, args.points, args.reason, who(), now())
-            overrides, why, event = [*kept, new], args.reason, "override"
-        _check(a, out, overrides)  # before the file is written: a bad one is refused whole
-        if args.dry_run:
-            print(f"{command}: {args.student}'s {what}: {why}; nothing written (--dry-run)")
-            return 0
-        write_overrides(out, overrides)
-        _say_rescore(command, rescore(a, out, reveal=args.reveal, why=why, event=event))
-        return 0
+            return Amendment("override removed", f"override of {args.student}'s {what} removed",
+                             overrides=kept)
+        if args.points is None or not args.reason:
+            raise UsageError("give --points P and --reason TEXT (or --remove)")
+        new = Override(args.student, args.answer, args.points, args.reason, who(), now())
+        return Amendment("override", args.reason, overrides=(*kept, new))
 
-    return _run(command, body)
+    return change
 
 
-def _check(a, out: Path, overrides) -> None:
-    """Each override applies to the record it names (raises UsageError otherwise)."""
-    from grader.assignment import UsageError
-    from grader.graded_folder import RESULTS
-    from grader.overrides import apply_overrides
-    from grader.results import read_result
-
-    for o in overrides:
-        record = read_result(out / RESULTS / f"{o.student}.json")
-        if record is None:
-            raise UsageError(f"{o.student} has no record in {out / RESULTS} yet: grade first")
-        apply_overrides(record, [o])
+def run_override(args: argparse.Namespace) -> int:
+    """Run ``eulertop override``."""
+    return _rescore(args, "eulertop override", override_change(args))

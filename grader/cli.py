@@ -93,6 +93,9 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> None:
                              "one is recorded as invalid without being read")
     parser.add_argument("--force", action="store_true",
                         help="regrade every submission, even those unchanged since last run")
+    parser.add_argument("--wait", type=float, default=600.0, metavar="SECONDS",
+                        help="wait this long for another command on the output folder to "
+                             "finish (default 600)")
     parser.add_argument("--reveal", action="store_true",
                         help="show each student their own key values in their feedback page")
     parser.add_argument("--no-sandbox", action="store_true",
@@ -151,7 +154,7 @@ def run_grade(args: argparse.Namespace, execute=None) -> int:
             force=args.force, reveal=args.reveal, execute=execute,
             on_plan=lambda n: Progress(n), cold_kernels=getattr(args, "cold_kernels", False),
             sandbox=not getattr(args, "no_sandbox", False), class_list=class_list,
-            cluster=getattr(args, "cluster", None),
+            cluster=getattr(args, "cluster", None), wait=args.wait,
         )
     except (UsageError, RosterError) as e:
         print(f"eulertop grade: {e}", file=sys.stderr)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import hashlib
 import os
 import shutil
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import UTC, datetime
@@ -79,6 +79,22 @@ class Run:
     claim: str | None = None  # the student id the notebook's own metadata names, if any
 
 
+def scored(student_id: str, expected: Sequence[KeyAnswer], key_sha256: str, *, status: str,
+           message: str, extracted: Mapping[str, Any] | None, execution: dict,
+           sandboxed: bool, submission_sha256: str | None) -> StudentResult:
+    """The record of ``student_id``: ``extracted`` (the answers read from their notebook; None
+    or empty: none) compared with ``expected`` — the one way a record is built, by a grading
+    run (:func:`record`, :func:`ungraded_result`) and by a rescore
+    (:func:`grader.rescore.rescored`) alike."""
+    answers = compare(expected, extracted)
+    return StudentResult(
+        student_id=student_id, status=status, message=message, answers=answers,
+        points=sum(a.verdict.points for a in answers) if status == "graded" else 0.0,
+        max_points=sum(k.answer.points for k in expected),
+        submission_sha256=submission_sha256, key_sha256=key_sha256, execution=execution,
+        sandboxed=sandboxed, graded_at=now())
+
+
 def record(student_id: str, expected: Sequence[KeyAnswer], key_sha256: str,
            run: Run) -> StudentResult:
     """The record of a submission that ran (or could not): its answers compared with
@@ -92,33 +108,23 @@ def record(student_id: str, expected: Sequence[KeyAnswer], key_sha256: str,
         notes.insert(0, run.problem)
     execution = run.execution
     extracted = execution.answers if execution is not None else {}
-    answers = compare(expected, extracted)
     if execution is not None and (execution.status != "ok" or not extracted):
         notes.insert(0, execution.message or f"execution status {execution.status}")
-    return StudentResult(
-        student_id=student_id,
+    return scored(
+        student_id, expected, key_sha256,
         status="graded" if extracted else "failed",  # fail closed: nothing read, nothing given
-        message="\n".join(notes),
-        answers=answers,
-        points=sum(a.verdict.points for a in answers),
-        max_points=sum(k.answer.points for k in expected),
-        submission_sha256=run.sha256,
-        key_sha256=key_sha256,
+        message="\n".join(notes), extracted=extracted,
         execution=(_execution_record(execution) if execution is not None else
                    {"retry": True} if run.fault else {}),
-        sandboxed=bool(getattr(execution, "sandboxed", False)),
-        graded_at=now(),
-    )
+        sandboxed=bool(getattr(execution, "sandboxed", False)), submission_sha256=run.sha256)
 
 
 def ungraded_result(
     student_id: str, status: str, message: str, expected: Sequence[KeyAnswer], key_sha256: str
 ) -> StudentResult:
     """The record of a student with no gradable submission (missing, or ambiguous)."""
-    answers = compare(expected, None)
-    return StudentResult(student_id, status, message, answers, 0.0,
-                         sum(k.answer.points for k in expected), None, key_sha256, {}, False,
-                         now())
+    return scored(student_id, expected, key_sha256, status=status, message=message,
+                  extracted=None, execution={}, sandboxed=False, submission_sha256=None)
 
 
 def submission_bytes(limits: Any) -> int:

@@ -6,9 +6,9 @@ student (``q3_T_nut``) or for one (``ada:q3_T_nut``); :func:`rekeyed` recomputes
 student's key from the parameters ``assignment.json`` recorded, with today's families and
 solver (:func:`problems.generate.recorded_variants`), keeping what was set by hand (tolerances,
 points, accepted values) — a solver fix reaches the key, an instructor's decisions stay. Both
-return the new key and what changed, and touch no file; :func:`write_key` writes it (mode
-0600, atomically), keeping the old one beside it. A rescore (:mod:`grader.rescore`) then
-carries the change to every record, without running a notebook.
+return the new key and what changed, and touch no file; :func:`stage_key` stages it (mode 0600)
+in the transaction of the rescore (:mod:`grader.rescore`) that carries the change to every
+record, keeping the old one beside it.
 
 Floor 4 of grader/ (the unit, what it is graded against, where its records go; grader/API.md).
 """
@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import copy
 import math
-import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from datetime import UTC, datetime
@@ -26,7 +25,7 @@ from typing import Any
 
 from grader.assignment import Assignment, UsageError
 from grader.plain_text import value_text
-from grader.results import atomic_write_text
+from grader.transaction import Transaction
 from problems.answers import Answer
 from problems.generate import json_text, key_hash
 from solver.parameters import ParameterError
@@ -185,9 +184,9 @@ def _same(x: Any, y: Any) -> bool:
     return x == y
 
 
-def write_key(hw: Path, key: Mapping) -> Path:
-    """Write ``HW/key.json`` (mode 0600, atomically), the old one kept beside it as
-    ``key.json.<UTC time>``; the old one's path."""
+def stage_key(tx: Transaction, hw: Path, key: Mapping) -> Path:
+    """Stage ``HW/key.json`` (mode 0600) to hold ``key``, the old one kept beside it as
+    ``key.json.<UTC time>`` (0600 too); the old one's path."""
     path = Path(hw) / "key.json"
     stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%SZ")
     old = path.with_name(f"key.json.{stamp}")
@@ -195,9 +194,6 @@ def write_key(hw: Path, key: Mapping) -> Path:
     while old.exists():
         n += 1
         old = path.with_name(f"key.json.{stamp}-{n}")
-    fd = os.open(old, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
-    with os.fdopen(fd, "wb") as f:
-        f.write(path.read_bytes())
-    atomic_write_text(path, json_text(key))  # as the generator writes it
-    os.chmod(path, 0o600)
+    tx.write(old, path.read_bytes())
+    tx.write(path, json_text(key))  # as the generator writes it
     return old

@@ -23,12 +23,12 @@ from __future__ import annotations
 
 import json
 import tomllib
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 from grader.assignment import Assignment, UsageError
-from grader.results import AnswerResult, StudentResult, atomic_write_text
+from grader.results import AnswerResult, StudentResult
 
 OVERRIDES = "overrides.toml"
 TOTAL = "total"
@@ -98,11 +98,6 @@ def overrides_toml(overrides: Iterable[Override]) -> str:
     return "\n".join(lines)
 
 
-def write_overrides(out: Path, overrides: Sequence[Override]) -> None:
-    """Write ``out``'s overrides file, atomically."""
-    atomic_write_text(Path(out) / OVERRIDES, overrides_toml(overrides))
-
-
 def without_overrides(result: StudentResult) -> StudentResult:
     """``result`` as it was before any override: each overridden answer's points back to what
     the comparison gave, the total their sum."""
@@ -121,9 +116,8 @@ def _with_points(answer: AnswerResult, points: float) -> AnswerResult:
 
 def apply_overrides(result: StudentResult, overrides: Iterable[Override]) -> StudentResult:
     """``result`` with the overrides of its student applied (an answer's first, then the total),
-    each noted in ``overridden``; any applied before are taken back first. An override of an
-    answer the record does not hold, or beyond an answer's or the record's points, is refused
-    (:class:`UsageError`)."""
+    each noted in ``overridden``; any applied before are taken back first. The overrides are
+    those :func:`check_overrides` accepted for the key ``result`` was compared with."""
     result = without_overrides(result)
     mine = [o for o in overrides if o.student == result.student_id]
     if not mine:
@@ -131,45 +125,41 @@ def apply_overrides(result: StudentResult, overrides: Iterable[Override]) -> Stu
     answers = {a.variable: a for a in result.answers}
     overridden = {}
     for o in (o for o in mine if o.answer is not None):
-        if o.answer not in answers:
-            raise UsageError(f"override of {o.student}'s {o.answer}: no such answer in their "
-                             f"key ({', '.join(answers)})")
-        a = answers[o.answer]
-        _check_points(o, a.verdict.max_points)
-        overridden[o.answer] = _note(o, a.verdict.points)
-        answers[o.answer] = _with_points(a, o.points)
+        overridden[o.answer] = _note(o, answers[o.answer].verdict.points)
+        answers[o.answer] = _with_points(answers[o.answer], o.points)
     kept = tuple(answers[a.variable] for a in result.answers)
     points = sum(a.verdict.points for a in kept)
     for o in (o for o in mine if o.answer is None):
-        _check_points(o, result.max_points)
         overridden[TOTAL] = _note(o, points)
         points = o.points
     return replace(result, answers=kept, points=points, overridden=overridden)
 
 
-def check_overrides(a: Assignment, overrides: Iterable[Override]) -> None:
+def check_overrides(a: Assignment, overrides: Iterable[Override],
+                    source: str | None = OVERRIDES) -> None:
     """Each override names a student of ``a``'s roster and an answer of their key, with points
-    within its own (or the key's total): else :class:`UsageError` naming the file's entry —
-    checked before a run writes anything, so that no override can stop one half-way."""
+    within its own (or the key's total): else :class:`UsageError` naming the entry (``source``:
+    the file's ``override N``; None: the override itself) — the one check of overrides, made
+    before anything is written, with the key they will be applied with, so that no override
+    can stop a command half-way."""
     for n, o in enumerate(overrides, start=1):
-        where = f"{OVERRIDES}: override {n}"
+        where = f"{source}: override {n}" if source else f"override of {o.student}'s {o.target}"
         if o.student not in a.ids:
             raise UsageError(f"{where}: no student {o.student!r} in the assignment's roster")
         expected = {k.variable: k.answer.points for k in a.expected(o.student)}
         if o.answer is not None and o.answer not in expected:
-            raise UsageError(f"{where}: {o.student} has no answer {o.answer!r} in the key "
-                             f"({', '.join(expected)})")
+            raise UsageError(f"{where}: {o.student} has no such answer {o.answer!r} in the "
+                             f"key ({', '.join(expected)})")
         most = sum(expected.values()) if o.answer is None else expected[o.answer]
         if not 0.0 <= o.points <= most:
             raise UsageError(f"{where}: {o.points:g} points for {o.student}'s {o.target} is "
-                             f"outside 0…{most:g}")
+                             f"outside 0…{most:g}" + (_take_back(o) if source else ""))
+
+
+def _take_back(o: Override) -> str:
+    target = f"{o.student} {o.answer}" if o.answer else o.student
+    return f" (change it, or take it back: 'eulertop override HW {target} --remove')"
 
 
 def _note(o: Override, was: float) -> dict:
     return {"points": o.points, "was": was, "reason": o.reason, "by": o.by, "at": o.at}
-
-
-def _check_points(o: Override, most: float) -> None:
-    if not 0.0 <= o.points <= most:
-        raise UsageError(f"override of {o.student}'s {o.target}: {o.points:g} points is outside "
-                         f"0…{most:g}")

@@ -10,9 +10,10 @@ them together and owns the run's bookkeeping:
 4. The others run through ``execute(path, variable_names, limits)`` — by default
    :func:`grader.execute.execute_submission`, injected so that tests and benchmarks can swap
    it — and :func:`grader.compare.compare` grades what came back, in this process.
-5. Each finished student's record is written at once, atomically
-   (:func:`grader.results.write_result`), with its feedback page; the gradebook and every
-   feedback page are rebuilt from the records at the end.
+5. Each finished student's record is settled (follow-through credit, then the overrides) and
+   committed at once with its feedback page and its line of the audit trail (a transaction:
+   :mod:`grader.transaction`); the gradebook, every other page, the class report and the run's
+   own line are committed together at the end.
 
 Kernels: unless ``execute`` is given, each submission runs in a *warm* kernel — forked, one
 fresh process per submission, from a per-slot zygote that has imported ipykernel, numpy, scipy
@@ -33,14 +34,16 @@ without pickling the key or the results across processes and with the assignment
 A worker writes its own result as soon as it has one, so the records on disk are the run's
 progress: a run killed at any moment loses at most the submissions in flight.
 
-Concurrency between runs: a run holds ``fcntl.flock`` on ``OUT/.lock`` from start to end; a
-second run on the same folder is refused (:class:`RunInProgress`). The lock goes with the
-process, so a killed run never leaves a stale lock behind; a run that ends removes the file
-(:func:`run_lock` says why that is safe).
+Concurrency between commands: a run holds ``fcntl.flock`` on ``OUT/.lock`` from before it
+reads the assignment to its end (:func:`grader.transaction.class_lock`); a second command on
+the same folder waits for it (up to ``wait`` seconds, then :class:`RunInProgress`). The lock goes
+with the process, so a killed run never leaves a stale lock behind; a killed run's last
+transaction is finished, or its temporaries removed, by the next command that takes the lock.
 
-Refused before anything is written (:class:`UsageError`, exit 2): a SUBMISSIONS folder that
-holds no submission for any roster student (:func:`require_submissions`), and an output folder
-inside SUBMISSIONS (:func:`require_out_outside`), where the gradebook would become a submission.
+Refused before anything is written (:class:`UsageError`, exit 2): a bad key or overrides file,
+a SUBMISSIONS folder that holds no submission for any roster student
+(:func:`require_submissions`), and an output folder inside SUBMISSIONS
+(:func:`require_out_outside`), where the gradebook would become a submission.
 
 Floor 7 of grader/ (the class run; grader/API.md).
 """
@@ -53,6 +56,7 @@ import os
 import shutil
 import sys
 import threading
+import uuid
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import ExitStack, contextmanager, suppress
 from dataclasses import dataclass
@@ -61,35 +65,27 @@ from pathlib import Path
 from typing import Any
 
 from grader.assignment import Assignment, UsageError, load_assignment
-from grader.audit import record_event
 from grader.discover import discover
 from grader.executors import Interrupted
 from grader.executors.local import run_local, warm_kernels
 from grader.follow_through import FollowThrough
 from grader.grade_one import Execute, submission_bytes, ungraded_result, unreadable
-from grader.gradebook import (
-    gradebook_csv,
-    ran_code,
-)
-from grader.graded_folder import (
-    DOWNLOAD,
-    FEEDBACK,
-    LMS_SUBMISSIONS,
-    RESULTS,
-    graded_folder,
-    run_lock,
-)
+from grader.gradebook import gradebook_csv, ran_code
+from grader.graded_folder import DOWNLOAD, FEEDBACK, LMS_SUBMISSIONS, RESULTS, graded_folder
 from grader.lms.classlist import merge_rows
 from grader.overrides import apply_overrides, check_overrides, read_overrides
-from grader.publish import class_report, prepare_report, publish_all, publish_record, rebuild
-from grader.results import (
-    StudentResult,
-    atomic_write_text,
-    read_result,
-    remove_stale_temporaries,
+from grader.publish import (
+    prepare_report,
+    records,
+    settled,
+    stage_record,
+    stage_report,
+    stage_views,
 )
+from grader.results import StudentResult, atomic_write_text, read_result
 from grader.submission_file import DEFAULT_MAX_BYTES, InvalidSubmission, read_submission
 from grader.submissions import Problem
+from grader.transaction import LOCK_WAIT, Transaction, class_lock
 
 
 @dataclass(frozen=True)
@@ -155,6 +151,8 @@ def _unchanged(old: StudentResult | None, sha: str | None, key_hash: str,
         return False
     if old.execution.get("retry"):
         return False  # not the student's doing (a kernel that could not start): grade again
+    if old.execution.get("unread"):
+        return False  # the key gained answers its notebook was never asked for (rescore)
     if sandboxed and ran_code(old) and not old.sandboxed:
         return False  # graded without a sandbox before: grade it in one now
     return fresh is None or (old.status, old.message) == (fresh.status, fresh.message)
@@ -229,6 +227,7 @@ def grade_assignment(
     sandbox: bool = True,
     class_list: Sequence[Mapping[str, str]] = (),
     cluster: str | None = None,
+    wait: float = LOCK_WAIT,
 ) -> RunReport:
     """Grade every submission in ``submissions`` against the assignment ``hw``.
 
@@ -263,6 +262,9 @@ def grade_assignment(
     class_list : sequence of dict, optional
         Rows of an LMS class list (``grade --roster``) whose columns are added to the
         roster's, by student id, to match an LMS download (:func:`grader.lms.classlist.merge_rows`).
+    wait : float
+        Seconds to wait for another command holding the output folder (default
+        :data:`grader.transaction.LOCK_WAIT`).
     cluster : str, optional
         Grade on a Dask cluster (:mod:`grader.executors.dask`): a scheduler address
         (``tcp://HOST:PORT``) or ``local:N`` (a LocalCluster of N workers); ``jobs`` is then
@@ -272,130 +274,200 @@ def grade_assignment(
     Raises
     ------
     UsageError
-        Missing or unreadable inputs, no sandbox to be had (with ``sandbox``);
-        :class:`RunInProgress` when another run holds the lock.
+        Missing or unreadable inputs, no sandbox to be had (with ``sandbox``), a bad key or
+        overrides file: nothing written; :class:`RunInProgress` when another command holds
+        the output folder for longer than ``wait``.
     """
     if cluster is not None:
         _require_cluster(cluster)
-    a = load_assignment(hw)
-    submissions = Path(submissions)
-    archive = submissions.suffix.lower() == ".zip" and submissions.is_file()
-    if not archive and (not submissions.is_dir()
-                        or not os.access(submissions, os.R_OK | os.X_OK)):
-        raise UsageError(f"{submissions}: not a readable folder of submissions (nor a .zip)")
+    if not Path(hw).is_dir():  # before the output folder is made in it
+        raise UsageError(f"{hw}: no such assignment folder")
+    submissions, archive = _submissions_input(Path(submissions))
     out = graded_folder(hw, out)
     require_out_outside(out, submissions)
-    rows = merge_rows(a.rows, class_list)
-    found = None  # discovered once: here, or for a zip once unpacked, below
-    if not archive:
-        found = discover(submissions, a.ids, rows)
-        require_submissions(submissions, found, a.ids)
-    own_execute = execute is None  # not one a test or a benchmark injected
-    execute, found_sandbox, warm, sandboxed = _choose_executor(execute, cold_kernels, sandbox,
-                                                               cluster)
-    container = getattr(found_sandbox, "tier", None) == "container"
     if limits is None:
         from grader.limits import Limits
 
         limits = Limits()
-    a.check_key()  # a bad key or override stops the run before anything is written
-    overrides = read_overrides(out)
-    check_overrides(a, overrides)
     made = _make_out(out)
-    with _unmade_on(NoKernel, made), run_lock(out), ExitStack() as private:
-        if container:  # kernels run as other users of this machine: nothing of ours for them
-            found_sandbox.private_folders(private, hw, submissions, out)
-        remove_stale_temporaries(out, out / RESULTS, out / FEEDBACK)
+    with _unmade_on(UsageError, made), \
+            class_lock(out, Path(hw), command="eulertop grade", wait=wait), \
+            ExitStack() as stack:
+        a, overrides = _checked_state(Path(hw), out)
+        rows = merge_rows(a.rows, class_list)
+        found = None if archive else _discovered(submissions, a, rows)
+        own_execute = execute is None  # not one a test or a benchmark injected
+        execute, isolation, warm, sandboxed = _choose_executor(execute, cold_kernels, sandbox,
+                                                               cluster)
+        if getattr(isolation, "tier", None) == "container":
+            # kernels run as other users of this machine: nothing of ours for them
+            isolation.private_folders(stack, hw, submissions, out)
         if archive:  # entries refused one by one: their owners' invalid submissions
-            submissions, refused = _unpack(submissions, out)
-            found = discover(submissions, a.ids, rows, refused)
-            require_submissions(submissions, found, a.ids)
+            submissions, found = _unpacked(submissions, out, a, rows)
         to_run, to_write, kept, packages = _plan(a, found, out, force, sandboxed,
                                                  submission_bytes(limits))
-        jobs = jobs or os.cpu_count() or 1
+        writer = _Writer(a, out, overrides, reveal, progress)
+        stack.callback(writer.close)
         from grader.kernels.preload import preload_for
 
-        follow = FollowThrough.of(a)
-        if follow is not None:
-            private.callback(follow.close)  # its worker, if one was started
-        before = {sid: read_result(out / RESULTS / f"{sid}.json") for sid in a.ids}
-
-        def finished(result: StudentResult) -> StudentResult:  # credit, then overrides: last
-            if follow is not None:
-                result = follow.apply(result, a.expected(result.student_id))
-            return apply_overrides(result, overrides)
-
+        jobs = jobs or os.cpu_count() or 1
         # the kernels' zygotes start first: they import while this process writes
-        def publish(result: StudentResult) -> None:  # the one writer of records
-            result = finished(result)
-            publish_record(a, out, result, reveal)
-            if progress:
-                progress(result)  # the points as recorded: credit and overrides in
-
         with warm_kernels(warm and bool(to_run) and cluster is None, min(jobs, len(to_run)),
-                          found_sandbox, preload_for(packages)) as f:
+                          isolation, preload_for(packages)) as f:
             run = execute if f is None else partial(execute, kernel_factory=f)
             if own_execute and to_run and cluster is None:
                 preflight(run, limits)  # before anything of the class is written
-            if found.layout != "folder":
-                atomic_write_text(out / LMS_SUBMISSIONS,
-                                  gradebook_csv(_lms_table(found, submissions)))
-            else:  # a previous run's LMS table would describe other files
-                (out / LMS_SUBMISSIONS).unlink(missing_ok=True)
+            _lms_submissions(found, submissions, out)
             if on_plan is not None:
-                progress = on_plan(len(to_run) + len(to_write)) or progress
-            publish_all(a, out, [finished(r) for r in to_write], reveal, progress)
-            if cluster is not None:
-                _run_on_cluster(cluster, to_run, execute, limits, publish, sandbox=sandbox,
-                                cold=cold_kernels, preload=preload_for(packages))
-            else:
-                if to_run:
-                    prepare_report()
-                run_local(to_run, run, limits, jobs, publish)
-        graded_now = (tuple(t[0].student_id for t in to_run)
-                      + tuple(r.student_id for r in to_write))
-        graded_now += _overrides_kept(a, out, kept, overrides, reveal)
-        results = {sid: read_result(out / RESULTS / f"{sid}.json") for sid in a.ids}
-        rebuild(a, out, results, reveal, published=set(graded_now))
+                writer.progress = on_plan(len(to_run) + len(to_write)) or progress
+            for result in to_write:
+                writer(result)
+            try:
+                _execute_all(to_run, run, execute, limits, jobs, writer, cluster,
+                             sandbox=sandbox, cold=cold_kernels, preload=preload_for(packages))
+            except KeyboardInterrupt:
+                writer.finish(found, kept, views_only=True)
+                raise
+        results = writer.finish(found, kept)
+    return RunReport(tuple(results[s] for s in a.ids), writer.graded, tuple(kept),
+                     found.problems, found.notes)
+
+
+def _submissions_input(submissions: Path) -> tuple[Path, bool]:
+    """``(submissions, whether it is a .zip download)``; :class:`UsageError` when it is neither
+    a readable folder nor a .zip file."""
+    archive = submissions.suffix.lower() == ".zip" and submissions.is_file()
+    if not archive and (not submissions.is_dir()
+                        or not os.access(submissions, os.R_OK | os.X_OK)):
+        raise UsageError(f"{submissions}: not a readable folder of submissions (nor a .zip)")
+    return submissions, archive
+
+
+def _checked_state(hw: Path, out: Path) -> tuple[Assignment, tuple]:
+    """The assignment and the overrides as they are now (under the lock), each checked: a bad
+    key or override stops the run before anything is written."""
+    a = load_assignment(hw)
+    a.check_key()
+    overrides = read_overrides(out)
+    check_overrides(a, overrides)
+    return a, overrides
+
+
+def _discovered(submissions: Path, a: Assignment, rows: Sequence[Mapping[str, str]],
+                refused: Mapping[Path, str] | None = None):
+    """What ``submissions`` holds for ``a``'s roster (:func:`grader.discover.discover`);
+    :class:`UsageError` when nothing of the class is there (:func:`require_submissions`)."""
+    found = discover(submissions, a.ids, rows, refused)
+    require_submissions(submissions, found, a.ids)
+    return found
+
+
+def _unpacked(archive: Path, out: Path, a: Assignment, rows: Sequence[Mapping[str, str]]):
+    """A downloaded ``.zip`` extracted into ``OUT/download`` and discovered there."""
+    folder, refused = _unpack(archive, out)
+    return folder, _discovered(folder, a, rows, refused)
+
+
+def _lms_submissions(found: Any, submissions: Path, out: Path) -> None:
+    """``OUT/submissions.csv`` for an LMS download; removed for a folder (a previous run's
+    table would describe other files)."""
+    if found.layout != "folder":
+        atomic_write_text(out / LMS_SUBMISSIONS, gradebook_csv(_lms_table(found, submissions)))
+    else:
+        (out / LMS_SUBMISSIONS).unlink(missing_ok=True)
+
+
+def _execute_all(to_run, run, execute, limits, jobs, writer, cluster, *, sandbox: bool,
+                 cold: bool, preload) -> None:
+    """Run every planned submission, here or on the cluster; ``writer`` records each."""
+    if cluster is not None:
+        _run_on_cluster(cluster, to_run, execute, limits, writer, sandbox=sandbox, cold=cold,
+                        preload=preload)
+        return
+    if to_run:
+        prepare_report()
+    run_local(to_run, run, limits, jobs, writer)
+
+
+class _Writer:
+    """The one writer of a grading run's records: each settled (follow-through credit, then the
+    overrides: :func:`grader.publish.settled`) and committed with its feedback page and its
+    line of the audit trail, one at a time (the executors call it from several threads); at
+    the end, the views and the run's own line (:meth:`finish`)."""
+
+    def __init__(self, a: Assignment, out: Path, overrides: Sequence[Any], reveal: bool,
+                 progress: Callable[[StudentResult], None] | None) -> None:
+        self.a, self.out, self.overrides, self.reveal = a, out, tuple(overrides), reveal
+        self.progress = progress
+        self.follow = FollowThrough.of(a)
+        self.before = records(a, out)
+        self.run = uuid.uuid4().hex  # names the run's lines in the trail
+        self.graded: tuple[str, ...] = ()
+        self._lock = threading.Lock()
+
+    def __call__(self, result: StudentResult) -> None:
+        result = settled(self.a, result, self.follow, self.overrides)
+        with self._lock:
+            tx = Transaction(self.out)
+            stage_record(tx, self.a, self.out, result, self.reveal)
+            tx.trail("graded", [_graded_change(self.before.get(result.student_id), result)],
+                     why="eulertop grade", run=self.run)
+            tx.commit()
+            self.graded += (result.student_id,)
+        if self.progress:
+            self.progress(result)  # the points as recorded: credit and overrides in
+
+    def close(self) -> None:
+        if self.follow is not None:
+            self.follow.close()  # its worker, if one was started
+
+    def finish(self, found: Any, kept: Sequence[str],
+               views_only: bool = False) -> dict[str, StudentResult | None]:
+        """The records kept with today's overrides, the gradebook, the pages and (unless
+        ``views_only``: an interrupted run) the report, and the run's line, as one
+        transaction; every record as it now is."""
+        tx = Transaction(self.out)
+        results = records(self.a, self.out)
+        rewritten = _overrides_kept(tx, self.a, self.out, results, kept, self.overrides,
+                                    self.reveal)
+        stage_views(tx, self.a, self.out, results, self.reveal,
+                    published=set(self.graded) | set(rewritten))
         notebooks = {s.student_id: s.path for s in found.submissions}
-        class_report(a, out, results, notebooks)
-        record_event(out, "grade", _grade_changes(before, results, graded_now),
-                     why="eulertop grade", graded=len(graded_now), kept=len(kept),
-                     notebooks={sid: str(Path(p).resolve()) for sid, p in notebooks.items()})
-    return RunReport(tuple(results[s] for s in a.ids), graded_now, tuple(kept), found.problems,
-                     found.notes)
+        if not views_only:
+            stage_report(tx, self.a, self.out, results, notebooks)
+        tx.trail("grade" if not views_only else "grade interrupted",
+                 [_graded_change(self.before.get(sid), results[sid]) for sid in rewritten],
+                 why="eulertop grade", run=self.run, graded=len(self.graded), kept=len(kept),
+                 notebooks={sid: str(Path(p).resolve()) for sid, p in notebooks.items()})
+        tx.commit()
+        return results
 
 
-def _overrides_kept(a: Assignment, out: Path, kept: Sequence[str], overrides: Sequence[Any],
-                    reveal: bool) -> tuple[str, ...]:
+def _overrides_kept(tx: Transaction, a: Assignment, out: Path,
+                    results: dict[str, StudentResult | None], kept: Sequence[str],
+                    overrides: Sequence[Any], reveal: bool) -> tuple[str, ...]:
     """The records kept unchanged by this run, with the overrides as they are now (added or
-    taken back since they were written); those it rewrote."""
+    taken back since they were written), staged into ``tx`` and put into ``results``; their
+    ids."""
     rewritten = []
     for sid in kept:
-        record = read_result(out / RESULTS / f"{sid}.json")
+        record = results.get(sid)
         if record is None:
             continue
         now_overridden = apply_overrides(record, overrides)
         if now_overridden.overridden != record.overridden or \
                 now_overridden.points != record.points:
-            publish_record(a, out, now_overridden, reveal)
+            stage_record(tx, a, out, now_overridden, reveal)
+            results[sid] = now_overridden
             rewritten.append(sid)
     return tuple(rewritten)
 
 
-def _grade_changes(before: Mapping[str, StudentResult | None],
-                   after: Mapping[str, StudentResult | None],
-                   graded: Sequence[str]) -> list[dict]:
-    """The audit trail's lines of a grading run: each student graded, points before → after."""
-    changes = []
-    for sid in dict.fromkeys(graded):
-        old, new = before.get(sid), after.get(sid)
-        if new is None:
-            continue
-        changes.append({"student": sid, "answer": "total",
-                        "before": None if old is None else old.points, "after": new.points,
-                        "why": new.status if old is None else f"regraded ({new.status})"})
-    return changes
+def _graded_change(old: StudentResult | None, new: StudentResult) -> dict:
+    """The audit trail's change of one student graded: their total before → after."""
+    return {"student": new.student_id, "answer": "total",
+            "before": None if old is None else old.points, "after": new.points,
+            "why": new.status if old is None else f"regraded ({new.status})"}
 
 
 def _unpack(archive: Path, out: Path) -> tuple[Path, dict[Path, str]]:

@@ -1,7 +1,9 @@
-"""A class's records written, and the views of them rebuilt (floor 6): each record with its
-feedback page as soon as it is made (:func:`publish_record`), then the gradebook, the answers
-table, every page and the class report from the records on disk (:func:`rebuild`,
-:func:`class_report`) — what a grading run and a rescore both end with.
+"""A class's records and the views of them, staged into the transaction that changes them: one
+record with its feedback page (:func:`stage_record`), then the gradebook, the answers table,
+every other page and the class report from the records (:func:`stage_views`,
+:func:`stage_report`) — what a grading run and a rescore both end with; and what every record
+goes through before it is written, in that order: follow-through credit, then the
+instructor's overrides (:func:`settled`).
 
 Floor 6 of grader/ (where grade_one runs; where submissions come from; grader/API.md).
 """
@@ -10,32 +12,41 @@ from __future__ import annotations
 
 import sys
 import threading
-from collections.abc import Callable, Mapping, Sequence, Set
+from collections.abc import Mapping, Sequence, Set
 from contextlib import suppress
 from pathlib import Path
 
 from grader.assignment import Assignment
+from grader.follow_through import FollowThrough
 from grader.gradebook import answers_rows, feedback_html, gradebook_csv, gradebook_rows, ran_code
 from grader.graded_folder import ANSWERS, FEEDBACK, GRADES, REPORT, RESULTS
-from grader.results import StudentResult, atomic_write_text, write_result
+from grader.overrides import Override, apply_overrides
+from grader.results import StudentResult, result_json
+from grader.transaction import Transaction
 
 
-def publish_record(a: Assignment, out: Path, result: StudentResult, reveal: bool) -> None:
-    write_result(out / RESULTS, result)
+def settled(a: Assignment, result: StudentResult, follow: FollowThrough | None,
+            overrides: Sequence[Override]) -> StudentResult:
+    """``result`` (compared with the key) as it is recorded: follow-through credit, then the
+    overrides — the one way every record of a grading run and of a rescore is finished."""
+    if follow is not None:
+        result = follow.apply(result, a.expected(result.student_id))
+    return apply_overrides(result, overrides)
+
+
+def _page(a: Assignment, result: StudentResult, reveal: bool) -> str:
     key = None
     if reveal:
         key = {k.variable: k.answer.value for k in a.expected(result.student_id)}
-    page = feedback_html(a.title, result, a.students[result.student_id]["questions"], key)
-    atomic_write_text(out / FEEDBACK / f"{result.student_id}.html", page)
+    return feedback_html(a.title, result, a.students[result.student_id]["questions"], key)
 
 
-def publish_all(a: Assignment, out: Path, results: Sequence[StudentResult], reveal: bool,
-                 progress: Callable[[StudentResult], None] | None) -> None:
-    """Publish the records that need no kernel (missing, invalid, unchanged-but-rewritten)."""
-    for result in results:
-        publish_record(a, out, result, reveal)
-        if progress:
-            progress(result)
+def stage_record(tx: Transaction, a: Assignment, out: Path, result: StudentResult,
+                 reveal: bool) -> None:
+    """Stage ``result``'s record and its feedback page."""
+    tx.write(out / RESULTS / f"{result.student_id}.json", result_json(result))
+    tx.write(out / FEEDBACK / f"{result.student_id}.html", _page(a, result, reveal),
+             durable=False)
 
 
 def prepare_report() -> None:
@@ -48,37 +59,41 @@ def prepare_report() -> None:
     threading.Thread(target=load, name="eulertop-report-imports", daemon=True).start()
 
 
-def class_report(a: Assignment, out: Path, results: Mapping[str, StudentResult | None],
-                 notebooks: Mapping[str, Path]) -> None:
-    """``OUT/report.html`` (:mod:`grader.report`), its code comparison over ``notebooks``
-    (student id → the notebook graded); a fault there is reported, never fatal to the grades
-    already written."""
-    from grader.report import build_report, write_report
+def stage_report(tx: Transaction, a: Assignment, out: Path,
+                 results: Mapping[str, StudentResult | None],
+                 notebooks: Mapping[str, Path], command: str = "eulertop grade") -> None:
+    """Stage ``OUT/report.html`` (:mod:`grader.report`) with its code comparison over
+    ``notebooks`` (student id → the notebook graded); a fault there is reported and leaves the
+    old report, never stopping the grades."""
+    from grader.report import build_report
     from grader.report.classdata import class_data
+    from grader.report.write import report_files
 
     try:
         report = build_report(class_data(a, results), dict(notebooks))
-        write_report(report, out / REPORT)
+        files = report_files(report, out / REPORT)
     except Exception as e:
-        sys.stderr.write(f"eulertop grade: the class report could not be written "
+        sys.stderr.write(f"{command}: the class report could not be written "
                          f"({type(e).__name__}: {e}); the grades are complete\n")
+        return
+    for path, text in files.items():
+        tx.write(path, text, durable=False)
 
 
-def rebuild(a: Assignment, out: Path, results: Mapping[str, StudentResult | None],
-             reveal: bool, published: Set[str] = frozenset()) -> None:
-    """The gradebook and every feedback page, from the records on disk; but the pages of
-    ``published`` (written by :func:`publish_record` in this run, from these same records)."""
+def stage_views(tx: Transaction, a: Assignment, out: Path,
+                results: Mapping[str, StudentResult | None], reveal: bool,
+                published: Set[str] = frozenset()) -> None:
+    """Stage the gradebook, the answers table and every feedback page from ``results``; but the
+    pages of ``published`` (staged with their records). A file whose text is unchanged is left
+    as it is (:meth:`Transaction.write`)."""
     present = {sid: r for sid, r in results.items() if r is not None}
     unsandboxed = any(ran_code(r) and not r.sandboxed for r in present.values())
     table = gradebook_rows(a.columns, a.rows, a.questions, present, sandbox_column=unsandboxed)
-    atomic_write_text(out / GRADES, gradebook_csv(table))
-    atomic_write_text(out / ANSWERS, gradebook_csv(answers_rows(a.rows, present)))
+    tx.write(out / GRADES, gradebook_csv(table), durable=False)
+    tx.write(out / ANSWERS, gradebook_csv(answers_rows(a.rows, present)), durable=False)
     for sid, r in present.items():
-        if sid in published:
-            continue
-        key = ({k.variable: k.answer.value for k in a.expected(sid)} if reveal else None)
-        page = feedback_html(a.title, r, a.students[sid]["questions"], key)
-        atomic_write_text(out / FEEDBACK / f"{sid}.html", page)
+        if sid not in published:
+            tx.write(out / FEEDBACK / f"{sid}.html", _page(a, r, reveal), durable=False)
 
 
 def report_notebooks(out: Path) -> dict[str, Path]:
@@ -90,3 +105,10 @@ def report_notebooks(out: Path) -> dict[str, Path]:
         if line.get("event") == "grade" and "notebooks" in line:
             return {sid: Path(p) for sid, p in line["notebooks"].items() if Path(p).is_file()}
     return {}
+
+
+def records(a: Assignment, out: Path) -> dict[str, StudentResult | None]:
+    """Every roster student's record in ``out`` (None: none yet)."""
+    from grader.results import read_result
+
+    return {sid: read_result(out / RESULTS / f"{sid}.json") for sid in a.ids}

@@ -1,19 +1,24 @@
-"""``eulertop rescore``: every verdict again from the answers stored in the records and the key as
-it is now, without starting a kernel (issue 26).
+"""``eulertop rescore`` — and ``key set``, ``rekey`` and ``override``, which are a change followed
+by one: every verdict again from the answers stored in the records and the key as it is now,
+without starting a kernel (issue 26), as one transaction (issue 30).
 
 What a student submitted is in their record (``results/<id>.json``: each answer's value as the
 grader extracted it), so a changed key — a tolerance that was too tight, points moved, an
-accepted alternative, a solver fix (``eulertop key set``, ``eulertop rekey``) — needs no
-notebook to run again: each record is compared again (:func:`rescored`), follow-through
-credit and the instructor's overrides applied last, as a grading run applies them; then the
-gradebook, the answers table, every feedback page and the class report are rebuilt from the
-records (:mod:`grader.publish`), and one line goes to the audit trail. What changed is
-returned (and printed by the command): student, answer, points before → after, and why.
+accepted alternative, a solver fix — needs no notebook to run again. Under the class's lock
+(:func:`grader.transaction.class_lock`) the command reads the key, the overrides and the records
+as they are, works out its change (:class:`Amendment`: a new key, new overrides), compares each
+record again (:func:`rescored`), gives follow-through credit and applies the overrides
+(:func:`grader.publish.settled`) — any of which may refuse the change, before a file is written
+— then commits the key, the overrides, the records that changed, the views and one line of the
+audit trail together (:class:`grader.transaction.Transaction`). A record whose verdicts did not
+change keeps its bytes.
 
 A record that is not ``graded`` (missing, or a notebook that could not be run) has no answers
 to compare: its answers are all missing against the new key, its points and its message as
-they were. An answer the key holds but the record does not (a key that gained an answer) reads
-as unset: only a ``--force`` regrade can read it from the notebook.
+they were. An answer the key holds but the record does not (a key that gained an answer) was
+never read from the notebook: it is recorded *unread* (missing, and the record's
+``execution["unread"]`` names it), so the next ``eulertop grade`` runs exactly those students'
+notebooks again; the command says who they are.
 
 Non-finite numbers: a record keeps NaN and infinities as the strings ``"NaN"``,
 ``"Infinity"``, ``"-Infinity"`` (strict JSON); they are read back as numbers where the answer
@@ -25,22 +30,39 @@ Floor 7 of grader/ (the class run; grader/API.md).
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
 
-from grader.assignment import Assignment, load_assignment
-from grader.audit import record_event
-from grader.compare import compare
+from grader.assignment import Assignment, UsageError, load_assignment
 from grader.follow_through import FollowThrough
-from grader.grade_one import now
-from grader.graded_folder import RESULTS, graded_folder, run_lock
-from grader.overrides import TOTAL, apply_overrides, read_overrides, without_overrides
-from grader.publish import class_report, publish_record, rebuild, report_notebooks
-from grader.results import StudentResult, non_finite_read, read_result
+from grader.grade_one import scored
+from grader.graded_folder import RESULTS, graded_folder
+from grader.overrides import (
+    OVERRIDES,
+    TOTAL,
+    Override,
+    check_overrides,
+    overrides_toml,
+    read_overrides,
+)
+from grader.publish import (
+    records,
+    report_notebooks,
+    settled,
+    stage_record,
+    stage_report,
+    stage_views,
+)
+from grader.results import StudentResult, non_finite_read
+from grader.transaction import LOCK_WAIT, Transaction, class_lock
+from problems.answers import Verdict
 
 NUMERIC = ("scalar", "angle", "vector")
+UNREAD = "unread"
+"""``execution`` key of a record: the answers the key gained after its notebook ran."""
+UNREAD_MESSAGE = ("not read yet: the key gained this answer after your notebook was graded; it "
+                  "is read when the notebook runs again")
 
 
 @dataclass(frozen=True)
@@ -60,6 +82,27 @@ class Change:
 
 
 @dataclass(frozen=True)
+class Amendment:
+    """A change to a graded class, worked out from its state under the lock: the new key or
+    overrides (None: unchanged), and what the trail and the person are told. ``unchanged``
+    set: there is nothing to change (why), and nothing is written."""
+
+    event: str = "rescore"
+    why: str = "rescore"
+    key: dict | None = None
+    overrides: tuple[Override, ...] | None = None
+    details: dict = field(default_factory=dict)
+    lines: tuple[str, ...] = ()  # the change itself, for the person (key changes)
+    unchanged: str = ""
+    files: dict = field(default_factory=dict)  # other files the change writes: path → text
+
+
+Amend = Callable[[Assignment, tuple[Override, ...]], Amendment]
+"""``change(assignment, overrides) -> Amendment``, run under the class's lock; raises
+:class:`UsageError` to refuse."""
+
+
+@dataclass(frozen=True)
 class Rescore:
     """What a rescore did (or, with ``dry_run``, would do)."""
 
@@ -67,31 +110,41 @@ class Rescore:
     rescored: tuple[str, ...]  # the students with a record
     unchanged: int  # of them, how many kept every point
     dry_run: bool
+    amendment: Amendment = Amendment()
+    unread: Mapping[str, tuple[str, ...]] = field(default_factory=dict)  # id → answers unread
 
 
-def rescored(a: Assignment, old: StudentResult,
-             follow: FollowThrough | None = None) -> StudentResult:
+def _unread(a: Assignment, old: StudentResult) -> tuple[str, ...]:
+    """The answers of ``a``'s key that ``old``'s notebook run never read (module docstring)."""
+    had = {x.variable for x in old.answers}
+    before = set(old.execution.get(UNREAD, ()))
+    return tuple(k.variable for k in a.expected(old.student_id)
+                 if k.variable not in had or k.variable in before)
+
+
+def rescored(a: Assignment, old: StudentResult) -> StudentResult:
     """``old`` compared again with ``a``'s key (the module docstring's rules), before
-    follow-through credit (``follow``) and overrides."""
+    follow-through credit and overrides."""
     sid = old.student_id
-    expected = a.expected(sid)
+    expected, execution, extracted = a.expected(sid), dict(old.execution), None
+    execution.pop(UNREAD, None)
+    unread = _unread(a, old) if old.status == "graded" else ()
     if old.status == "graded":
         kinds = {k.variable: k.answer.kind for k in expected}
         extracted = {x.variable: non_finite_read(x.submitted) if kinds.get(x.variable) in NUMERIC
-                     else x.submitted for x in old.answers}
-        for k in expected:
-            extracted.setdefault(k.variable, None)
-        answers = compare(expected, extracted)
-        if follow is not None:
-            answers = follow.credit(sid, expected, answers)
-    else:
-        answers = compare(expected, None)
-    return StudentResult(
-        student_id=sid, status=old.status, message=old.message, answers=answers,
-        points=sum(x.verdict.points for x in answers) if old.status == "graded" else 0.0,
-        max_points=sum(k.answer.points for k in expected),
-        submission_sha256=old.submission_sha256, key_sha256=a.key_hash(sid),
-        execution=old.execution, sandboxed=old.sandboxed, graded_at=now())
+                     else x.submitted for x in old.answers if x.variable not in unread}
+        extracted.update({k.variable: None for k in expected if k.variable not in extracted})
+        if unread:
+            execution[UNREAD] = list(unread)
+    new = scored(sid, expected, a.key_hash(sid), status=old.status, message=old.message,
+                 extracted=extracted, execution=execution, sandboxed=old.sandboxed,
+                 submission_sha256=old.submission_sha256)
+    if not unread:
+        return new
+    answers = tuple(replace(x, verdict=Verdict("missing", 0.0, x.verdict.max_points,
+                                               UNREAD_MESSAGE)) if x.variable in unread else x
+                    for x in new.answers)
+    return replace(new, answers=answers, points=sum(x.verdict.points for x in answers))
 
 
 def changes_between(old: StudentResult, new: StudentResult, why: str) -> list[Change]:
@@ -111,64 +164,108 @@ def changes_between(old: StudentResult, new: StudentResult, why: str) -> list[Ch
     return found
 
 
-def rescore(hw: Path | Assignment, out: Path | None = None, *, dry_run: bool = False,
-            reveal: bool = False, why: str = "rescore", event: str = "rescore",
-            **details: Any) -> Rescore:
-    """Rescore a graded class (module docstring): ``HW`` (or its loaded assignment), its
-    output folder ``out`` (default ``HW/graded``). ``dry_run``: compute and return the
-    changes, write nothing. ``why`` is what each change says; ``event`` names the audit
-    trail's line and ``details`` go into it (a key change passes its own).
+def same_record(old: StudentResult, new: StudentResult) -> bool:
+    """Whether two records say the same, their ``graded_at`` apart."""
+    return replace(new, graded_at=old.graded_at) == old
+
+
+def rescore(hw: Path, out: Path | None = None, *, change: Amend | None = None,
+            dry_run: bool = False, reveal: bool = False, wait: float = LOCK_WAIT,
+            command: str = "eulertop rescore") -> Rescore:
+    """Rescore the graded class of assignment folder ``hw`` (output folder ``out``, default
+    ``HW/graded``), after ``change`` if given (module docstring); ``dry_run``: work it all out,
+    write nothing. ``wait``: seconds to wait for another command holding the class.
 
     Raises
     ------
     grader.assignment.UsageError
-        No assignment, no records, an unreadable overrides file, or another run holding the
-        output folder (:class:`grader.graded_folder.RunInProgress`).
+        No assignment or no records; a change refused (it names why); an unreadable overrides
+        file; another command holding the class longer than ``wait``
+        (:class:`grader.graded_folder.RunInProgress`). Nothing is written then.
     """
-    from grader.assignment import UsageError
-
-    a = hw if isinstance(hw, Assignment) else load_assignment(hw)
-    out = graded_folder(a.folder, out)
+    hw = Path(hw)
+    out = graded_folder(hw, out)
     if not (out / RESULTS).is_dir():
         raise UsageError(f"{out / RESULTS}: no result records here; run 'eulertop grade' "
                          "first (or pass --out DIR)")
-    with run_lock(out):
-        overrides = read_overrides(out)
-        follow = FollowThrough.of(a)
-        try:
-            report, new = _rescored_class(a, out, overrides, follow, why, dry_run)
-        finally:
-            if follow is not None:
-                follow.close()  # its worker, if one was started
-        if dry_run:
-            return report
-        done = report.rescored
-        for sid in done:
-            publish_record(a, out, new[sid], reveal)
-        rebuild(a, out, new, reveal, published=set(done))
-        class_report(a, out, new, report_notebooks(out))
-        record_event(out, event, (c.as_dict() for c in report.changes), why=why,
-                     students=len(done), unchanged=report.unchanged, **details)
+    with class_lock(out, hw, command=command, wait=wait):
+        a, overrides = load_assignment(hw), read_overrides(out)
+        amendment = change(a, overrides) if change is not None else Amendment()
+        if amendment.unchanged:
+            return Rescore((), (), 0, dry_run, amendment)
+        a, overrides = _amended(a, overrides, amendment)
+        old = records(a, out)
+        report, new = _rescored_class(a, old, overrides, amendment)
+        report = replace(report, dry_run=dry_run)
+        if not dry_run:
+            _commit(a, hw, out, old, new, report, reveal, command)
     return report
 
 
-def _rescored_class(a: Assignment, out: Path, overrides: Sequence[Any],
-                    follow: FollowThrough | None, why: str,
-                    dry_run: bool) -> tuple[Rescore, dict[str, StudentResult | None]]:
-    """Every record of ``out`` rescored (nothing written): the report, and the new records."""
-    old = {sid: read_result(out / RESULTS / f"{sid}.json") for sid in a.ids}
+def _amended(a: Assignment, overrides: tuple[Override, ...],
+             amendment: Amendment) -> tuple[Assignment, tuple[Override, ...]]:
+    """The assignment and overrides as ``amendment`` makes them, checked together."""
+    if amendment.key is not None:
+        a = replace(a, key=amendment.key)
+    if amendment.overrides is not None:
+        overrides = tuple(amendment.overrides)
+    a.check_key()
+    check_overrides(a, overrides, None if amendment.overrides is not None else OVERRIDES)
+    return a, overrides
+
+
+def _rescored_class(a: Assignment, old: Mapping[str, StudentResult | None],
+                    overrides: Sequence[Override],
+                    amendment: Amendment) -> tuple[Rescore, dict[str, StudentResult | None]]:
+    """Every record rescored and settled (nothing written): the report, and the new records
+    (an unchanged one is the old one, its bytes kept)."""
+    follow = FollowThrough.of(a)
     new: dict[str, StudentResult | None] = {}
     changes: list[Change] = []
-    for sid, record in old.items():
-        if record is None:
-            new[sid] = None
-            continue
-        result = apply_overrides(rescored(a, without_overrides(record), follow), overrides)
-        new[sid] = result
-        changes += changes_between(record, result, why)
+    try:
+        for sid, record in old.items():
+            if record is None:
+                new[sid] = None
+                continue
+            result = settled(a, rescored(a, record), follow, overrides)
+            new[sid] = record if same_record(record, result) else result
+            changes += changes_between(record, result, amendment.why)
+    finally:
+        if follow is not None:
+            follow.close()  # its worker, if one was started
     done = tuple(sid for sid, r in old.items() if r is not None)
+    unread = {sid: tuple(r.execution[UNREAD]) for sid, r in new.items()
+              if r is not None and r.execution.get(UNREAD)}
     touched = {c.student for c in changes}
-    return Rescore(tuple(changes), done, len(done) - len(touched), dry_run), new
+    return Rescore(tuple(changes), done, len(done) - len(touched), False, amendment,
+                   unread), new
+
+
+def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult | None],
+            new: Mapping[str, StudentResult | None], report: Rescore, reveal: bool,
+            command: str) -> None:
+    """The change, its records and their views, and its line of the trail, as one
+    transaction."""
+    amendment, details = report.amendment, dict(report.amendment.details)
+    tx = Transaction(out)
+    if amendment.key is not None:
+        from grader.key_edit import stage_key
+
+        details["old_key"] = stage_key(tx, hw, amendment.key).name
+    if amendment.overrides is not None:
+        tx.write(out / OVERRIDES, overrides_toml(amendment.overrides))
+    for path, text in amendment.files.items():
+        tx.write(path, text)
+    changed = {sid for sid, r in new.items() if r is not None and r is not old[sid]}
+    for sid in changed:
+        stage_record(tx, a, out, new[sid], reveal)
+    stage_views(tx, a, out, new, reveal, published=changed)
+    stage_report(tx, a, out, new, report_notebooks(out), command)
+    tx.trail(amendment.event, (c.as_dict() for c in report.changes), why=amendment.why,
+             students=len(report.rescored), unchanged=report.unchanged,
+             **({"unread": dict(report.unread)} if report.unread else {}),
+             **details)
+    tx.commit()
 
 
 def change_lines(changes: Sequence[Change], limit: int | None = None) -> list[str]:

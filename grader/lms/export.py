@@ -120,12 +120,23 @@ def write_export(hw: Path, lms: str, out: Path | None = None, graded: Path | Non
     :func:`build_grades`. Raises :class:`ExportError`, ``grader.assignment.UsageError``,
     ``problems.roster.RosterError`` or ``grader.lms.classlist.ImportError_`` on bad input.
     """
+    from grader.graded_folder import graded_folder
+    from grader.transaction import class_lock
+
+    graded = graded_folder(hw, graded)
+    if not graded.is_dir():
+        raise ExportError(f"{graded}: no results/ here — run 'eulertop grade' first")
+    with class_lock(graded, Path(hw), command="eulertop export"):  # no change read half-way
+        return _export(hw, lms, out, graded, options)
+
+
+def _export(hw: Path, lms: str, out: Path | None, graded: Path,
+            options: dict) -> tuple[Path, Path]:
     from grader.gradebook import answers_rows, gradebook_csv
-    from grader.graded_folder import ANSWERS, graded_folder
+    from grader.graded_folder import ANSWERS
     from grader.lms.registry import LMS
     from grader.results import atomic_write_text
 
-    graded = graded_folder(hw, graded)
     grades, a, results = build_grades(Path(hw), graded, **options)
     table = LMS[lms].write_import(grades)
     out = Path(out) if out is not None else graded / f"{lms}-import.csv"

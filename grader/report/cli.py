@@ -35,10 +35,23 @@ def submitted_notebooks(folder: Path, ids) -> dict[str, Path]:
     return {s.student_id: s.path for s in discover(folder, ids).submissions}
 
 
+def _locked_report(a, graded, submissions, page):
+    """:func:`grader.report.write.report_for`, holding the class's lock (its records read
+    whole, never half-way through a change) where the graded folder exists."""
+    from grader.graded_folder import graded_folder
+    from grader.report.write import report_for
+    from grader.transaction import class_lock
+
+    folder = graded_folder(a.folder, graded)
+    if not folder.is_dir():
+        return report_for(a, graded, submissions, page)  # its own message: nothing graded
+    with class_lock(folder, a.folder, command="eulertop report"):
+        return report_for(a, graded, submissions, page)
+
+
 def run_report(args: argparse.Namespace) -> int:
     """Run ``eulertop report``; the exit status."""
     from grader.assignment import UsageError, load_assignment
-    from grader.report.write import report_for
 
     try:
         if args.out is not None and args.out.is_dir():
@@ -50,7 +63,7 @@ def run_report(args: argparse.Namespace) -> int:
             if not args.submissions.is_dir():
                 raise UsageError(f"--submissions {args.submissions}: not a folder")
             submissions = submitted_notebooks(args.submissions, a.ids)
-        report, page = report_for(a, args.graded, submissions, args.out)
+        report, page = _locked_report(a, args.graded, submissions, args.out)
     except UsageError as err:
         print(f"eulertop report: {err}", file=sys.stderr)
         return 2

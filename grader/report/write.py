@@ -26,17 +26,25 @@ def companion_paths(page: Path) -> tuple[Path, Path]:
     return page.with_suffix(".csv"), page.with_name(f"{page.stem}_items.csv")
 
 
-def write_report(report: ClassReport, page: Path) -> Path:
-    """Write the page to ``page`` and its two CSV files beside it (:func:`companion_paths`),
-    each atomically; returns ``page``."""
+def report_files(report: ClassReport, page: Path) -> dict[Path, str]:
+    """The page (at ``page``) and its two CSV files beside it (:func:`companion_paths`): each
+    path and its text, written by the caller (a class's change stages them in its
+    transaction)."""
     page = Path(page)
-    page.parent.mkdir(parents=True, exist_ok=True)
     students_path, items_path = companion_paths(page)
     table = student_rows(report.data, report.slips, report.pairs, report.code)
     students = gradebook_csv(table)
-    atomic_write_text(students_path, students)
-    atomic_write_text(items_path, items_csv(report))
-    atomic_write_text(page, report_html(report, table, students, students_path.name))
+    return {students_path: students, items_path: items_csv(report),
+            page: report_html(report, table, students, students_path.name)}
+
+
+def write_report(report: ClassReport, page: Path) -> Path:
+    """Write the page to ``page`` and its two CSV files beside it (:func:`report_files`),
+    each atomically; returns ``page``."""
+    page = Path(page)
+    page.parent.mkdir(parents=True, exist_ok=True)
+    for path, text in report_files(report, page).items():
+        atomic_write_text(path, text)
     return page
 
 

@@ -187,12 +187,13 @@ def test_sigkill_mid_run_then_resume_equals_an_uninterrupted_run(graded, tmp_pat
     assert not [p for p in (hw / "graded").rglob(".*") if p.name != ".lock"]
 
 
-def test_a_concurrent_run_is_refused(graded, capsys):
+def test_a_concurrent_run_waits_then_is_refused(graded, capsys):
     hw, subs, *_ = graded
     with run_lock(hw / "graded"):
-        assert main(["grade", str(hw), str(subs)]) == 2
+        assert main(["grade", str(hw), str(subs), "--wait", "0.2"]) == 2
     err = capsys.readouterr().err
-    assert "another 'eulertop grade' run" in err and "in progress" in err
+    assert "waiting for another command" in err
+    assert "still holds this folder after 0.2 s of waiting" in err and "Traceback" not in err
 
 
 @pytest.mark.parametrize(("case", "fragment"), [

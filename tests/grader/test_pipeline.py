@@ -12,6 +12,7 @@ import csv
 import json
 import shutil
 import threading
+import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -275,13 +276,36 @@ def test_a_grader_fault_on_one_submission_spares_the_others(hw, tmp_path):
     assert r["bob"].points == r["bob"].max_points
 
 
-def test_a_second_run_is_told_one_is_in_progress(hw, subs):
+def test_a_second_run_is_told_one_is_in_progress(hw, subs, capsys):
     out = hw / "graded"
     out.mkdir()
-    with run_lock(out):
-        with pytest.raises(RunInProgress, match=r"another 'eulertop grade' run \(pid \d+\)"):
-            _run(hw, subs, FakeExecute())
+    with run_lock(out, command="eulertop override"):
+        with pytest.raises(RunInProgress, match=r"another command \(pid \d+: eulertop override\) "
+                                                r"still holds this folder after 0.3 s"):
+            _run(hw, subs, FakeExecute(), wait=0.3)
+    assert "waiting for another command" in capsys.readouterr().err  # said once, at once
     assert not (out / "results").exists() or not any((out / "results").iterdir())
+
+
+def test_a_second_run_waits_for_the_first(hw, subs):
+    """A run started while another command holds the class waits for it, then grades."""
+    out = hw / "graded"
+    out.mkdir()
+    held = threading.Event()
+
+    def hold() -> None:
+        with run_lock(out, command="eulertop rescore"):
+            held.set()
+            time.sleep(1.0)
+
+    holder = threading.Thread(target=hold)
+    holder.start()
+    held.wait()
+    start = time.monotonic()
+    report = _run(hw, subs, FakeExecute(), wait=30)
+    holder.join()
+    assert time.monotonic() - start >= 0.9  # it did wait for the holder
+    assert {r.student_id for r in report.results if r.status == "graded"}
 
 
 def test_temporaries_of_a_killed_run_are_cleared(hw, subs):
