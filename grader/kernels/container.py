@@ -33,12 +33,14 @@ Where the grader is not root there is no other user to run the kernel as: the ke
 the grader's own user and **can read the key**; :func:`kernel_user` returns None and
 :data:`UNPROTECTED` says so in every result.
 
-The third isolation tier of ``eulertop grade`` (issue 22; :func:`local_tier`): as root where no
-user namespace can be made (a Docker container with its default seccomp profile), the same
-kernels, each as a uid of its own never used before (:func:`grader.sandbox.slot_uid`, or a free
-uid of a rootless container's range), so that no two students' kernels share a user; the
-instructor's folders (assignment, submissions, output) are made private to root for the run
-(:func:`private_folders`).
+The third isolation tier of ``eulertop grade`` (issue 22; :class:`ContainerTier`): as root where
+no user namespace can be made (a Docker container with its default seccomp profile), the same
+kernels, each as a uid of its own (:class:`RunUids`, from :func:`free_uids`): a run gives a uid
+to one kernel at most, and never one that owns a process or a file in :data:`WRITABLE` (another
+run's kernel), so no two students' kernels share a user; when the range is spent, a kernel
+fails to start (:class:`NoFreeUid`: the grader's fault, retried and recorded so) rather than
+share one. The instructor's folders (assignment, submissions, output) are made private to root
+for the run (:func:`private_folders`).
 
 Floor 2 of grader/ (one kernel; grader/API.md).
 """
@@ -46,8 +48,10 @@ Floor 2 of grader/ (one kernel; grader/API.md).
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import pwd
+import secrets
 import stat
 import subprocess
 import sys
@@ -271,22 +275,45 @@ def remove_files_of(uid: int, places: Iterable[str] = WRITABLE) -> int:
     import shutil
 
     removed = 0
-    todo = [p for p in places if os.path.isdir(p)]
+    for path, info in _shared_entries(places):
+        if info.st_uid == uid:
+            with contextlib.suppress(OSError):
+                if stat.S_ISDIR(info.st_mode):
+                    shutil.rmtree(path, ignore_errors=True)
+                else:
+                    os.unlink(path)
+                removed += 1
+    return removed
+
+
+def _shared_entries(places: Iterable[str]) -> Iterator[tuple[str, os.stat_result]]:
+    """``(path, stat)`` of every entry of the folders ``places`` and of the world-writable
+    folders below them (where any user may leave something), links not followed."""
+    todo = [str(p) for p in places if os.path.isdir(p)]
     while todo:
-        folder = todo.pop()
+        folder, found = todo.pop(), []
         with contextlib.suppress(OSError), os.scandir(folder) as entries:
             for entry in entries:
                 with contextlib.suppress(OSError):
-                    info = entry.stat(follow_symlinks=False)
-                    if info.st_uid == uid:
-                        if stat.S_ISDIR(info.st_mode):
-                            shutil.rmtree(entry.path, ignore_errors=True)
-                        else:
-                            os.unlink(entry.path)
-                        removed += 1
-                    elif stat.S_ISDIR(info.st_mode) and info.st_mode & stat.S_IWOTH:
-                        todo.append(entry.path)
-    return removed
+                    found.append((entry.path, entry.stat(follow_symlinks=False)))
+        for path, info in found:
+            yield path, info
+            if stat.S_ISDIR(info.st_mode) and info.st_mode & stat.S_IWOTH:
+                todo.append(path)
+
+
+def uids_in_use(places: Iterable[str] = WRITABLE) -> set[int]:
+    """The uids that own an entry of the shared folders ``places`` (:func:`_shared_entries`)
+    or a process of this machine (a zombie too): in use, by a kernel of another run, say."""
+    owners = {info.st_uid for _, info in _shared_entries(places)}
+    for entry in os.scandir("/proc"):
+        if entry.name.isdigit():
+            with contextlib.suppress(OSError, ValueError, StopIteration), \
+                    open(f"/proc/{entry.name}/status", "rb") as f:
+                # real, effective, saved and file-system uid: read here, not from the owner of
+                # /proc/<pid>, which is root for a process that cannot be dumped
+                owners.update(map(int, next(x for x in f if x.startswith(b"Uid:")).split()[1:]))
+    return owners
 
 
 def resident_of(uid: int, proportional: bool = False) -> int:
@@ -474,46 +501,94 @@ def free_uids() -> tuple[int, int] | None:
     return max(spans, key=lambda s: s[1]) if spans else None
 
 
-def fresh_user(uids: tuple[int, int]) -> KernelUser:
-    """A uid of ``uids`` (first, count) that no account of this machine has, as a
-    :class:`KernelUser` whose group is its own number."""
-    import secrets
+class NoFreeUid(RuntimeError):
+    """Every uid of a run's range was given to one of its kernels or is in use here: no more
+    kernels of their own can start (the grader's fault, not the student's)."""
 
-    first, count = uids
-    for _ in range(100):
-        uid = first + secrets.randbelow(count)
-        try:
-            pwd.getpwuid(uid)
-        except KeyError:
-            return KernelUser(uid, uid, f"uid {uid}")
-    raise KernelUserError(f"no free uid in {first}…{first + count - 1}")
+
+class RunUids:
+    """The uids ``[first, first + count)`` (:func:`free_uids`) as one run gives them to its
+    kernels, from any thread: each at most once, and none that an account has or that owns a
+    process or a file in :data:`WRITABLE` when it is given (:func:`uids_in_use`)."""
+
+    def __init__(self, first: int, count: int) -> None:
+        if count < 1:
+            raise ValueError(f"uids: a range of {count} uids holds none")
+        self.first, self.count = first, count
+        # A random order (a random start and a random stride co-prime with count: every uid
+        # met once, none twice), not upwards from first: another run on this machine walks
+        # the range in another order, so two runs started together rarely reach one uid at
+        # the same time — uids_in_use cannot see a uid the other run chose a moment ago. A
+        # uid passed over as in use is not met again: the range is thousands of uids.
+        self._start, self._stride = secrets.randbelow(count), _coprime_stride(count)
+        self._walked = self._given = 0
+        self._lock = threading.Lock()
+
+    def take(self) -> KernelUser:
+        """The next uid, as a :class:`KernelUser` whose group is its own number;
+        :class:`NoFreeUid` once none is left (a uid is never given twice)."""
+        with self._lock:
+            busy = uids_in_use()
+            while self._walked < self.count:
+                uid = self.first + (self._start + self._walked * self._stride) % self.count
+                self._walked += 1
+                if uid not in busy and not _has_account(uid):
+                    self._given += 1
+                    return KernelUser(uid, uid, f"uid {uid}")
+        raise NoFreeUid(
+            f"no uid left for a kernel of its own: of the {self.count} uids {self.first}…"
+            f"{self.first + self.count - 1}, {self._given} went to this run's kernels and "
+            f"{self.count - self._given} were in use here (an account, a process, or a file in "
+            f"{', '.join(WRITABLE)}); uids are never shared between kernels, so grade again "
+            "once other runs have ended, or map more uids into this container")
+
+
+def _coprime_stride(count: int) -> int:
+    """A random step of ``1…count`` with no factor in common with ``count``: walking ``count``
+    steps of it modulo ``count`` meets every residue exactly once."""
+    while True:
+        step = 1 + secrets.randbelow(count)
+        if math.gcd(step, count) == 1:
+            return step
+
+
+def _has_account(uid: int) -> bool:
+    try:
+        pwd.getpwuid(uid)
+    except KeyError:
+        return False
+    return True
 
 
 @dataclass(frozen=True)
 class ContainerTier:
-    """The ``container`` tier of ``eulertop grade``: where no user namespace can be made and
-    the grader is root, each kernel a :class:`ContainerKernel` as a fresh uid of ``uids``;
-    ``why`` says why bubblewrap could not be used."""
+    """The ``container`` tier of one run of ``eulertop grade``: where no user namespace can be
+    made and the grader is root, each kernel a :class:`ContainerKernel` as a uid of its own
+    from ``uids`` (given once each, whatever thread asks); ``why`` says why bubblewrap could
+    not be used."""
 
-    uids: tuple[int, int]
+    uids: RunUids
     why: str
     tier: str = "container"
 
     def describe(self) -> str:
         """One line for the run's header and every record."""
         return (f"container: no bubblewrap here ({self.why}); each kernel runs as a uid of its "
-                "own never used before, with resource limits (memory of all its processes "
-                "together watched, processes, CPU time, file size, open files), in a private "
-                "folder, and everything of its uid killed when it ends; the assignment, "
-                "submissions and output folders private to root during the run; no namespaces: "
-                "it sees this machine's world-readable files, its process list and its network")
+                "own (given to no other kernel of the run, and to none in use here), with "
+                "resource limits (memory of all its processes together watched, processes, "
+                "CPU time, file size, open files), in a private folder, and everything of its "
+                "uid killed when it ends; the assignment, submissions and output folders "
+                "private to root during the run; no namespaces: it sees this machine's "
+                "world-readable files, its process list and its network")
 
     def kernel_factory(self) -> Any:
-        """``(workdir, control, limits) -> ContainerKernel``, each as a fresh uid."""
+        """``(workdir, control, limits) -> ContainerKernel``, each as the next uid of
+        :attr:`uids` (:class:`NoFreeUid` when none is left: the run records that submission
+        as not graded through no fault of its own)."""
         note = self.describe()
 
         def factory(workdir: Path, control: Path, limits: Limits) -> ContainerKernel:
-            return ContainerKernel(workdir, control, limits, fresh_user(self.uids), note)
+            return ContainerKernel(workdir, control, limits, self.uids.take(), note)
 
         return factory
 

@@ -12,7 +12,13 @@ from __future__ import annotations
 import os
 from typing import Any
 
-from grader.kernels.container import ContainerTier, check_interpreter, free_uids, fresh_user
+from grader.kernels.container import (
+    ContainerTier,
+    NoFreeUid,
+    RunUids,
+    check_interpreter,
+    free_uids,
+)
 
 
 def choose_tier() -> Any:
@@ -30,12 +36,22 @@ def choose_tier() -> Any:
         raise refusal
     if refusal.diagnosis.kind == "missing" and host.userns_possible()[0]:
         raise refusal  # a machine where bubblewrap would work: install it
-    uids = free_uids()
+    found = free_uids()
+    uids = None if found is None else RunUids(*found)
     why = ("this root has no other uid to give a kernel (its user namespace maps too few)"
-           if uids is None else check_interpreter(fresh_user(uids)))
+           if uids is None else _container_obstacle(uids))
     if why is None:
         return ContainerTier(uids, refusal.diagnosis.cause)
     diagnosis = refusal.diagnosis
     raise SandboxUnavailable(host.Diagnosis(
         diagnosis.kind, f"{diagnosis.cause}; and the container mode cannot run here either: "
         f"{why}", diagnosis.fix))
+
+
+def _container_obstacle(uids: RunUids) -> str | None:
+    """Why a kernel could not run as a uid of ``uids`` (its first: the run's own, never given
+    again), or None."""
+    try:
+        return check_interpreter(uids.take())
+    except NoFreeUid as err:
+        return str(err)

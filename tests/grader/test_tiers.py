@@ -14,6 +14,7 @@ the instructor's files byte for byte — never what the grader says of itself al
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import subprocess
@@ -22,6 +23,7 @@ import tempfile
 from pathlib import Path
 
 import pytest
+from nbformat.v4 import new_code_cell
 
 from grader.sandbox import available, host
 from tests.grader.tiers_support import (
@@ -114,19 +116,39 @@ def test_root_of_a_one_uid_namespace_grades_as_that_uid(public_tmp):
 def test_the_container_tier_as_root_where_no_namespace_can_be_made(public_tmp):
     """Docker's default seccomp profile refuses bwrap its namespaces: as root, each kernel runs
     as a uid of its own, with rlimits and the seccomp filter, the instructor's folders private
-    for the run; the key stays out of the thief's reach, and the folders' modes come back."""
+    for the run; the key stays out of the thief's reach, and the folders' modes come back.
+    Each notebook leaves a file named by its kernel's uid: three students, three uids."""
     from tests.grader.hosted.conftest import container_layout
 
     layout = container_layout()
     assert layout is not None, "bubblewrap could not lay out a container's file system"
     cls = make_class(public_tmp)
+    drop = _uid_drop(cls)
     modes = {name: cls[name].stat().st_mode for name in ("hw", "subs")}
     done = grade(cls, "root", bin_first=fake_bwrap(public_tmp, "docker"), prefix=layout)
     got = assert_graded_in_full_and_safe(cls, cls["hw"] / "graded", done, "container")
     assert "private to root during the run" in done.stderr
     assert {name: cls[name].stat().st_mode for name in ("hw", "subs")} == modes
-    uids = {r["execution"]["isolation"] for r in got.values()}
-    assert len(uids) == 1 and "a uid of its own never used before" in uids.pop()
+    notes = {r["execution"]["isolation"] for r in got.values()}
+    assert len(notes) == 1 and "given to no other kernel of the run" in notes.pop()
+    uids = {p.name: p.stat().st_uid for p in drop.iterdir()}
+    assert len(uids) == len(got) and len(set(uids.values())) == len(got), uids
+    assert all(str(uid) == name and uid not in (0, os.geteuid()) for name, uid in uids.items())
+
+
+def _uid_drop(cls: dict) -> Path:
+    """A world-writable folder below ``cls``'s (whose own is not, so the kernels' clean-up
+    keeps it), and a last cell in every submission that leaves there a file named by its
+    kernel's uid."""
+    drop = cls["base"] / "uids"
+    drop.mkdir()
+    drop.chmod(0o1777)
+    cell = new_code_cell(f"import os; open(os.path.join({str(drop)!r}, str(os.getuid())), 'w')")
+    for path in cls["subs"].glob("*.ipynb"):
+        nb = json.loads(path.read_text())
+        nb["cells"].append(cell)
+        path.write_text(json.dumps(nb))
+    return drop
 
 
 def test_without_the_sandbox_the_thief_would_get_every_point(public_tmp):
