@@ -1,7 +1,7 @@
 """``eulertop generate``: a roster and a list of problem families (or an assignment spec) → one
 assignment folder.
 
-Layout (``/work/shared/design.md``)::
+Layout (``docs/instructors/generate.md`` says it for the instructor)::
 
     HW/assignment.json          manifest: title, seed, problems, roster, generator version, and
                                 every student's reroll count and *resolved* questions (params,

@@ -1,6 +1,6 @@
 """Grading on a Dask distributed cluster: ``eulertop grade HW SUBS --cluster ADDRESS``.
 
-The executor of ``--cluster`` (design.md, "executors — where grade_one runs"): the local pool
+The executor of ``--cluster`` (``grader/API.md``, floor 6: where ``grade_one`` runs): the local pool
 runs :func:`grader.grade_one.grade_one` on threads of this machine; this module runs the same
 function on the workers of a Dask cluster. Nothing else of a run changes: the grader process
 (the Dask *client*) plans the run, holds ``OUT/.lock``, and alone writes result records,

@@ -1,6 +1,6 @@
 """What the class report reads: the assignment, the key and the result records — nothing else.
 
-The report never runs student code (design.md, "Where the next parts go"). It reads
+The report never runs student code (``grader/API.md``, "The class report"). It reads
 ``HW/assignment.json`` and ``HW/key.json`` (through :func:`grader.assignment.load_assignment`, the
 grader's one reader, so a broken folder gets the same message) and ``GRADED/results/<id>.json``
 (:func:`grader.results.read_result`). Submitted notebooks are read only as text, for the code
