@@ -5,11 +5,11 @@ The key never enters the student's kernel: the execution stage is given variable
 problems' own answer definitions (:func:`problems.answers.grade`: correct / wrong / invalid /
 missing, known mistakes with their feedback).
 
-Fail closed (style.md, nbgrader's mistakes): a student gets points only for an answer that was
-extracted *and* compared correct. When nothing could be extracted (the notebook is not valid,
-the kernel died, the run was cut at its time limit) every answer is ``missing`` with no points,
-whatever the notebook's saved outputs say; a comparison that itself fails marks that answer
-``invalid``, never correct.
+Fail closed (where nbgrader gave credit for output it could not parse): a student gets points
+only for an answer that was extracted *and* compared correct. When nothing could be extracted
+(the notebook is not valid, the kernel died, the run was cut at its time limit) every answer is
+``missing`` with no points, whatever the notebook's saved outputs say; a comparison that itself
+fails marks that answer ``invalid``, never correct.
 
 Floor 3 of grader/ (the stages of one submission; grader/API.md).
 """

@@ -3,7 +3,7 @@
 A submission is ``SUBMISSIONS/<id>.ipynb`` or ``SUBMISSIONS/<id>/<one>.ipynb``. The student
 id — and so the variant the submission is graded against — comes from that file or folder name
 alone, which the instructor's files control; nothing inside the notebook is consulted here
-(design.md, trust boundaries).
+(``docs/security.md``, "Who is trusted").
 
 What is found is sorted into four kinds, so that nothing is guessed and nothing is silent:
 

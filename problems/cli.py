@@ -38,8 +38,10 @@ def add_problems_arguments(parser: argparse.ArgumentParser) -> None:
                     "finite and JSON-able; every draw is well posed or rejected; the key is "
                     "recomputed from the recorded parameters; known mistakes lie outside the "
                     "tolerance; no answer value is written in the statement; every tolerance "
-                    "is stated in the notebook; time per variant; the solutions notebook, run "
-                    "in the sandbox, gets full marks. Exit 1 on any failure.")
+                    "is stated in the notebook; time per variant; follow() gives back the "
+                    "key; the statement prints each parameter as the parameter cell holds it; "
+                    "the solutions notebook, run in the sandbox, gets full marks. Exit 1 on "
+                    "any failure.")
     _one_family(test, DEFAULT_TEST_SEEDS)
     test.add_argument("--sandbox-seeds", type=_count, metavar="K",
                       help="run the solutions of the first K seeds in the sandbox "

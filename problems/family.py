@@ -11,9 +11,10 @@ A family is a Python module (one file, or a package) that defines::
 
 and may define ``draw(rng) -> dict | None`` (default :func:`draw_parameters`: each parameter
 drawn in its range and rounded to its figures), ``heading(params) -> str`` (a title for these
-parameters; default ``TITLE``), ``RESULTS`` (R-ids of ``physics.md``), ``CONVENTIONS`` (topics
-of :mod:`problems.conventions` its statement relies on), ``prepare()`` (one-time work, done
-before the generator forks its workers) and ``MAX_ATTEMPTS`` (draws before giving up).
+parameters; default ``TITLE``), ``RESULTS`` (R-ids of ``docs/physics/index.md``),
+``CONVENTIONS`` (topics of :mod:`problems.conventions` its statement relies on), ``prepare()``
+(one-time work, done before the generator forks its workers) and ``MAX_ATTEMPTS`` (draws before
+giving up).
 
 Drawing is kept apart from answering, so that a key can be recomputed from the parameters an
 assignment recorded: :meth:`Family.variant` is ``answers(params)`` and ``statement(params)``

@@ -1,7 +1,7 @@
 """``eulertop generate``: a roster and a list of problem families (or an assignment spec) → one
 assignment folder.
 
-Layout (``/work/shared/design.md``)::
+Layout (``docs/instructors/generate.md`` says it for the instructor)::
 
     HW/assignment.json          manifest: title, seed, problems, roster, generator version, and
                                 every student's reroll count and *resolved* questions (params,
@@ -58,7 +58,7 @@ import os
 import secrets
 import shutil
 import tempfile
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
@@ -517,68 +517,142 @@ def generate_assignment(
         A template failed; nothing is written (the temporary folder is removed).
     """
     out = Path(out)
-    if questions is None:
-        questions = tuple(Question.of(n) for n in resolve_problems(problems, families))
-    questions = tuple(questions)
-    problems = tuple(q.label for q in questions)
+    questions = _asked(problems, questions, families)
     old = _existing_assignment(out, force)
-    notes = []
-    if seed is None:
-        seed = old["seed"] if old else secrets.randbelow(2**32)
-        notes.append(f"seed {seed} ({'kept from the replaced assignment' if old else 'drawn'}; "
-                     f"pass --seed {seed} to reproduce)")
-    planned = _questions_record(questions)
-    rerolls: dict[str, int] = {}
-    if old and old.get("seed") == seed and tuple(old.get("problems", ())) == problems \
-            and old.get("questions") == planned:
-        rerolls = {sid: s["reroll"] for sid, s in old["students"].items() if s["reroll"]}
-        kept = sorted(set(rerolls) & set(roster.ids))
-        if kept:
-            notes.append(f"kept the reroll counts of {', '.join(kept)}")
+    notes: list[str] = []
+    seed = _seed(old, seed, notes)
+    rerolls = _kept_rerolls(old, seed, questions, roster, notes)
     title = out.name if title is None else title
+    manifest = _new_manifest(title, seed, questions, roster, follow_through,
+                             _outside_families(families, questions, out))
+    key = {"format": "eulertop-key", "format_version": FORMAT_VERSION, "title": title,
+           "seed": seed, "students": {}}
+    plan = _Plan(title, seed, questions, families, rerolls)
+    with _Staging(out) as tmp:
+        _copy_spec(spec_file, tmp, manifest)
+        entries = _student_entries(tmp, plan, roster.rows, jobs)
+        _record_students(roster.rows, entries, manifest, key, progress)
+        _write_json(tmp, manifest, key)
+    return Summary(out, seed, _labels(questions), roster.ids, tuple(notes))
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """What every student's questions are drawn from: the assignment's title, seed, questions
+    and families, and the reroll count of each student who has one."""
+
+    title: str
+    seed: int
+    questions: tuple[Question, ...]
+    families: Mapping[str, Family]
+    rerolls: Mapping[str, int]
+
+
+def _asked(problems: Sequence[str] | None, questions: Sequence[Question] | None,
+           families: Mapping[str, Family]) -> tuple[Question, ...]:
+    """The questions: a spec's, else one per family of ``problems`` (default: every one)."""
+    if questions is None:
+        return tuple(Question.of(n) for n in resolve_problems(problems, families))
+    return tuple(questions)
+
+
+def _labels(questions: Sequence[Question]) -> tuple[str, ...]:
+    """The manifest's ``problems``: each question's family, or its pool's names."""
+    return tuple(q.label for q in questions)
+
+
+def _seed(old: Mapping | None, seed: int | None, notes: list[str]) -> int:
+    """``seed``, else the replaced assignment's, else a fresh one; a note says which."""
+    if seed is not None:
+        return seed
+    seed = old["seed"] if old else secrets.randbelow(2**32)
+    notes.append(f"seed {seed} ({'kept from the replaced assignment' if old else 'drawn'}; "
+                 f"pass --seed {seed} to reproduce)")
+    return seed
+
+
+def _kept_rerolls(old: Mapping | None, seed: int, questions: Sequence[Question],
+                  roster: Roster, notes: list[str]) -> dict[str, int]:
+    """The reroll counts of the replaced assignment, kept when it is regenerated alike (same
+    seed, problems and questions); a note names the students of the roster they are kept
+    for."""
+    if not old or old.get("seed") != seed or tuple(old.get("problems", ())) != _labels(questions) \
+            or old.get("questions") != _questions_record(questions):
+        return {}
+    rerolls = {sid: s["reroll"] for sid, s in old["students"].items() if s["reroll"]}
+    kept = sorted(set(rerolls) & set(roster.ids))
+    if kept:
+        notes.append(f"kept the reroll counts of {', '.join(kept)}")
+    return rerolls
+
+
+def _new_manifest(title: str, seed: int, questions: Sequence[Question], roster: Roster,
+                  follow_through: float | None, outside: Mapping[str, dict]) -> dict:
+    """``assignment.json`` before its students: what was asked, of whom, and from where."""
     manifest = {
         "format": "eulertop-assignment",
         "format_version": FORMAT_VERSION,
         "generator": {"name": "eulertop", "version": generator_version()},
         "title": title,
         "seed": seed,
-        "problems": list(problems),
+        "problems": list(_labels(questions)),
         "roster": roster.to_dict(),
         "students": {},
     }
+    planned = _questions_record(questions)
     if planned is not None:
         manifest["questions"] = planned
     if follow_through is not None:
         manifest["follow_through"] = follow_through
-    outside = _outside_families(families, questions, out)
     if outside:
         manifest["families"] = outside
-    key = {"format": "eulertop-key", "format_version": FORMAT_VERSION, "title": title,
-           "seed": seed, "students": {}}
-    with _Staging(out) as tmp:
-        if spec_file is not None:
-            data = Path(spec_file).read_bytes()
-            (tmp / SPEC_COPY).write_bytes(data)
-            manifest["spec"] = {"file": SPEC_COPY, "sha256": hashlib.sha256(data).hexdigest()}
-        (tmp / RELEASE).mkdir()
-        (tmp / SOLUTIONS).mkdir()
-        workers = _parallel_jobs(jobs, len(roster.rows))
-        if workers > 1:
-            entries = _students_in_parallel(tmp, title, roster.rows, rerolls, families,
-                                            questions, seed, workers)
-        else:
-            _FORKED.update(families=families, questions=questions, seed=seed)
-            entries = (_student_files((tmp, title, row, rerolls.get(row["id"], 0), i == 0))
-                       for i, row in enumerate(roster.rows))
-        for done, (row, (entry, answers)) in enumerate(zip(roster.rows, entries, strict=True),
-                                                       start=1):
-            manifest["students"][row["id"]] = entry
-            key["students"][row["id"]] = answers
-            if progress:
-                progress(done, len(roster.rows))
+    return manifest
+
+
+def _copy_spec(spec_file: Path | None, folder: Path, manifest: dict) -> None:
+    """Copy the spec into ``folder`` as :data:`SPEC_COPY`, recorded with its SHA-256."""
+    if spec_file is None:
+        return
+    data = Path(spec_file).read_bytes()
+    (folder / SPEC_COPY).write_bytes(data)
+    manifest["spec"] = {"file": SPEC_COPY, "sha256": hashlib.sha256(data).hexdigest()}
+
+
+def _student_entries(tmp: Path, plan: _Plan, rows: Sequence[Mapping[str, str]],
+                     jobs: int | None) -> Iterator[tuple[CompactJSON, CompactJSON]]:
+    """Write every student's notebooks into ``tmp`` (its release and solutions folders made
+    here), yielding their ``(manifest entry, key entry)`` in roster order: in this process, or
+    in forked workers for a large class (:func:`_parallel_jobs`)."""
+    (tmp / RELEASE).mkdir()
+    (tmp / SOLUTIONS).mkdir()
+    workers = _parallel_jobs(jobs, len(rows))
+    if workers > 1:
+        return _students_in_parallel(tmp, plan.title, rows, plan.rerolls, plan.families,
+                                     plan.questions, plan.seed, workers)
+    return _students_here(tmp, plan, rows)
+
+
+def _students_here(tmp: Path, plan: _Plan, rows: Sequence[Mapping[str, str]]
+                   ) -> Iterator[tuple[CompactJSON, CompactJSON]]:
+    """:func:`_student_files` of each row in this process (the schema checked for the
+    first)."""
+    _FORKED.update(families=plan.families, questions=plan.questions, seed=plan.seed)
+    try:
+        for i, row in enumerate(rows):
+            yield _student_files((tmp, plan.title, row, plan.rerolls.get(row["id"], 0), i == 0))
+    finally:
         _FORKED.clear()
-        _write_json(tmp, manifest, key)
-    return Summary(out, seed, problems, roster.ids, tuple(notes))
+
+
+def _record_students(rows: Sequence[Mapping[str, str]],
+                     entries: Iterable[tuple[CompactJSON, CompactJSON]],
+                     manifest: dict, key: dict, progress: Progress | None) -> None:
+    """Put each student's entries into the manifest and the key, reporting progress."""
+    for done, (row, (entry, answers)) in enumerate(zip(rows, entries, strict=True), start=1):
+        manifest["students"][row["id"]] = entry
+        key["students"][row["id"]] = answers
+        if progress:
+            progress(done, len(rows))
 
 
 def _questions_record(questions: Sequence[Question]) -> list[dict] | None:

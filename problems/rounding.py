@@ -1,10 +1,11 @@
 """Rounding parameters to the significant figures a student sees, and printing them.
 
-The design rule (``design.md``): parameters are rounded to the digits shown in the statement,
-and answers are computed from the rounded values. So the rounded *value* and the displayed
-*string* must be the same number: :func:`round_sig` returns ``float(s)`` where ``s`` is the
-decimal string with ``sig`` significant digits, and :func:`format_sig` prints exactly that
-number, so ``float(format_sig(x, sig)) == round_sig(x, sig)`` for every finite ``x``.
+The rule of a family (``problems/API.md``, "A family"): parameters are rounded to the digits
+shown in the statement, and answers are computed from the rounded values. So the rounded *value*
+and the displayed *string* must be the same number: :func:`round_sig` returns ``float(s)`` where
+``s`` is the decimal string with ``sig`` significant digits, and :func:`format_sig` prints
+exactly that number, so ``float(format_sig(x, sig)) == round_sig(x, sig)`` for every finite
+``x``.
 
 Rounding is Python's correctly rounded decimal conversion (``f"{x:.{sig-1}e}"``): it rounds the
 exact binary value of ``x``, ties to even. A number that looks like a tie in decimal usually is

@@ -36,6 +36,14 @@ seed that reproduces it and what failed:
     recomputes it to within its own tolerance (the consistency follow-through credit relies
     on: a student whose earlier answers are right is judged as by the key). A family without
     such answers passes it trivially.
+``parameters printed as in the cell``
+    Every number the statement (and the question's title) prints for a parameter is that
+    parameter's value exactly as the parameter cell holds it (the key is computed from it): a
+    statement that prints θ = 0.316 as ``0.32`` sends a student 1.3 % off. Where a parameter
+    is printed is found by rendering the statement again with that one number (one component
+    of a vector) doubled, or halved where doubling fails: a printed number that changes, and
+    whose digits are a rounding of the parameter, is a print of it — a fixed number of the text
+    (``0.5 m``, a list's ``2.``) never is, however close.
 ``solutions get full marks (sandbox)``
     One solutions notebook holding the variants of the first ``sandbox_seeds`` seeds as its
     questions is run as a submission and compared with their key by ``grade`` — the grader's
@@ -53,6 +61,7 @@ import tempfile
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from difflib import SequenceMatcher
 from pathlib import Path
 
 import numpy as np
@@ -79,6 +88,7 @@ CHECKS = (
     "every tolerance stated in the notebook",
     "time per variant",
     "follow-through gives back the key",
+    "parameters printed as in the cell",
     "solutions get full marks (sandbox)",
 )
 
@@ -172,6 +182,8 @@ def self_test(family: Family, seeds: Iterable[int], sandbox_seeds: int | None = 
     for seed, variant in variants.items():  # after every draw: no state of its own draw left
         tallies[CHECKS[2]].record(seed, _safely(_recomputed, family, variant))
         tallies[CHECKS[8]].record(seed, _safely(_follow_problem, family, variant))
+        tallies[CHECKS[9]].record(seed, _safely(lambda f, v: _first(misprinted(f, v)),
+                                                family, variant))
     timing = f"max {max(times):.3f} s, mean {sum(times) / len(times):.3f} s" if times else ""
     checks = [tallies[name].result(timing if name == CHECKS[7] else "") for name in CHECKS[:-1]]
     chosen = dict(list(variants.items())[:sandbox_seeds])
@@ -303,25 +315,55 @@ _NUMBER = re.compile(
 )
 
 
+@dataclass(frozen=True)
+class Printed:
+    """One number as a text writes it: its ``text``, its magnitude ``value`` and half the
+    unit of its last digit, ``half_unit`` (``0.32``: 0.005; ``1230``: 5)."""
+
+    text: str
+    value: float
+    half_unit: float
+
+    def rounds(self, x: float) -> bool:
+        """Whether these digits are ``|x|`` rounded to the figures shown (a tie, ``0.125`` as
+        ``0.12``, included: the margin is for the binary error of ``value`` and ``half_unit``)."""
+        return abs(abs(x) - self.value) <= self.half_unit * (1 + 1e-9)
+
+
+def _printed(match: re.Match) -> Printed:
+    power, mantissa, exponent = match.groups()
+    if power:
+        return Printed(match.group(0), float(f"1e{power}"), 0.5 * 10.0 ** int(power))
+    digits, _, e_notation = mantissa.partition("e")
+    whole, _, fraction = digits.partition(".")
+    last_digit = -len(fraction) if fraction else len(whole) - len(whole.rstrip("0") or "0")
+    scale = int(e_notation or 0) + int(exponent or 0)
+    return Printed(match.group(0), float(f"{digits}e{scale}"),
+                   0.5 * 10.0 ** (last_digit + scale))
+
+
+def printed_numbers(text: str) -> list[Printed]:
+    r"""The numbers written in ``text``, in order: ``0.05``, ``1.2e-5``,
+    ``1.2 \times 10^{-5}``, ``10^{-7}`` (digits inside names such as ``r1`` or ``m_1`` are not
+    numbers; a sign is not part of one).
+
+    Examples
+    --------
+    >>> [(p.text, p.value, p.half_unit) for p in printed_numbers("$m_1 = 0.32$ kg, 1230")]
+    [('0.32', 0.32, 0.005), ('1230', 1230.0, 5.0)]
+    """
+    return [_printed(m) for m in _NUMBER.finditer(text)]
+
+
 def numbers_in(text: str) -> set[float]:
-    """Magnitudes of the numbers written in ``text``: ``0.05``, ``1.2e-5``,
-    ``1.2 \\times 10^{-5}``, ``10^{-7}`` (digits inside names such as ``r1`` or ``m_1`` are not
-    numbers).
+    """Magnitudes of the numbers written in ``text`` (:func:`printed_numbers`).
 
     Examples
     --------
     >>> sorted(numbers_in(r"$m_1 = 0.05$ kg (`r1`), $I = 1.2 \\times 10^{-5}$, 3e5"))
     [1.2e-05, 0.05, 300000.0]
     """
-    shown = set()
-    for power, mantissa, exponent in _NUMBER.findall(text):
-        if power:
-            shown.add(float(f"1e{power}"))
-        elif exponent:
-            shown.add(float(f"{mantissa}e{exponent}"))
-        else:
-            shown.add(float(mantissa))
-    return shown
+    return {p.value for p in printed_numbers(text)}
 
 
 def _leaves(value: object) -> list[float]:
@@ -353,6 +395,77 @@ def leaked_values(variant: Variant) -> list[str]:
                 leaks.append(f"answer {answer.name!r} = {x!r} is written in the statement as "
                              f"{hits[0]:g}")
     return leaks
+
+
+def _numeric_leaves(value: object, path: tuple[int, ...] = ()
+                    ) -> list[tuple[tuple[int, ...], float]]:
+    """The numbers of a parameter's value (a number, a vector, a matrix), each with its
+    index."""
+    if isinstance(value, list):
+        return [leaf for k, v in enumerate(value) for leaf in _numeric_leaves(v, (*path, k))]
+    is_number = isinstance(value, float | int) and not isinstance(value, bool)
+    return [(path, float(value))] if is_number else []
+
+
+def _replaced(value: object, path: tuple[int, ...], new: float) -> object:
+    """``value`` with its number at ``path`` replaced by ``new``."""
+    if not path:
+        return new
+    return [_replaced(v, path[1:], new) if k == path[0] else v for k, v in enumerate(value)]
+
+
+def _shown_text(family: Family, params: dict) -> str:
+    """What the student reads of the question: its title and its statement."""
+    return family.heading(params) + "\n\n" + family.statement(params)
+
+
+def _changed(before: list[Printed], after: list[Printed]) -> list[Printed]:
+    """The numbers of ``before`` that ``after`` writes otherwise at the same place (numbers
+    added or dropped, a wording that changed with the value, are not paired)."""
+    matcher = SequenceMatcher(None, [p.text for p in before], [p.text for p in after],
+                              autojunk=False)
+    return [before[i] for tag, i1, i2, j1, j2 in matcher.get_opcodes()
+            if tag == "replace" and i2 - i1 == j2 - j1 for i in range(i1, i2)]
+
+
+def printed_for(family: Family, params: dict, name: str, path: tuple[int, ...] = ()
+                ) -> list[Printed]:
+    """What the question's text prints for the number at ``path`` of parameter ``name``: the
+    numbers that change when it alone is doubled (halved, where the family cannot render it
+    doubled) and whose digits are a rounding of it.
+
+    Raises
+    ------
+    ValueError
+        The family renders the question neither with it doubled nor halved.
+    """
+    x = dict(_numeric_leaves(params[name]))[path]
+    before = printed_numbers(_shown_text(family, params))
+    for factor in (2.0, 0.5):
+        try:
+            changed = {**params, name: _replaced(params[name], path, x * factor)}
+            after = printed_numbers(_shown_text(family, changed))
+        except Exception:  # a value the family's text cannot take: try the other
+            continue
+        return [p for p in _changed(before, after) if p.rounds(x)]
+    raise ValueError(f"the statement cannot be rendered with {name} doubled or halved, so "
+                     "where it prints the parameter cannot be found")
+
+
+def misprinted(family: Family, variant: Variant) -> list[str]:
+    """Parameters the question's text prints otherwise than as the parameter cell holds them
+    (the value the key is computed from), one message each."""
+    problems = []
+    for name, value in variant.parameters.items():
+        for path, x in _numeric_leaves(value):
+            if x == 0:
+                continue  # nothing to double, and no rounding of it but 0 itself
+            label = name + "".join(f"[{k}]" for k in path)
+            where = "the parameter cell holds" if name in variant.params else "the key uses"
+            problems += [f"parameter {label} is printed as {p.text!r} but {where} {x!r}"
+                         for p in printed_for(family, variant.parameters, name, path)
+                         if p.value != abs(x)]
+    return problems
 
 
 def _tolerance_problem(family: Family, variant: Variant) -> str | None:

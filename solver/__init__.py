@@ -1,1 +1,2 @@
-"""eulertop reference solver: every result R1–R21 of ../shared/physics.md, vectorised."""
+"""eulertop reference solver: every result R1–R21 of the physics page (docs/physics/index.md),
+vectorised."""

@@ -1,8 +1,8 @@
 """Euler angles: body/inertial rotation, angular velocity and kinetic energy (R11–R13).
 
-Convention of ``/work/shared/physics.md`` (Fetter & Walecka, Goldstein's z-y'-z'' variant): rotate
-by ``α`` about the inertial ``z``, then ``β`` about the new ``y'``, then ``γ`` about the body
-``ê3``. ``R = R_γ R_β R_α`` maps inertial components ``V`` to body components ``V' = R V``.
+Convention of R11 (``docs/physics/index.md``; Fetter & Walecka, Goldstein's z-y'-z'' variant):
+rotate by ``α`` about the inertial ``z``, then ``β`` about the new ``y'``, then ``γ`` about the
+body ``ê3``. ``R = R_γ R_β R_α`` maps inertial components ``V`` to body components ``V' = R V``.
 
 In terms of ``scipy.spatial.transform.Rotation`` (active rotations), ``R`` is the *transpose* of
 ``Rotation.from_euler("ZYZ", [α, β, γ]).as_matrix()`` (intrinsic z-y'-z''): the columns of that

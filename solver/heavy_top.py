@@ -1,4 +1,4 @@
-"""The heavy symmetric top on a fixed tip (R14–R21 of ``physics.md``).
+"""The heavy symmetric top on a fixed tip (R14–R21 of the physics page, ``docs/physics/``).
 
 Every function of the initial state takes ``I1, I3, Mgl, beta0, alpha_dot0, beta_dot0,
 gamma_dot0``: ``I1`` the transverse moment about the tip and ``I3`` the axial moment (kg m²),

@@ -1,6 +1,6 @@
 """Inertia tensors, principal axes, kinetic energy and angular momentum (R2–R5).
 
-Results of ``/work/shared/physics.md``:
+Results of the physics page, ``docs/physics/index.md``:
 
 - R2: the inertia tensor of point masses, ``I_ij = Σ_p m_p (δ_ij r_p² − r_pi r_pj)``, the
   closed forms of standard uniform shapes, and the parallel-axis theorem;

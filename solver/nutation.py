@@ -1,7 +1,7 @@
 """Nutation of the heavy symmetric top: the cubic ``f(u)``, its roots, and its elliptic integrals.
 
-R17 and R20 of ``physics.md``. With ``u = cos β`` the motion obeys ``u̇² = f(u)``,
-``f(u) = (1 − u²)(A − B u) − (b − a u)² = B (u − u1)(u − u2)(u − u3)``.
+R17 and R20 of the physics page (``docs/physics/``). With ``u = cos β`` the motion obeys ``u̇² =
+f(u)``, ``f(u) = (1 − u²)(A − B u) − (b − a u)² = B (u − u1)(u − u2)(u − u3)``.
 
 Numerical design (why it is not ``np.roots``)
 ---------------------------------------------

@@ -1,4 +1,4 @@
-"""Sleeping and steadily precessing heavy symmetric tops (R19, R21 of ``physics.md``).
+"""Sleeping and steadily precessing heavy symmetric tops (R19, R21 of ``docs/physics/``).
 
 Both results are closed forms; the only care needed is rounding: the slow precession root
 ``[p_γ − √(p_γ² − 4 I1 Mgl cos β0)] / (2 I1 cos β0)`` cancels catastrophically for a fast top,

@@ -4,9 +4,9 @@ Every expression here is *derived*, not typed in: the body angular velocity come
 rotation matrix of R11 (``[ω]× = −Ṙ Rᵀ``), the kinetic energy from those components, the
 heavy-top Lagrangian from that energy with ``I1 = I2``, the momenta and the energy from the
 Lagrangian, and so on down to the cubic ``f(u)`` and the steady-precession quadratic. The
-numeric solver implements the stated closed forms of ``physics.md``; these derivations are the
-independent reference its tests are checked against, and problem templates use them (through
-:data:`SYMBOLS`) for expression answers.
+numeric solver implements the closed forms stated on ``docs/physics/index.md``; these
+derivations are the independent reference its tests are checked against, and problem templates
+use them (through :data:`SYMBOLS`) for expression answers.
 
 All functions are pure and cached: they take no arguments and return sympy expressions (immutable)
 in the symbols of :data:`SYMBOLS`. The first call of the chain costs about a second of sympy.
@@ -49,7 +49,7 @@ SYMBOLS: Mapping[str, sp.Symbol] = MappingProxyType(
 )
 """The named symbols of every expression in this module, read-only.
 
-Names (``physics.md`` notation): ``I1 I2 I3`` principal moments (``I1`` about the tip for the
+Names (``docs/physics/`` notation): ``I1 I2 I3`` principal moments (``I1`` about the tip for the
 heavy top), ``Mgl M g l``, Euler angles ``alpha beta gamma`` and their rates ``alpha_dot beta_dot
 gamma_dot`` (R11, R12), momenta ``p_alpha p_gamma`` and ``E_prime`` (R15, R16), body angular
 velocity ``omega1 omega2 omega3``, and R17's ``u = cos β``, ``a = p_γ/I1``, ``b = p_α/I1``,

@@ -1,5 +1,5 @@
 """The torque-free rigid body: Euler's equations, their invariants, the symmetric top and
-the stability of spin about a principal axis (R7–R9 of ``physics.md``).
+the stability of spin about a principal axis (R7–R9 of the physics page, ``docs/physics/``).
 
 Conventions: principal body frame, right-handed; ``omega`` holds the body components
 ``(ω1, ω2, ω3)`` in its last axis (rad/s); moments of inertia in kg m²; times in s.

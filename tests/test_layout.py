@@ -3,9 +3,12 @@
 The imports are read statically (``ast``) from every module of the four top-level packages,
 function-level imports included — a lazy import is still a dependency — and those under
 ``if TYPE_CHECKING:`` left out. The floors are data (:data:`FLOORS`): the package or module,
-its floor; a module takes the floor of the longest prefix listed. Checked:
+its floor. A module takes its own entry; a module without one takes the floor of the package
+around it only where that package is listed as a whole room (:data:`WHOLE_ROOMS`: every module
+in it shares its floor). ``grader`` is not one: each of its loose modules is a stage with a
+floor of its own, so a new one must be given its floor. Checked:
 
-* every module has a floor (a new module must be placed);
+* every module has a floor (a new module must be placed; a made-up one is refused);
 * no module imports one on a higher floor;
 * no circle between modules (strongly connected components of one);
 * no circle between rooms: the top-level packages, and grader's sub-packages among themselves.
@@ -45,14 +48,19 @@ FLOORS = {
     # 7: the class run
     "grader.pipeline": 27, "grader.rescore": 27,
     # 8: front ends
-    "grader": 28, "grader.cli": 28, "grader.check": 28, "grader.doctor": 28,
-    "grader.report.cli": 28, "grader.lms.export": 28, "grader.hosted": 28,
+    "grader": 28, "grader.cli": 28, "grader.amend": 28, "grader.check": 28,
+    "grader.doctor": 28, "grader.selftest_run": 28, "grader.report.cli": 28,
+    "grader.lms.export": 28, "grader.hosted": 28,
     # the console script and what composes the rooms
     "eulertop": 40,
 }
 
 SUBPACKAGES = ("grader.sandbox", "grader.kernels", "grader.executors", "grader.lms",
                "grader.report", "grader.hosted")
+
+WHOLE_ROOMS = ("solver", "problems", "eulertop", *SUBPACKAGES)
+"""Packages whose modules take the package's floor unless listed themselves (``grader.lms``'s
+formats are floor 5, its ``export`` front end is listed at 8). ``grader`` is not one."""
 
 
 def module_files() -> dict[str, Path]:
@@ -109,12 +117,27 @@ GRAPH = {name: imports_of(name, path) for name, path in MODULES.items()}
 
 
 def floor(name: str) -> int:
+    """Module ``name``'s floor: its own entry, else that of the innermost whole room holding
+    it; KeyError when it has neither (it must be placed)."""
+    if name in FLOORS:
+        return FLOORS[name]
     parts = name.split(".")
-    for i in range(len(parts), 0, -1):
-        prefix = ".".join(parts[:i])
-        if prefix in FLOORS:
-            return FLOORS[prefix]
+    for i in range(len(parts) - 1, 0, -1):
+        room = ".".join(parts[:i])
+        if room in WHOLE_ROOMS:
+            return FLOORS[room]
     raise KeyError(name)
+
+
+def unplaced(names) -> list[str]:
+    """The modules of ``names`` that have no floor."""
+    missing = []
+    for name in names:
+        try:
+            floor(name)
+        except KeyError:
+            missing.append(name)
+    return missing
 
 
 def circles(graph: dict[str, set[str]]) -> list[list[str]]:
@@ -188,13 +211,19 @@ def test_the_walk_sees_the_project():
 
 
 def test_every_module_has_a_floor():
-    unplaced = []
-    for name in MODULES:
-        try:
-            floor(name)
-        except KeyError:
-            unplaced.append(name)
-    assert unplaced == []
+    assert unplaced(MODULES) == []
+
+
+def test_a_new_module_must_be_placed():
+    """Control of the test above: a made-up loose grader module has no floor (``"grader"``
+    names the package's own ``__init__``, not a room), nor has a new top-level package; a new
+    module inside a whole room takes the room's floor."""
+    made_up = ["grader.new_stage", "grader.new_room.part", "newpackage.module",
+               "grader.report.new_view", "problems.templates.new_family", "solver.new_model"]
+    assert unplaced(made_up) == ["grader.new_stage", "grader.new_room.part",
+                                 "newpackage.module"]
+    assert floor("grader.report.new_view") == FLOORS["grader.report"]
+    assert all(room in FLOORS for room in WHOLE_ROOMS)
 
 
 def test_no_module_imports_a_higher_floor():

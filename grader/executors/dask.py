@@ -1,6 +1,6 @@
 """Grading on a Dask distributed cluster: ``eulertop grade HW SUBS --cluster ADDRESS``.
 
-The executor of ``--cluster`` (design.md, "executors — where grade_one runs"): the local pool
+The executor of ``--cluster`` (``grader/API.md``, floor 6: where ``grade_one`` runs): the local pool
 runs :func:`grader.grade_one.grade_one` on threads of this machine; this module runs the same
 function on the workers of a Dask cluster. Nothing else of a run changes: the grader process
 (the Dask *client*) plans the run, holds ``OUT/.lock``, and alone writes result records,
@@ -375,62 +375,103 @@ def grade_on_cluster(
     """
     from distributed import as_completed
 
-    from grader.sandbox import SandboxUnavailable
-
     plugin = WorkerKernels(sandbox, cold, preload)
     _register(client, plugin)
-    from grader.grade_one import submission_bytes
+    run = _ClusterRun(client, list(reversed(to_run)), limits, publish, execute, plugin.name,
+                      stop)
+    return run.grade(as_completed([]))
 
-    max_bytes = submission_bytes(limits)
-    pending = list(reversed(to_run))
-    attempts: dict[str, int] = {}
-    by_key: dict[str, tuple] = {}
-    done: set[str] = set()
-    published = 0
 
-    def submit_next(ac: Any) -> bool:
-        nonlocal published
-        while pending:
-            run = pending.pop()
-            submission, expected, key_hash, sha = run
-            try:
-                data = read_submission(submission.path, max_bytes)
-            except (OSError, InvalidSubmission) as e:
-                publish(_unreadable(run, e))
-                done.add(submission.student_id)
-                published += 1
+Planned = tuple[Submission, Sequence[KeyAnswer], str, str | None]
+"""One submission of the pipeline's plan: (submission, expected answers, key hash, sha256)."""
+
+
+class _ClusterRun:
+    """The state of one :func:`grade_on_cluster`: the submissions still to send (``pending``,
+    last first), those in flight (``by_key``: Dask key → run), each student's attempts, the
+    students published, and the window of tasks in flight."""
+
+    def __init__(self, client: Any, pending: list[Planned], limits: Any,
+                 publish: Callable[[StudentResult], None], execute: Callable | None,
+                 plugin: str, stop: threading.Event | None) -> None:
+        from grader.grade_one import submission_bytes
+
+        self.client, self.pending, self.limits, self.publish = client, pending, limits, publish
+        self.execute, self.plugin, self.stop = execute, plugin, stop
+        self.max_bytes = submission_bytes(limits)
+        self.by_key: dict[str, Planned] = {}
+        self.attempts: dict[str, int] = {}
+        self.done: set[str] = set()
+        self.published = 0
+        self.limit = window(client)
+
+    @property
+    def stopping(self) -> bool:
+        return self.stop is not None and self.stop.is_set()
+
+    def grade(self, completed: Any) -> int:
+        """Send the submissions through ``completed`` (a Dask ``as_completed``), publishing
+        each student's first record; the count published."""
+        self.fill(completed, 1)
+        for finished, future in enumerate(completed, start=1):
+            run = self.by_key.pop(future.key)
+            record = self.outcome(future, run, completed, finished)
+            if record is None or self.stopping:
                 continue
-            sha = sha or hashlib.sha256(data).hexdigest()
-            task = Task(submission.student_id, submission.path.name, data, sha,
-                        tuple(expected), key_hash)
-            future = client.submit(grade_remote, task, limits, execute, plugin.name,
-                                   pure=False, retries=TASK_RETRIES,
-                                   key=f"eulertop-grade-{submission.student_id}-"
-                                       f"{os.urandom(4).hex()}")
-            by_key[future.key] = (submission, expected, key_hash, sha)
-            ac.add(future)
-            return True
-        return False
+            if run[0].student_id not in self.done:  # one record per student, the first back
+                self.record(run[0].student_id, record)
+            if not self.stopping:
+                self.fill(completed, finished)
+        return self.published
 
-    def fill(ac: Any, finished: int) -> None:
+    def fill(self, completed: Any, finished: int) -> None:
         """Top up to the window; it is looked up again now and then, since workers may come
         and go during a run (dask-jobqueue's scale or adapt)."""
-        nonlocal limit
         if finished % 32 == 0:
-            limit = window(client)
-        while len(by_key) < limit and submit_next(ac):
+            self.limit = window(self.client)
+        while len(self.by_key) < self.limit and self.submit_next(completed):
             pass
 
-    ac = as_completed([])
-    limit = window(client)
-    fill(ac, 1)
-    finished = 0
-    for future in ac:
-        finished += 1
-        run = by_key.pop(future.key)
-        sid = run[0].student_id
+    def submit_next(self, completed: Any) -> bool:
+        """Send the next readable submission (publishing the record of each unreadable one on
+        the way); False when none is left."""
+        while self.pending:
+            run = self.pending.pop()
+            data = self.read(run)
+            if data is not None:
+                self.submit(run, data, completed)
+                return True
+        return False
+
+    def read(self, run: Planned) -> bytes | None:
+        """The submission's bytes, or None once its unreadable record is published."""
         try:
-            record = StudentResult.from_dict(future.result())
+            return read_submission(run[0].path, self.max_bytes)
+        except (OSError, InvalidSubmission) as e:
+            self.record(run[0].student_id, _unreadable(run, e))
+            return None
+
+    def submit(self, run: Planned, data: bytes, completed: Any) -> None:
+        """One :class:`Task` to the cluster, under a key of its own."""
+        submission, expected, key_hash, sha = run
+        sha = sha or hashlib.sha256(data).hexdigest()
+        task = Task(submission.student_id, submission.path.name, data, sha, tuple(expected),
+                    key_hash)
+        future = self.client.submit(grade_remote, task, self.limits, self.execute, self.plugin,
+                                    pure=False, retries=TASK_RETRIES,
+                                    key=f"eulertop-grade-{submission.student_id}-"
+                                        f"{os.urandom(4).hex()}")
+        self.by_key[future.key] = (submission, expected, key_hash, sha)
+        completed.add(future)
+
+    def outcome(self, future: Any, run: Planned, completed: Any, finished: int
+                ) -> StudentResult | None:
+        """The record a finished task gives; None when it was lost to the infrastructure and
+        sent again. :class:`ClusterError` when a worker has no sandbox or no eulertop."""
+        from grader.sandbox import SandboxUnavailable
+
+        try:
+            return StudentResult.from_dict(future.result())
         except SandboxUnavailable as e:
             raise ClusterError(f"a worker of the cluster has no sandbox: {e}") from None
         except ModuleNotFoundError as e:
@@ -439,23 +480,27 @@ def grade_on_cluster(
         except BaseException as e:
             if isinstance(e, KeyboardInterrupt | SystemExit):
                 raise
-            attempts[sid] = attempts.get(sid, 0) + 1
-            if _infrastructure(e) and attempts[sid] <= RESUBMIT and not (stop and stop.is_set()):
-                pending.append(run)
-                fill(ac, finished)
-                continue
-            record = _fault_record(run, f"{type(e).__name__}: {e}"[:300])
+            if self.resubmitted(run, e, completed, finished):
+                return None
+            return _fault_record(run, f"{type(e).__name__}: {e}"[:300])
         finally:
             future.release()
-        if stop is not None and stop.is_set():
-            continue
-        if sid not in done:  # one record per student, from the first result back
-            done.add(sid)
-            publish(record)
-            published += 1
-        if stop is None or not stop.is_set():
-            fill(ac, finished)
-    return published
+
+    def resubmitted(self, run: Planned, err: BaseException, completed: Any, finished: int) -> bool:
+        """Send ``run`` again if ``err`` is the infrastructure's and its attempts allow."""
+        sid = run[0].student_id
+        self.attempts[sid] = self.attempts.get(sid, 0) + 1
+        if not _infrastructure(err) or self.attempts[sid] > RESUBMIT or self.stopping:
+            return False
+        self.pending.append(run)
+        self.fill(completed, finished)
+        return True
+
+    def record(self, student_id: str, record: StudentResult) -> None:
+        """Publish a student's record (once: the student is then done)."""
+        self.done.add(student_id)
+        self.publish(record)
+        self.published += 1
 
 
 def _register(client: Any, plugin: WorkerKernels) -> None:

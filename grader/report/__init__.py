@@ -1,6 +1,6 @@
 """The class report: item statistics, common wrong answers, copied answers.
 
-Reads result records and the key, never runs student code (design.md). One call,
+Reads result records and the key, never runs student code (``grader/API.md``). One call,
 :func:`report_for`, loads a graded class, runs every analysis and writes ``report.html``
 (self-contained), ``report.csv`` and ``report_items.csv``:
 

@@ -1,6 +1,6 @@
 """What the class report reads: the assignment, the key and the result records — nothing else.
 
-The report never runs student code (design.md, "Where the next parts go"). It reads
+The report never runs student code (``grader/API.md``, "The class report"). It reads
 ``HW/assignment.json`` and ``HW/key.json`` (through :func:`grader.assignment.load_assignment`, the
 grader's one reader, so a broken folder gets the same message) and ``GRADED/results/<id>.json``
 (:func:`grader.results.read_result`). Submitted notebooks are read only as text, for the code
@@ -16,7 +16,7 @@ Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from grader.assignment import Assignment, UsageError, load_assignment
+from grader.compare import KeyAnswer
 from grader.graded_folder import RESULTS, graded_folder
 from grader.results import StudentResult, read_result
 from problems.answers import Answer
@@ -47,7 +48,8 @@ class Item:
     kind : str
         The answer kind (``problems.answers.KINDS``).
     family : str
-        The problem family of the question.
+        The problem families of the students asked it (:func:`families_label`): one family,
+        or the families of a spec's pool that ask an answer of this name.
     """
 
     variable: str
@@ -132,14 +134,40 @@ def class_data(a: Assignment, results: Mapping[str, StudentResult | None]) -> Cl
 
 def _items(a: Assignment) -> tuple[Item, ...]:
     """Every answer asked of anyone, in the order of the first student asked it: variants of
-    one family may ask for different answers (one student ``F_body``, another ``r_lab``)."""
-    items: dict[str, Item] = {}
+    one family may ask for different answers (one student ``F_body``, another ``r_lab``), and
+    the families of a pool each their own."""
+    first: dict[str, KeyAnswer] = {}
+    families: dict[str, dict[str, None]] = {}
     for sid in a.ids:
-        families = {q["question"]: q["family"] for q in a.key["students"][sid]["questions"]}
+        asked = {q["question"]: q["family"] for q in a.key["students"][sid]["questions"]}
         for k in a.expected(sid):
-            items.setdefault(k.variable, Item(k.variable, k.question, k.answer.name,
-                                              k.answer.kind, families[k.question]))
-    return tuple(sorted(items.values(), key=lambda i: i.question))
+            first.setdefault(k.variable, k)
+            families.setdefault(k.variable, {})[asked[k.question]] = None
+    items = (Item(v, k.question, k.answer.name, k.answer.kind, families_label(families[v]))
+             for v, k in first.items())
+    return tuple(sorted(items, key=lambda i: i.question))
+
+
+def families_label(families: Iterable[str]) -> str:
+    """How the report names the families behind a question or an answer: the family, or
+    ``pool: a, b`` for several (a spec's ``pool``).
+
+    Examples
+    --------
+    >>> families_label(["sleeping_top"]), families_label(["sleeping_top", "steady_precession"])
+    ('sleeping_top', 'pool: sleeping_top, steady_precession')
+    """
+    names = list(families)
+    return names[0] if len(names) == 1 else "pool: " + ", ".join(names)
+
+
+def question_families(a: Assignment, question: int) -> str:
+    """The families question ``question`` draws from (:func:`families_label`): its spec's pool
+    as ``assignment.json`` records it, else its one family."""
+    recorded = a.manifest.get("questions")
+    if recorded is not None:
+        return families_label(recorded[question - 1]["pool"])
+    return families_label([a.manifest["problems"][question - 1]])
 
 
 def numeric(value: Any) -> np.ndarray | None:

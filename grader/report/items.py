@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from grader.report.classdata import ClassData
+from grader.report.classdata import ClassData, question_families
 
 CATEGORIES = ("correct", "follows", "known mistake", "wrong", "invalid", "unanswered")
 """How one answer is counted (in this order in tables and figures)."""
@@ -59,6 +59,8 @@ class ItemStats:
     question : int
     name : str or None
     family : str
+        The families behind it (:func:`grader.report.classdata.families_label`): a question
+        drawn from a spec's pool is named by its pool.
     counts : dict
         :data:`CATEGORIES` → number of graded students.
     facility : float or None
@@ -140,7 +142,7 @@ def item_statistics(data: ClassData) -> tuple[tuple[ItemStats, ...], tuple[ItemS
                               [lists[i] for i in asked], totals[asked]))
     questions = []
     for q in data.assignment.questions:
-        family = next(i.family for i in data.items if i.question == q)
+        family = question_families(data.assignment, q)
         lists = [[a.verdict for a in r.answers if a.question == q] for r in graded]
         questions.append(_stats(f"q{q}", q, None, family, lists, totals))
     return tuple(questions), tuple(answers)

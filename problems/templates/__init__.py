@@ -2,11 +2,11 @@
 the module ``problems/templates/<name>.py``.
 
 Each module keeps the family contract (``problems/API.md``, :mod:`problems.family`): ``NAME``
-(equal to the module name), ``TITLE``, ``SUMMARY``, ``RESULTS`` (R-ids of ``physics.md``),
-``PARAMETERS``, ``draw``, ``answers`` and ``statement``. To add one, write the module and append
-its name to :data:`CATALOGUE`; the catalogue's order is the order of ``eulertop problems`` and
-of the default ``--problems`` list. Families from outside the package are found by
-:mod:`problems.family_files`.
+(equal to the module name), ``TITLE``, ``SUMMARY``, ``RESULTS`` (R-ids of
+``docs/physics/index.md``), ``PARAMETERS``, ``draw``, ``answers`` and ``statement``. To add one,
+write the module and append its name to :data:`CATALOGUE`; the catalogue's order is the order of
+``eulertop problems`` and of the default ``--problems`` list. Families from outside the package
+are found by :mod:`problems.family_files`.
 """
 
 from __future__ import annotations

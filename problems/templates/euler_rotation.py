@@ -1,8 +1,9 @@
 """Euler angles: the rotation matrix, a vector transformed body ↔ inertial, ω from the rates.
 
-The convention is ``physics.md``'s (R11): ``R = R_γ R_β R_α`` (α about the inertial z, β about
-the new y', γ about the body ê3; β from the upward vertical), and ``V' = R V`` maps inertial
-components to body components. The statement spells it out, with the three elementary matrices.
+The convention is R11's (``docs/physics/index.md``): ``R = R_γ R_β R_α`` (α about the inertial
+z, β about the new y', γ about the body ê3; β from the upward vertical), and ``V' = R V`` maps
+inertial components to body components. The statement spells it out, with the three elementary
+matrices.
 
 A spinning top in the lab or a quadcopter drone, at one instant: Euler angles (rad) and their
 rates (rad/s). Answers:

@@ -1,8 +1,8 @@
 """An independent high-precision reference for the heavy symmetric top (R15–R20), in mpmath.
 
-Written from ``physics.md`` alone: it imports nothing from ``solver`` and shares none of its
-numerics (no offset cubic, no pole frames, no Carlson forms). It is what the fuzz suite
-(:mod:`solver.bench.fuzz`) and the accuracy tests measure the solver against.
+Written from the formulas of ``docs/physics/index.md`` alone: it imports nothing from ``solver``
+and shares none of its numerics (no offset cubic, no pole frames, no Carlson forms). It is what
+the fuzz suite (:mod:`solver.bench.fuzz`) and the accuracy tests measure the solver against.
 
 For a state given as binary floats (exact inputs), at ``dps`` decimal digits:
 

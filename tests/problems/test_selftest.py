@@ -18,7 +18,8 @@ from grader.selftest_run import grade_solutions
 from problems.answers import Answer, Mistake
 from problems.family import Family, Parameter
 from problems.family_files import load_family_file
-from problems.selftest import CHECKS, leaked_values, readings, self_test
+from problems.rounding import latex_sig
+from problems.selftest import CHECKS, leaked_values, misprinted, printed_for, readings, self_test
 from problems.templates import FAMILIES
 
 from .family_sources import pendulum, write_family
@@ -124,6 +125,93 @@ def test_leaks_are_readings_of_the_answer_not_parameters_or_list_numbers():
     assert 0.0 not in readings(0.0004)  # zero is never a reading
 
 
+PRINTED = "parameters printed as in the cell"
+
+
+def test_a_parameter_printed_with_fewer_digits_than_its_cell_is_caught():
+    """The issue's case: the cell (and the key) has h = 12.3, the statement prints 12 — a
+    student using the printed number is 2.4 % off a 0.1 % tolerance. Run without the grader:
+    only this check and the sandbox's (not run) fail."""
+    def statement(p):
+        return (f"A ball is dropped from $h = {p['h']:.2g}$ m (`h`); $g = {p['g']:g}$ m/s² "
+                "(`g`).\n\n1. `t`: how long it falls.")
+
+    seeds = range(20)
+    report = self_test(falling(statement=statement), seeds)
+    drawn = {s: falling().generate(np.random.default_rng(s)).parameters["h"] for s in seeds}
+    shortened = [s for s, h in drawn.items() if float(f"{h:.2g}") != h]
+    count, shown = failures(report, PRINTED)
+    assert count == len(shortened) > 0
+    first, h = shortened[0], drawn[shortened[0]]
+    assert shown[0] == (f"seed {first}: parameter h is printed as '{h:.2g}' but the parameter "
+                        f"cell holds {h!r}")
+    assert only_failing(report) == {PRINTED, CHECKS[-1]}
+
+
+def tiny_marker(shown_figures: int) -> Family:
+    """A family whose vector parameter prints in LaTeX powers of ten (``4.2 \\times 10^{-5}``)
+    with ``shown_figures`` figures, followed by its unit; the cell holds 3."""
+    def statement(p):
+        r = ",\\ ".join(latex_sig(x, shown_figures) for x in p["r"])
+        return f"A marker sits at $\\mathbf r = ({r})$ m (`r`).\n\n1. `s`: its mean coordinate."
+
+    return Family(types.SimpleNamespace(
+        NAME="marker", TITLE="A marker", SUMMARY="a vector parameter (test)",
+        PARAMETERS={"r": Parameter(unit="m", low=1e-5, high=9e-5, shape=(3,), figures=3)},
+        answers=lambda p: (Answer("s", "scalar", sum(p["r"]) / 3, unit="m"),),
+        statement=statement), origin="test")
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_each_component_of_a_vector_in_latex_is_compared_with_the_cell(seed):
+    variant = tiny_marker(2).generate(np.random.default_rng(seed))
+    r = variant.parameters["r"]
+    expected = [f"parameter r[{k}] is printed as {latex_sig(x, 2)!r} but the parameter cell "
+                f"holds {x!r}" for k, x in enumerate(r) if float(f"{x:.1e}") != x]
+    assert expected and misprinted(tiny_marker(2), variant) == expected
+    assert misprinted(tiny_marker(3), tiny_marker(3).generate(np.random.default_rng(seed))) == []
+
+
+def test_fixed_numbers_near_a_parameter_are_not_taken_for_it():
+    """12, 10 and the list's 1. and 2. are roundings of h = 12.3 but do not change with it."""
+    def statement(p):
+        return (f"1. A ball is dropped from $h = {p['h']:g}$ m (`h`), off a 12 m wall 10 m "
+                f"from the road; $g = {p['g']:g}$ m/s² (`g`).\n\n2. `t`: how long it falls.")
+
+    family = falling(draw=lambda rng: {"h": 12.3, "g": 9.81}, statement=statement)
+    variant = family.generate(np.random.default_rng(0))
+    assert [p.text for p in printed_for(family, variant.parameters, "h")] == ["12.3"]
+    assert misprinted(family, variant) == []
+
+
+def test_a_parameter_rounded_to_a_whole_number_is_caught():
+    family = falling(draw=lambda rng: {"h": 3.04, "g": 9.81},
+                     statement=lambda p: f"1. Dropped from {round(p['h'])} m (`h`), g (`g`).")
+    assert misprinted(family, family.generate(np.random.default_rng(0))) == [
+        "parameter h is printed as '3' but the parameter cell holds 3.04"]
+
+
+def test_a_statement_that_cannot_take_the_doubled_value_is_checked_with_it_halved():
+    def statement(p):
+        if p["h"] > 20:
+            raise ValueError("too high a drop")
+        return f"Dropped from $h = {p['h']:.2g}$ m (`h`); g (`g`)."
+
+    family = falling(draw=lambda rng: {"h": 12.3, "g": 9.81}, statement=statement)
+    variant = family.generate(np.random.default_rng(0))
+    assert misprinted(family, variant) == [
+        "parameter h is printed as '12' but the parameter cell holds 12.3"]
+
+    def only_as_drawn(p):
+        if p["h"] != 12.3:
+            raise ValueError("not the drop this statement was written for")
+        return f"Dropped from $h = {p['h']:g}$ m (`h`); g (`g`)."
+
+    stubborn = falling(draw=lambda rng: {"h": 12.3, "g": 9.81}, statement=only_as_drawn)
+    with pytest.raises(ValueError, match="cannot be rendered with h doubled or halved"):
+        misprinted(stubborn, stubborn.generate(np.random.default_rng(0)))
+
+
 def test_two_mistakes_the_grader_cannot_tell_apart_are_caught():
     def answers(p):
         t = math.sqrt(2 * p["h"] / p["g"])
@@ -200,6 +288,21 @@ def test_the_command_prints_a_table_and_exits_1_naming_the_seed(tmp_path, capsys
     assert row.split()[-2:] == ["0", "5"]
     assert "FAILED no answer value in the statement: 5 time(s)" in out
     assert "  seed 0: answer 'T' = " in out
+
+
+def test_the_command_names_a_parameter_printed_otherwise_than_its_cell(tmp_path, capsys):
+    """An instructor's own file printing L with two figures while the cell holds three."""
+    source = pendulum("shortened").replace("{p['L']:g}", "{p['L']:.2g}")
+    assert "{p['L']:.2g}" in source
+    path = write_family(tmp_path, "shortened.py", source)
+    assert main(["problems", "test", str(path), "--seeds", "5"]) == 1
+    out = capsys.readouterr().out
+    family = load_family_file(path)
+    lengths = {s: family.generate(np.random.default_rng(s)).parameters["L"] for s in range(5)}
+    first, L = next((s, L) for s, L in lengths.items() if float(f"{L:.2g}") != L)
+    assert (f"  seed {first}: parameter L is printed as '{L:.2g}' but the parameter cell holds "
+            f"{L!r}") in out.splitlines()
+    assert f"FAILED {PRINTED}:" in out
 
 
 def test_the_command_refuses_an_unknown_family(capsys):

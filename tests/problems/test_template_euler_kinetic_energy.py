@@ -7,8 +7,8 @@ R13). Here, from the displayed parameters only:
   rotations (the angles advancing at their rates), then R3's ``T = ½ Σ I_i ω_i²``;
 - ``T`` from the sympy derivation ``solver.symbolic.kinetic_energy_euler_expr`` (R11 → R12 →
   R13, derived, not typed in), evaluated by mpmath at 30 digits;
-- ``T_expr`` against the textbook symmetric-top formula of ``physics.md`` R13, typed in here:
-  symbolically (the difference simplifies to 0) and through the grader.
+- ``T_expr`` against the textbook symmetric-top formula of R13 (``docs/physics/``), typed in
+  here: symbolically (the difference simplifies to 0) and through the grader.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Independent checks of the symbolic-derivation template (R14–R16, R18, R19).
 
-References: the results as ``physics.md`` states them, typed here in numpy — R15's momenta
+References: the results as ``docs/physics/`` states them, typed here in numpy — R15's momenta
 (``p_α`` in its R15 form ``I1 α̇ sin²β + p_γ cos β``), R16's ``E' = ½ I1 β̇² + V_eff`` with the
 momenta of R15, R18's ``α̇`` — compared with the key expressions (derived by
 :mod:`solver.symbolic`, a different route) at random points; the sleeping top's ``c2`` as the
@@ -61,7 +61,7 @@ REFERENCES = {
     "p_alpha": _p_alpha, "p_gamma": _p_gamma, "E_prime": _e_prime, "V_eff": _v_eff,
     "alpha_dot": _alpha_dot, "c2": _c2,
 }
-# How a student would write each result from physics.md (a different form from the key's).
+# How a student would write each result from docs/physics/ (a different form from the key's).
 TEXTBOOK = {
     "p_alpha": "I1*alpha_dot*sin(beta)^2 + I3*(alpha_dot*cos(beta) + gamma_dot)*cos(beta)",
     "p_gamma": "I3*alpha_dot*cos(beta) + I3*gamma_dot",

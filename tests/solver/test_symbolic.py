@@ -1,9 +1,9 @@
-"""Sympy derivations against the forms stated in physics.md; the numeric solver against them.
+"""Sympy derivations against the forms stated in docs/physics/; the numeric solver against them.
 
 Two kinds of test:
 
 * derived == stated: every expression of ``solver.symbolic`` is derived (from R11's rotation
-  matrix onwards); the reference is the result as ``physics.md`` states it, typed here as text
+  matrix onwards); the reference is the result as ``docs/physics/`` states it, typed here as text
   and parsed with :data:`SYMBOLS`, so a typo in either shows up as a difference. Structural
   identities (R orthogonal, energy conservation along the Euler–Lagrange equations, odd terms of
   the sleeping-top series) back them up.
@@ -31,7 +31,7 @@ N_POINTS = 16
 
 
 def stated(text: str) -> sp.Expr:
-    """A formula as typed from physics.md, in the module's symbols."""
+    """A formula as typed from docs/physics/, in the module's symbols."""
     return parse_expr(text, local_dict=dict(SYMBOLS))
 
 
@@ -87,7 +87,7 @@ def top_state(rng: np.random.Generator) -> dict[str, np.ndarray]:
     }
 
 
-# --- derived == stated (physics.md) -----------------------------------------------------------
+# --- derived == stated (docs/physics/) ---------------------------------------------------------
 
 R12_OMEGA = (
     "-alpha_dot*sin(beta)*cos(gamma) + beta_dot*sin(gamma)",
@@ -149,7 +149,7 @@ def test_momenta_are_R15():
 
 
 def in_velocities(expr: sp.Expr) -> sp.Expr:
-    """Replace p_α, p_γ by their R15 velocity forms (typed from physics.md)."""
+    """Replace p_α, p_γ by their R15 velocity forms (typed from docs/physics/)."""
     p_gamma = stated("I3*(alpha_dot*cos(beta) + gamma_dot)")
     p_alpha = stated("I1*alpha_dot*sin(beta)**2 + p_gamma*cos(beta)").subs(S["p_gamma"], p_gamma)
     return expr.subs({S["p_alpha"]: p_alpha, S["p_gamma"]: p_gamma})

@@ -12,7 +12,7 @@
     run it (a pyenv under ``/root``, as on CI) but a container's would be runnable
     (``/usr/bin/python3``), the entrypoints run as a program in a *container layout*
     (:func:`container_layout`): the same file system, but for the closed folders above this
-    Python, made passable as a container's are.
+    Python, made passable as a container's are; without bubblewrap to make it, it fails.
 ``notebooks``
     Submissions built from the generated notebooks: ``right``, ``wrong``, ``broken``,
     ``oversized``, ``key_reader(key_path)`` (see :class:`Notebooks`).
@@ -108,9 +108,9 @@ def kernel_uid(monkeypatch) -> int:
     why = check_interpreter(user)
     if why is not None:
         layout = container_layout()
-        if not layout:
-            pytest.skip(f"{why}; and no bubblewrap here to lay the file system out as a "
-                        "container's")
+        if not layout:  # bubblewrap is required (README): fail, never skip
+            pytest.fail(f"{why}; and no bubblewrap here to lay the file system out as a "
+                        "container's (apt-get install bubblewrap)", pytrace=False)
         monkeypatch.setattr(sys.modules[__name__], "LAYOUT", layout)
     return user.uid
 
