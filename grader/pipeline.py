@@ -62,7 +62,7 @@ from typing import Any
 
 from grader.assignment import Assignment, UsageError, load_assignment
 from grader.audit import record_event
-from grader.discover import discover
+from grader.discover import discover, require_handed_in
 from grader.executors import Interrupted
 from grader.executors.local import run_local, warm_kernels
 from grader.follow_through import FollowThrough
@@ -229,6 +229,7 @@ def grade_assignment(
     sandbox: bool = True,
     class_list: Sequence[Mapping[str, str]] = (),
     cluster: str | None = None,
+    yes: bool = False,
 ) -> RunReport:
     """Grade every submission in ``submissions`` against the assignment ``hw``.
 
@@ -268,6 +269,9 @@ def grade_assignment(
         (``tcp://HOST:PORT``) or ``local:N`` (a LocalCluster of N workers); ``jobs`` is then
         unused (each worker grades as many at once as it has threads) and the sandbox is
         that of each worker's machine.
+    yes : bool
+        Grade a SUBMISSIONS folder that is the assignment's ``release/`` or ``solutions/``, or
+        a copy of one, all the same (:func:`grader.discover.require_handed_in`).
 
     Raises
     ------
@@ -290,6 +294,7 @@ def grade_assignment(
     if not archive:
         found = discover(submissions, a.ids, rows)
         require_submissions(submissions, found, a.ids)
+        require_handed_in(hw, submissions, found, yes)
     own_execute = execute is None  # not one a test or a benchmark injected
     execute, found_sandbox, warm, sandboxed = _choose_executor(execute, cold_kernels, sandbox,
                                                                cluster)

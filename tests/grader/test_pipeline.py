@@ -386,6 +386,73 @@ def test_a_class_where_one_student_handed_in_is_graded(hw, tmp_path):
     assert [r.status for r in report.results] == ["graded"] + ["missing"] * (len(ROSTER) - 1)
 
 
+def _generated_copy(hw: Path, folder: Path, kinds: dict[str, str]) -> Path:
+    """``folder`` holding, for each student of ``kinds``, their generated notebook of that kind
+    (``release`` or ``solutions``), copied byte for byte."""
+    folder.mkdir()
+    for sid, kind in kinds.items():
+        shutil.copyfile(hw / kind / f"{sid}.ipynb", folder / f"{sid}.ipynb")
+    return folder
+
+
+@pytest.mark.parametrize(("case", "fragment"), [
+    ("release", "is the assignment's release folder (the blank notebooks handed out), not "
+                "submissions: grading it would give every student 0"),
+    ("solutions", "is the assignment's solutions folder (the key's answers filled in), not "
+                  "submissions: grading it would give every student full marks"),
+    ("link to solutions", "is the assignment's solutions folder"),
+    ("copy of release", "every submission in {subs} (6) is byte for byte the notebook generated "
+                        "for its student (6 as in {hw}/release: a copy?)"),
+    ("copies of both", "(1 as in {hw}/release, 2 as in {hw}/solutions: a copy?), not one a "
+                       "student worked in: grading them would give 0 or full marks as they came"),
+])
+def test_the_assignments_own_notebooks_are_refused_as_submissions(hw, tmp_path, case, fragment):
+    """Issue 30: ``grade HW HW/release`` gave everyone 0 and ``HW/solutions`` full marks, with
+    exit status 0 and no warning; by real path or by content, the run is refused before it
+    writes anything."""
+    subs = {"release": hw / "release", "solutions": hw / "solutions"}.get(case)
+    if case == "link to solutions":
+        subs = tmp_path / "handed-in"
+        subs.symlink_to(hw / "solutions")
+    elif case == "copy of release":
+        subs = _generated_copy(hw, tmp_path / "subs", dict.fromkeys(ROSTER, "release"))
+    elif case == "copies of both":
+        subs = _generated_copy(hw, tmp_path / "subs", {"alice": "release", "bob": "solutions",
+                                                       "carol": "solutions"})
+    with pytest.raises(UsageError) as err:
+        _run(hw, subs, FakeExecute())
+    message = str(err.value)
+    assert fragment.format(subs=subs, hw=hw) in message, message
+    assert message.endswith("or --yes to grade it all the same")
+    assert not (hw / "graded").exists()
+
+
+def test_a_class_where_some_handed_in_the_notebook_as_generated_is_graded(hw, tmp_path):
+    subs = _generated_copy(hw, tmp_path / "subs", {"alice": "release", "bob": "solutions"})
+    (subs / "carol.ipynb").write_text(_notebook(hw, "carol"))  # worked in: other bytes
+    r = _by_id(_run(hw, subs, FakeExecute()))
+    assert r["alice"].points == 0 and r["bob"].points == r["carol"].points == r["bob"].max_points
+
+
+def test_yes_grades_the_solutions_folder_all_the_same(hw, capsys):
+    from eulertop.cli import build_parser
+    from grader.cli import run_grade
+
+    def grade(*options: str) -> int:
+        args = build_parser("grade").parse_args(["grade", str(hw), str(hw / "solutions"),
+                                                 *options])
+        return run_grade(args, execute=FakeExecute())
+
+    assert grade() == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"eulertop grade: {hw / 'solutions'} is the assignment's solutions")
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert not (hw / "graded").exists()
+    assert grade("--yes") == 0
+    with open(hw / "graded" / "grades.csv", newline="") as f:
+        assert all(row["total"] == row["maximum"] != "0" for row in csv.DictReader(f))
+
+
 @pytest.mark.parametrize("where", ["inside", "same"])
 def test_an_output_folder_inside_the_submissions_is_refused(hw, subs, where):
     out = subs / "graded" if where == "inside" else subs
