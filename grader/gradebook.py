@@ -34,15 +34,32 @@ MAX_SHOWN = 400
 """Characters of a submitted value or message shown before it is cut (the record keeps all)."""
 
 
+SHOWN_DIGITS = 4
+"""Significant figures of every point count shown (:func:`number`); records keep the float."""
+
+NOISE = 1e-9
+"""Point counts smaller than this are shown as ``0``: what is left of a sum of fractions such
+as ``1 - 0.9 - 0.1``, not points anyone gave."""
+
+
 def number(x: float) -> str:
-    """A point count for people and spreadsheets: ``3``, ``2.5``, ``0.3333333333``.
+    """A point count for people and spreadsheets, to :data:`SHOWN_DIGITS` significant figures
+    and never in exponent notation — the one rounding of every view (grades.csv, answers.csv,
+    the summary, feedback pages, the report, LMS imports, rescore's change lines).
 
     Examples
     --------
-    >>> number(3.0), number(2.5), number(1 / 3)
-    ('3', '2.5', '0.3333333333')
+    >>> number(3.0), number(2.5), number(22 / 3), number(14.999999999999998), number(-0.0)
+    ('3', '2.5', '7.333', '15', '0')
+    >>> number(12345.6), number(1 / 3000), number(1 - 0.9 - 0.1)
+    ('12350', '0.0003333', '0')
     """
-    return f"{x:.10g}"
+    import numpy as np
+
+    if abs(x) < NOISE:
+        x = 0.0  # -0.0 too
+    return np.format_float_positional(x, precision=SHOWN_DIGITS, unique=True, fractional=False,
+                                      trim="-")
 
 
 def _cut(text: str, limit: int = MAX_SHOWN) -> str:
@@ -107,7 +124,7 @@ def gradebook_rows(
 
 
 ANSWER_COLUMNS = ("id", "question", "answer", "variable", "submitted", "points", "max",
-                  "status", "mistake")
+                  "status", "mistake", "overridden")
 
 
 def answers_rows(rows: Sequence[Mapping[str, str]],
@@ -116,7 +133,9 @@ def answers_rows(rows: Sequence[Mapping[str, str]],
 
     Columns :data:`ANSWER_COLUMNS`: the student id, question number, the answer's name and
     notebook variable, the submitted value as JSON (empty when not set), points awarded and
-    possible, the verdict's status and the recognised mistake (empty when none). Students
+    possible, the verdict's status, the recognised mistake (empty when none), and for an
+    answer the instructor overrode (:mod:`grader.overrides`) what it had and why,
+    ``was 0: <reason>`` (``points`` is then the override's; empty for the others). Students
     without a record are left out.
     """
     table = [list(ANSWER_COLUMNS)]
@@ -126,8 +145,14 @@ def answers_rows(rows: Sequence[Mapping[str, str]],
             v = a.verdict
             submitted = "" if a.submitted is None else json.dumps(a.submitted, ensure_ascii=False)
             table.append([r.student_id, str(a.question), a.name, a.variable, submitted,
-                          number(v.points), number(v.max_points), v.status, v.mistake or ""])
+                          number(v.points), number(v.max_points), v.status, v.mistake or "",
+                          csv_cell(_overridden(r.overridden.get(a.variable)))])
     return table
+
+
+def _overridden(override: Mapping[str, Any] | None) -> str:
+    """An answer's override as one cell: ``was 0: <reason>``; ``""`` for none."""
+    return "" if override is None else f"was {number(override['was'])}: {override['reason']}"
 
 
 def reason(result: StudentResult) -> str:

@@ -27,6 +27,7 @@ import re
 from collections.abc import Mapping
 from pathlib import Path
 
+from grader.gradebook import number
 from grader.lms.classlist import ClassListFormat, Grades, ImportError_, cell
 from grader.lms.download import NOTEBOOK, Candidate, Matched, Students, is_system_file
 
@@ -98,7 +99,7 @@ def write_import(grades: Grades) -> list[list[str]]:
             "Blackboard matches students by Username, and the roster has none for "
             f"{', '.join(lacking[:5])}{' …' if len(lacking) > 5 else ''}: export with "
             "--roster <Blackboard Grade Center export>")
-    column = f"{grades.title} [Total Pts: {grades.max_points:.10g} Score]"
+    column = f"{grades.title} [Total Pts: {number(grades.max_points)} Score]"
     if grades.column_id:
         column += f" |{grades.column_id}"
     table = [["Last Name", "First Name", "Username", column]]

@@ -37,6 +37,7 @@ import re
 from collections.abc import Mapping
 from pathlib import Path
 
+from grader.gradebook import number
 from grader.lms.classlist import ClassListFormat, Grades, ImportError_, cell, fold
 from grader.lms.download import NOTEBOOK, Candidate, Matched, Students, is_system_file
 
@@ -193,7 +194,7 @@ def write_import(grades: Grades) -> list[list[str]]:
             "export with --roster <Canvas gradebook export>")
     column = f"{grades.title} ({grades.column_id})" if grades.column_id else grades.title
     table = [["Student", *IMPORT_KEYS, "Section", column],
-             ["Points Possible", "", "", "", "", f"{grades.max_points:.10g}"]]
+             ["Points Possible", "", "", "", "", number(grades.max_points)]]
     for r in grades.rows:
         table.append([cell(r, "Student"), *(cell(r, k) for k in IMPORT_KEYS),
                       cell(r, "Section"), grades.scores[r["id"]]])

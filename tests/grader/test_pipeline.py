@@ -10,6 +10,7 @@ from __future__ import annotations
 import ast
 import csv
 import json
+import re
 import shutil
 import threading
 from dataclasses import dataclass, replace
@@ -533,3 +534,61 @@ def test_each_students_key_is_derived_once_per_run(hw, subs, monkeypatch, reveal
     monkeypatch.setattr(grader.assignment, "key_answers", counting)
     _run(hw, subs, FakeExecute(), reveal=reveal)
     assert sorted(derived) == sorted(ROSTER)
+
+
+def _cells(path: Path) -> list[list[str]]:
+    with open(path, newline="", encoding="utf-8") as f:
+        return list(csv.reader(f))
+
+
+def test_points_are_shown_to_four_significant_figures_and_recorded_exactly(hw, subs, capsys):
+    """Issue 30: totals were shown as ``7.333333333``. A third of a point given by an override
+    (``eulertop override``, then a grading run that applies it) is recorded as the float it is
+    and shown as 0.3333 — its totals as ``<n>.333`` — in every view: grades.csv, answers.csv,
+    the change lines, the progress and summary lines, the feedback page, the report's table
+    and the LMS imports."""
+    from eulertop.cli import build_parser, main
+    from grader.cli import run_grade
+    from grader.lms.export import build_grades
+
+    def grade() -> str:
+        args = build_parser("grade").parse_args(["grade", str(hw), str(subs), "--force"])
+        run_grade(args, execute=FakeExecute())
+        return "".join(capsys.readouterr())
+
+    grade()
+    variable = _variables(hw, "alice")[0]
+    assert main(["override", str(hw), "alice", variable, "--points", repr(1 / 3),
+                 "--reason", "a third of the way"]) == 0
+    said = capsys.readouterr().out
+    out = hw / "graded"
+    record = read_result(out / "results" / "alice.json")
+    whole = int(record.max_points) - 1  # every other answer right, one point each
+    q1 = len(_key(hw)["students"]["alice"]["questions"][0]["answers"]) - 1
+    assert record.points == whole + 1 / 3 and record.answers[0].verdict.points == 1 / 3
+    assert re.search(rf"alice\s+{variable}\s+1 → 0\.3333 ", said), said
+    assert re.search(rf"alice\s+total\s+{whole + 1} → {whole}\.333 ", said), said
+    printed = grade()
+    assert f"alice: {whole}.333/{whole + 1}" in printed  # the progress line
+    assert re.search(rf"^alice\s+graded\s+{whole}\.333\s+{whole + 1}$", printed, re.M)
+    grades = _cells(out / "grades.csv")
+    alice = dict(zip(grades[0], next(r for r in grades if r[0] == "alice"), strict=True))
+    assert (alice["q1"], alice["total"]) == (f"{q1}.333", f"{whole}.333")
+    answers = _cells(out / "answers.csv")
+    row = dict(zip(answers[0], next(r for r in answers if r[:1] + r[3:4] == ["alice", variable]),
+                   strict=True))
+    assert (row["points"], row["max"]) == ("0.3333", "1")
+    assert row["overridden"] == "was 1: a third of the way"  # and no other answer is marked
+    assert [r[0] for r in answers[1:] if r[-1]] == ["alice"]
+    page = (out / "feedback" / "alice.html").read_text()
+    assert f"{whole}.333 of {whole + 1} points" in page and "0.3333 / 1" in page
+    report = _cells(out / "report.csv")
+    assert dict(zip(report[0], next(r for r in report if r[0] == "alice"),
+                    strict=True))["points"] == f"{whole}.333"
+    grades, _, _ = build_grades(hw, out)  # what every LMS import writes
+    assert grades.scores["alice"] == f"{whole}.333"
+    assert grades.feedback["alice"].startswith(f"{whole}.333 of {whole + 1} points; Q1 {q1}.333/")
+    for path in (out / "grades.csv", out / "answers.csv", out / "report.csv",
+                 out / "feedback" / "alice.html"):
+        assert "3333333" not in path.read_text(), path
+    assert "3333333" not in said + printed
