@@ -25,6 +25,7 @@ import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from grader.extract import UNREADABLE, invalid_reason
 from grader.plain_text import printable
 from grader.results import StudentResult
 from grader.statement_html import statement_html
@@ -157,13 +158,38 @@ def _overridden(override: Mapping[str, Any] | None) -> str:
 
 def reason(result: StudentResult) -> str:
     """Why a student has the status they have, in one line: the record's message (its first
-    line for a failed one, every line joined for notes on a graded one)."""
+    line for a failed one); for a graded one every line of it, then each cell that raised or
+    timed out (:func:`cell_notes`) and each answer that could not be read
+    (:func:`unreadable_notes`)."""
     if result.status == "failed":
         lines = [line for line in result.message.splitlines() if line.strip()]
         return lines[0] if lines else "could not be graded"
     if result.status == "missing":
         return result.message or "no submission"
-    return "; ".join(line.strip() for line in result.message.splitlines() if line.strip())
+    lines = [line.strip() for line in result.message.splitlines() if line.strip()]
+    return "; ".join([*lines, *cell_notes(result), *unreadable_notes(result)])
+
+
+_CELL = re.compile(r"cell \d+ \(")
+
+
+def unreadable_notes(result: StudentResult) -> list[str]:
+    """The verdicts of the answers whose value could not be read (``q2_x could not be read:
+    its value did not convert within 2 s …``: :data:`grader.extract.UNREADABLE`)."""
+    return [a.verdict.message for a in result.answers
+            if (invalid_reason(a.submitted) or "").startswith(UNREADABLE)]
+
+
+def cell_notes(result: StudentResult) -> list[str]:
+    """The record's lines for the cells that raised or timed out (``cell 7 (`while True:`):
+    timed out after 30 s and was interrupted``), but those its message already names — a
+    notebook whose time ran out says in its message which cell was running."""
+    notes = []
+    for line in result.execution.get("cell_errors") or ():
+        named = _CELL.match(str(line))
+        if named is None or named.group() not in result.message:
+            notes.append(str(line))
+    return notes
 
 
 _CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]+")
@@ -333,7 +359,7 @@ def summary_table(results: Sequence[StudentResult], problems: Sequence[Problem] 
     """A plain-text table, one line per student, then what was not graded and the counts."""
     header = ("id", "status", "points", "max", "note")
     lines = [(r.student_id, r.status, number(r.points), number(r.max_points),
-              _cut(r.message.splitlines()[0] if r.message else "", 70)) for r in results]
+              _cut(reason(r), 70)) for r in results]
     widths = [max(len(str(row[i])) for row in [header, *lines]) for i in range(4)]
     fmt = "  ".join(f"{{:<{w}}}" for w in widths) + "  {}"
     out = [fmt.format(*header).rstrip(), fmt.format(*("-" * w for w in widths), "----")]
@@ -341,6 +367,10 @@ def summary_table(results: Sequence[StudentResult], problems: Sequence[Problem] 
     counts = {s: sum(r.status == s for r in results) for s in ("graded", "missing", "failed")}
     out.append("")
     out.append(", ".join(f"{n} {s}" for s, n in counts.items()) + f" of {len(results)} students")
+    foreign = [r.student_id for r in results if r.execution.get("foreign")]
+    if foreign:
+        out.append(f"not this assignment's notebook, or another student's, graded all the same "
+                   f"({len(foreign)}): {', '.join(foreign)}")
     out += answer_counts(results)
     stray = [p for p in problems if p.student_id is None]
     if stray:

@@ -19,6 +19,7 @@ from grader.gradebook import (
     gradebook_csv,
     gradebook_rows,
     number,
+    reason,
     summary_table,
 )
 from grader.results import StudentResult
@@ -127,7 +128,7 @@ def test_summary_lists_students_counts_and_strays(files):
     text = summary_table([alice, bob], [Problem(Path("eve.ipynb"), "eve.ipynb: not on roster")])
     lines = text.splitlines()
     assert re.match(r"alice\s+graded\s+(\d+)\s+\1$", lines[2])
-    assert re.match(r"bob\s+missing\s+0\s+\d+$", lines[3])
+    assert re.match(r"bob\s+missing\s+0\s+\d+\s+no submission$", lines[3])
     assert "1 graded, 1 missing, 0 failed of 2 students" in text
     assert "  eve.ipynb: not on roster" in lines
 
@@ -224,3 +225,23 @@ def test_every_view_of_a_record_shows_its_points_rounded(files):
     page = feedback_html(manifest["title"], r, manifest["students"]["alice"]["questions"])
     assert "7.333 of 15 points" in page and "0.3333 / 2.143" in page
     assert "33333" not in page and "99999" not in page
+
+
+def test_a_graded_row_names_each_cell_that_raised_or_timed_out_once(files):
+    """Issue 30: a run whose cells raised or timed out left the row's reason empty. Cells its
+    message already names (the one running when the notebook's time ran out) are not said
+    twice."""
+    _, key = files
+    raised = "cell 4 (`x = 1/0`): ZeroDivisionError: division by zero"
+    spun = "cell 7 (`while True:`): timed out after 30 s and was interrupted"
+    ran = replace(_record(key, "alice", _key_values(key, "alice")),
+                  execution={"status": "ok", "message": "ran all 9 code cells; 2 did not finish "
+                             "normally", "cell_errors": [raised, spun]})
+    assert reason(ran) == f"{raised}; {spun}"
+    out_of_time = replace(ran, message="stopped at the time limit for the whole notebook (120 s) "
+                          "while cell 7 (`while True:`) was running: it was interrupted",
+                          execution={**ran.execution, "status": "timeout"})
+    assert reason(out_of_time) == f"{out_of_time.message}; {raised}"
+    row = gradebook_rows(("id",), [{"id": "alice"}], (1, 2), {"alice": ran})[1]
+    assert row[-1] == f"{raised}; {spun}"
+    assert f"{raised}; cell 7" in summary_table([ran])
