@@ -27,7 +27,6 @@ import re
 from collections.abc import Mapping
 from pathlib import Path
 
-from grader.gradebook import number
 from grader.lms.classlist import ClassListFormat, Grades, ImportError_, cell
 from grader.lms.download import NOTEBOOK, Candidate, Matched, Students, is_system_file
 
@@ -93,6 +92,8 @@ def match_download(folder: Path, students: Students) -> Matched | None:
 
 def write_import(grades: Grades) -> list[list[str]]:
     """Rows of the Grade Center upload (module docstring); the writer quotes every field."""
+    from grader.gradebook import number
+
     lacking = [r["id"] for r in grades.rows if not cell(r, "Username")]
     if lacking:
         raise ImportError_(

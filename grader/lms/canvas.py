@@ -37,7 +37,6 @@ import re
 from collections.abc import Mapping
 from pathlib import Path
 
-from grader.gradebook import number
 from grader.lms.classlist import ClassListFormat, Grades, ImportError_, cell, fold
 from grader.lms.download import NOTEBOOK, Candidate, Matched, Students, is_system_file
 
@@ -186,6 +185,8 @@ IMPORT_KEYS = ("ID", "SIS User ID", "SIS Login ID")
 
 def write_import(grades: Grades) -> list[list[str]]:
     """Rows of the file Canvas's gradebook import takes (module docstring)."""
+    from grader.gradebook import number
+
     lacking = [r["id"] for r in grades.rows if not any(cell(r, k) for k in IMPORT_KEYS)]
     if lacking:
         raise ImportError_(
