@@ -191,8 +191,12 @@ def _generated_folder(hw: Path, submissions: Path) -> str | None:
 def _generated_copies(hw: Path, submissions: Path, found: Discovery) -> str | None:
     """Why every submission ``found`` is its student's generated notebook, or None (some is
     not, or there is none)."""
-    kinds = [_generated_kind(hw, s) for s in found.submissions]
-    if not kinds or None in kinds:
+    kinds = []
+    for submission in found.submissions:  # a class that worked stops at its first notebook
+        kinds.append(_generated_kind(hw, submission))
+        if kinds[-1] is None:
+            return None
+    if not kinds:
         return None
     where = [f"{kinds.count(kind)} as in {hw / kind}" for kind in GENERATED if kind in kinds]
     gives = GENERATED[kinds[0]][1] if len(where) == 1 else "0 or full marks as they came"
