@@ -96,6 +96,7 @@ def answer_specs(path: Path) -> tuple[dict, ...]:
         No such file, not a notebook, no (or damaged) eulertop metadata.
     """
     from grader.notebook_load import SubmissionError, read_notebook
+    from grader.notebook_metadata import NoAnswerList, answer_list
 
     path = Path(path)
     if not path.exists():
@@ -104,18 +105,10 @@ def answer_specs(path: Path) -> tuple[dict, ...]:
         metadata = read_notebook(path).notebook.get("metadata", {})
     except SubmissionError as err:
         raise CheckUsageError(f"{path}: {err}") from None
-    eulertop = metadata.get("eulertop") if isinstance(metadata, Mapping) else None
-    if eulertop is None:
-        raise CheckUsageError(f"{path} has no eulertop answer list in its metadata: "
-                              f"{WHERE_METADATA}")
     try:
-        specs = tuple(dict(a) for q in eulertop["questions"] for a in q["answers"])
-        if not specs or not all(_valid_spec(s) for s in specs):
-            raise ValueError
-    except (KeyError, TypeError, ValueError):
-        raise CheckUsageError(f"{path}: its eulertop metadata is damaged; "
-                              f"{WHERE_METADATA}") from None
-    return specs
+        return answer_list(metadata)
+    except NoAnswerList as err:
+        raise CheckUsageError(f"{path} {err}: {WHERE_METADATA}") from None
 
 
 def check_notebook(path: Path, limits: Any) -> CheckReport:
@@ -193,11 +186,3 @@ def _tally(statuses: Sequence[str]) -> str:
     if missing or bad:
         text += f"; {missing} missing, {bad} malformed"
     return text + "."
-
-
-def _valid_spec(spec: Mapping[str, Any]) -> bool:
-    from problems.answers import KINDS
-
-    variable = spec.get("variable")
-    return (isinstance(variable, str) and variable.isidentifier()
-            and spec.get("kind") in KINDS and isinstance(spec.get("name"), str))

@@ -98,6 +98,10 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> None:
                              "finish (default 600)")
     parser.add_argument("--reveal", action="store_true",
                         help="show each student their own key values in their feedback page")
+    parser.add_argument("--yes", action="store_true",
+                        help="grade SUBMISSIONS even when it is the assignment's release or "
+                             "solutions folder, or a copy of one (refused otherwise: it would "
+                             "give everyone 0 or full marks)")
     parser.add_argument("--no-sandbox", action="store_true",
                         help="run student code WITHOUT the bubblewrap sandbox (where none can "
                              "be had); it can then read the key and your files. Every run "
@@ -155,6 +159,7 @@ def run_grade(args: argparse.Namespace, execute=None) -> int:
             on_plan=lambda n: Progress(n), cold_kernels=getattr(args, "cold_kernels", False),
             sandbox=not getattr(args, "no_sandbox", False), class_list=class_list,
             cluster=getattr(args, "cluster", None), wait=args.wait,
+            yes=getattr(args, "yes", False),
         )
     except (UsageError, RosterError) as e:
         print(f"eulertop grade: {e}", file=sys.stderr)

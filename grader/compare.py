@@ -19,7 +19,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any, NamedTuple
 
-from grader.extract import invalid_reason
+from grader.extract import UNREADABLE, invalid_reason
 from grader.results import AnswerResult
 from problems.answers import Answer, Verdict, grade
 from problems.generate import key_records
@@ -47,8 +47,10 @@ def variable_names(expected: Sequence[KeyAnswer]) -> tuple[str, ...]:
     return tuple(k.variable for k in expected)
 
 
-def _grade_one(answer: Answer, submitted: Any) -> Verdict:
+def _grade_one(variable: str, answer: Answer, submitted: Any) -> Verdict:
     reason = invalid_reason(submitted)
+    if reason is not None and reason.startswith(UNREADABLE):  # named: it failed alone
+        return Verdict("invalid", 0.0, answer.points, f"{variable} {reason}")
     if reason is not None:  # the kernel held something that is not plain JSON
         return Verdict("invalid", 0.0, answer.points,
                        f"{reason}, which cannot be read as a {answer.kind} answer")
@@ -84,6 +86,6 @@ def compare(
             submitted = None
         else:
             submitted = extracted.get(variable)
-            verdict = _grade_one(answer, submitted)
+            verdict = _grade_one(variable, answer, submitted)
         results.append(AnswerResult(variable, question, answer.name, submitted, verdict))
     return tuple(results)

@@ -20,16 +20,25 @@ zip bomb, names that collide) makes only its own student's submission invalid, s
 Hidden entries (``.ipynb_checkpoints``, ``.DS_Store``) are ignored; other files that are not
 notebooks are reported.
 
+Not what students handed in (:func:`require_handed_in`): a SUBMISSIONS folder that is the
+assignment's own ``release/`` or ``solutions/`` folder, or whose every submission is byte for
+byte the notebook generated for its student (a copy of either), would grade everyone 0 or give
+everyone full marks; ``eulertop grade`` refuses it unless told ``--yes``.
+
 Floor 6 of grader/ (where grade_one runs; where submissions come from; grader/API.md).
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
 
+from grader.assignment import UsageError
+from grader.submission_file import InvalidSubmission, read_submission
 from grader.submissions import SUFFIX, Discovery, Problem, Submission
+from problems.generate import RELEASE, SOLUTIONS
 
     # (older uploads, several notebooks, entries refused from an archive): submissions.csv
 
@@ -146,3 +155,65 @@ def _discover_folder(folder: Path, roster_ids: Sequence[str]) -> Discovery:
             message = f"{entry.name}: {name!r} is not on the roster{hint}; not graded"
             problems.append(Problem(entry, message))
     return Discovery(tuple(submissions), tuple(missing), tuple(problems))
+
+
+# --------------------------------------------------------------------------------------------
+# not what students handed in
+
+GENERATED = {RELEASE: ("the blank notebooks handed out", "every student 0"),
+             SOLUTIONS: ("the key's answers filled in", "every student full marks")}
+"""The generated folders: what each holds, and what grading it as submissions would give."""
+
+
+def require_handed_in(hw: Path, submissions: Path, found: Discovery, yes: bool = False) -> None:
+    """:class:`UsageError` when ``submissions`` is not what students handed in but the
+    assignment's own notebooks: its ``release/`` or ``solutions/`` folder (by real path), or a
+    folder whose every submission is, byte for byte, the notebook generated for its student.
+    ``yes`` (``eulertop grade --yes``) grades it all the same."""
+    if yes:
+        return
+    why = _generated_folder(Path(hw), Path(submissions)) or \
+        _generated_copies(Path(hw), Path(submissions), found)
+    if why:
+        raise UsageError(f"{why}; pass the folder of the notebooks the students handed in, "
+                         "or --yes to grade it all the same")
+
+
+def _generated_folder(hw: Path, submissions: Path) -> str | None:
+    """Why ``submissions`` is one of ``hw``'s generated folders, or None."""
+    for kind, (holds, gives) in GENERATED.items():
+        if os.path.realpath(submissions) == os.path.realpath(hw / kind):
+            return (f"{submissions} is the assignment's {kind} folder ({holds}), not "
+                    f"submissions: grading it would give {gives}")
+    return None
+
+
+def _generated_copies(hw: Path, submissions: Path, found: Discovery) -> str | None:
+    """Why every submission ``found`` is its student's generated notebook, or None (some is
+    not, or there is none)."""
+    kinds = []
+    for submission in found.submissions:  # a class that worked stops at its first notebook
+        kinds.append(_generated_kind(hw, submission))
+        if kinds[-1] is None:
+            return None
+    if not kinds:
+        return None
+    where = [f"{kinds.count(kind)} as in {hw / kind}" for kind in GENERATED if kind in kinds]
+    gives = GENERATED[kinds[0]][1] if len(where) == 1 else "0 or full marks as they came"
+    return (f"every submission in {submissions} ({len(kinds)}) is byte for byte the notebook "
+            f"generated for its student ({', '.join(where)}: a copy?), not one a student "
+            f"worked in: grading them would give {gives}")
+
+
+def _generated_kind(hw: Path, submission: Submission) -> str | None:
+    """``release`` or ``solutions`` when the submission's bytes are those of the notebook
+    generated for its student in that folder; None otherwise (or when either is unreadable:
+    links and FIFOs are read, and refused, by the run itself)."""
+    for kind in GENERATED:
+        try:
+            generated = (hw / kind / f"{submission.student_id}{SUFFIX}").read_bytes()
+            if read_submission(submission.path, len(generated)) == generated:
+                return kind
+        except (OSError, InvalidSubmission):
+            continue
+    return None

@@ -74,7 +74,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from grader.extract import EXTRACTION_FAILED, extraction_request, parse_answers
+from grader.extract import (
+    ANSWER_SECONDS,
+    EXTRACTION_FAILED,
+    extraction_request,
+    parse_answers,
+)
 from grader.kernels.base import STOP_TIMEOUT, KernelFactory, KernelProcess
 from grader.kernels.local import LocalKernel
 from grader.limits import Limits
@@ -94,7 +99,16 @@ STATUSES = ("ok", "invalid_notebook", "timeout", "kernel_died", "error")
 
 
 EXTRACTION_TIMEOUT = 10.0
-"""Seconds the answer extraction may take (within what is left of the whole-notebook limit)."""
+"""Seconds the answer extraction may take, beyond :data:`grader.extract.ANSWER_SECONDS` per
+answer (the kernel bounds the reading of each: :func:`extraction_seconds`), within what is left
+of the whole-notebook limit."""
+
+
+def extraction_seconds(variables: Sequence[str], limits: Limits) -> float:
+    """How long the grader waits for the answers of ``variables``: :data:`EXTRACTION_TIMEOUT`
+    and :data:`grader.extract.ANSWER_SECONDS` per answer, at most the notebook's limit."""
+    return min(EXTRACTION_TIMEOUT + ANSWER_SECONDS * len(variables), limits.total_timeout)
+
 
 OUT_OF_TIME_GRACE = 5.0
 """Seconds, past the whole-notebook limit, for interrupting the cell that ran out of time and
@@ -337,14 +351,14 @@ async def _cell_session(run: _Run, kernel: KernelProcess, channel: Any,
         run.phase = "extracting"
         request = extraction_request(variables)
         n = channel.send("answers", request.code, user_expressions=request.user_expressions)
-        deadline = min(EXTRACTION_TIMEOUT, run.limits.total_timeout)
+        deadline = extraction_seconds(variables, run.limits)
         reply = await _cell_reply(channel, n, run, kernel, deadline, interrupt=False)
     except ChannelClosed:
         await _exit_reported(kernel)
         raise _KernelDied from None
     if reply is None:
         run.answers, run.problem = {}, (f"{EXTRACTION_FAILED}: reading them took more than "
-                                        f"{EXTRACTION_TIMEOUT:g} s")
+                                        f"{deadline:g} s")
     else:
         run.answers, run.problem = parse_answers(reply, variables)
     return _done(run)
@@ -423,7 +437,8 @@ async def _extract(
     msg_id = kc.execute(request.code, silent=False, store_history=False,
                         user_expressions=request.user_expressions, allow_stdin=False,
                         stop_on_error=False)
-    deadline = time.monotonic() + min(EXTRACTION_TIMEOUT, limits.total_timeout)
+    seconds = extraction_seconds(variables, limits)
+    deadline = time.monotonic() + seconds
     while True:
         try:
             msg = await kc.get_shell_msg(timeout=max(0.05, deadline - time.monotonic()))
@@ -431,8 +446,7 @@ async def _extract(
             if kernel.exit_status() is not None:
                 raise _KernelDied from None
             if time.monotonic() >= deadline:
-                return {}, (f"{EXTRACTION_FAILED}: reading them took more than "
-                            f"{EXTRACTION_TIMEOUT:g} s")
+                return {}, f"{EXTRACTION_FAILED}: reading them took more than {seconds:g} s"
             continue
         parent = msg.get("parent_header") if isinstance(msg, dict) else None
         if isinstance(parent, dict) and parent.get("msg_id") == msg_id:

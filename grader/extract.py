@@ -17,6 +17,15 @@ Conversion (in the kernel, :func:`kernel_extract`)
     ``{"__invalid__": "<what it is>"}``, which the comparison reports as invalid
     (:func:`invalid_reason`).
 
+One answer at a time (issue 30)
+    Reading a value can run the student's code (a ``__float__``, a list subclass, a metaclass),
+    which may never end. A value made only of Python's and numpy's own numbers, strings, lists
+    and arrays is read in the kernel; the others are read in a child process the kernel forks,
+    one line per answer, each given :data:`ANSWER_SECONDS`; one that does not come in time (or
+    whose reading raised, or ended the child) is marked ``could not be read: …``
+    (:data:`UNREADABLE`), the child is killed, and the rest are read in a new one. So one such
+    answer is invalid alone, named, and every other answer is graded.
+
 Trust
     The student's code runs in the same kernel before the extraction and may have replaced
     anything there: names in its namespace (``json = 3``, ``print = None``, ``float = str``),
@@ -74,6 +83,15 @@ MAX_REPLY_CHARS = 16_000_000
 MAX_REASON = 200
 """Characters of a marker's reason kept."""
 
+ANSWER_SECONDS = 2.0
+"""Seconds the kernel gives the reading of one answer (its conversion to plain JSON: a
+``__float__`` or ``__repr__`` of the student's runs then); past them that answer is marked
+"could not be read" and the next is read."""
+
+UNREADABLE = "could not be read"
+"""How the reason of a marker begins when the value itself could not be read (its reading
+raised, did not end, or ended its process), as opposed to a value of the wrong kind."""
+
 EXTRACTION_FAILED = "the notebook ran, but its answers could not be read"
 
 
@@ -85,18 +103,154 @@ EXTRACTION_FAILED = "the notebook ran, but its answers could not be read"
 def kernel_extract(namespace, names, limits):
     """JSON text {name: plain value or marker} for ``names`` read from ``namespace``.
 
-    ``limits`` is ``(max_elements, max_string, max_depth)``. Runs in the student's kernel.
+    ``limits`` is ``(max_elements, max_string, max_depth, seconds_per_answer, max_line)``.
+    Runs in the student's kernel. A value made only of Python's and numpy's own numbers,
+    strings and lists (:func:`kernel_inert`: reading it runs none of the student's code) is
+    read here; every other one on its own (:func:`kernel_read`) in a child process of the
+    kernel (:func:`kernel_read_forked`), so that one whose reading does not end is stopped
+    there and marked, and the next is read in a new child. Where no child can be started, the
+    others are read here too.
     """
     import json
+    import sys
 
+    np = sys.modules.get("numpy")
+    scalars = {id(t) for t in np.sctypeDict.values()} if np is not None else set()
     out = {}
     for name in names:
-        budget = [limits[0]]
+        if kernel_inert(namespace.get(name), limits, [limits[0]], 0, scalars):
+            out[name] = kernel_read(namespace, name, limits)
+    pending = [name for name in names if name not in out]
+    while pending:
+        read = kernel_read_forked(namespace, pending, limits)
+        if read is None:  # no process to spare: read here, without a time bound
+            out.update((name, kernel_read(namespace, name, limits)) for name in pending)
+            break
+        out.update(read)
+        pending = [name for name in pending if name not in out]
+    return json.dumps({name: out[name] for name in names}, allow_nan=True)
+
+
+def kernel_inert(x, limits, budget, depth, scalars):
+    """Is ``x`` made only of None, Python's own bool, int, float and str, exact lists and
+    tuples of them, and numpy's own numeric arrays and scalars (``scalars``: their ids) — so
+    that reading it runs no code of the student's? Types are told apart by identity alone:
+    comparing or hashing a type of the student's could run its metaclass's code."""
+    import sys
+
+    kind = type(x)
+    if x is None or kind is bool or kind is int or kind is float or kind is str \
+            or id(kind) in scalars:
+        return True
+    if kind is list or kind is tuple:
+        budget[0] -= len(x)
+        return depth < limits[2] and budget[0] >= 0 and all(
+            kernel_inert(item, limits, budget, depth + 1, scalars) for item in x)
+    np = sys.modules.get("numpy")
+    return np is not None and kind is np.ndarray and x.dtype.kind in "biuf" \
+        and x.size <= limits[0]
+
+
+def kernel_read(namespace, name, limits):
+    """One answer as plain JSON, or a marker saying why it could not be read."""
+    try:
+        return kernel_plain(namespace.get(name), limits, [limits[0]], 0)
+    except BaseException as err:  # a student's object that misbehaves when read
+        return {"__invalid__": f"could not be read: reading it raised {type(err).__name__}"}
+
+
+def kernel_read_forked(namespace, names, limits):
+    """``{name: value}`` for ``names``, read in order in a child process — all of them, or up
+    to the first that gave no value within ``limits[3]`` seconds or ended the child (marked
+    so); None when no child process can be started. The child is killed and reaped."""
+    import os
+    import signal
+    import warnings
+
+    try:
+        read_end, write_end = os.pipe()
+    except OSError:
+        return None
+    try:
+        with warnings.catch_warnings():  # fork() of a process with threads (Python ≥ 3.12)
+            warnings.simplefilter("ignore", DeprecationWarning)
+            pid = os.fork()
+    except OSError:
+        os.close(read_end)
+        os.close(write_end)
+        return None
+    if pid == 0:  # the child: one line of JSON per answer, then gone, whatever happens
         try:
-            out[name] = kernel_plain(namespace.get(name), limits, budget, 0)
-        except Exception as err:  # a student's object that misbehaves when read
-            out[name] = {"__invalid__": f"a value that could not be read ({type(err).__name__})"}
-    return json.dumps(out, allow_nan=True)
+            os.close(read_end)
+            kernel_send(write_end, namespace, names, limits)
+        finally:
+            os._exit(0)
+    os.close(write_end)
+    try:
+        return kernel_collect(read_end, names, limits)
+    finally:
+        os.close(read_end)
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except OSError:
+            pass
+        os.waitpid(pid, 0)
+
+
+def kernel_send(fd, namespace, names, limits):
+    """In the child: each answer of ``names`` as one line of JSON (ASCII) written to ``fd``."""
+    import json
+    import os
+
+    for name in names:
+        data = (json.dumps(kernel_read(namespace, name, limits), allow_nan=True) + "\n").encode()
+        while data:
+            data = data[os.write(fd, data):]
+
+
+def kernel_collect(fd, names, limits):
+    """The child's lines read from ``fd``, one per name, each within ``limits[3]`` seconds of
+    the one before: ``{name: value}`` up to the first that did not come (then a marker)."""
+    import json
+
+    got, pending = {}, [b""]
+    for name in names:
+        line = kernel_line(fd, pending, limits)
+        if isinstance(line, str):  # why no line came
+            got[name] = {"__invalid__": f"could not be read: {line}"}
+            return got
+        try:
+            got[name] = json.loads(line)
+        except (ValueError, RecursionError):  # the child ran the student's code: untrusted
+            got[name] = {"__invalid__": "could not be read"}
+            return got
+    return got
+
+
+def kernel_line(fd, pending, limits):
+    """The next line from ``fd`` (``pending[0]``: what was read past the last one), as bytes;
+    or, as a str, why none came: not within ``limits[3]`` s, the child ended, or it is longer
+    than ``limits[4]`` bytes."""
+    import os
+    import select
+    import time
+
+    deadline = time.monotonic() + limits[3]
+    poll = select.poll()  # select() cannot watch a descriptor numbered 1024 or more
+    poll.register(fd, select.POLLIN)
+    while b"\n" not in pending[0]:
+        left = deadline - time.monotonic()
+        if left <= 0 or not poll.poll(left * 1000):
+            return (f"its value did not convert within {limits[3]:g} s (a loop that does not "
+                    "end?)")
+        chunk = os.read(fd, 1 << 16)
+        if not chunk:
+            return "reading it ended the process"
+        if len(pending[0]) + len(chunk) > limits[4]:
+            return "it is too large"
+        pending[0] += chunk
+    line, pending[0] = pending[0].split(b"\n", 1)
+    return line
 
 
 def kernel_plain(x, limits, budget, depth):
@@ -185,7 +339,9 @@ class ExtractionRequest(NamedTuple):
 def _kernel_program() -> str:
     """The source of :func:`kernel_plain` and :func:`kernel_extract` (read once: reading
     source is a few milliseconds, per submission otherwise)."""
-    return "\n\n".join(inspect.getsource(f) for f in (kernel_plain, kernel_extract))
+    return "\n\n".join(inspect.getsource(f) for f in (
+        kernel_plain, kernel_inert, kernel_read, kernel_send, kernel_line, kernel_collect,
+        kernel_read_forked, kernel_extract))
 
 
 def extraction_request(variables: Sequence[str], nonce: str | None = None) -> ExtractionRequest:
@@ -202,8 +358,9 @@ def extraction_request(variables: Sequence[str], nonce: str | None = None) -> Ex
     nonce = nonce or secrets.token_hex(16)
     result = f"_eulertop_answers_{nonce}"
     program = _kernel_program()
+    limits = (MAX_ELEMENTS, MAX_STRING, MAX_DEPTH, ANSWER_SECONDS, MAX_REPLY_CHARS)
     program += (f"\n\nnamespace[{result!r}] = kernel_extract(namespace, {tuple(variables)!r}, "
-                f"{(MAX_ELEMENTS, MAX_STRING, MAX_DEPTH)!r})\n")
+                f"{limits!r})\n")
     builtins = f"_eulertop_builtins_{nonce}"
     code = (f"import builtins as {builtins}\n"
             f"{builtins}.exec({program!r}, {{'__builtins__': {builtins}, "

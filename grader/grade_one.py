@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from grader.compare import KeyAnswer, compare, variable_names
+from grader.notebook_metadata import Identity, identity
 from grader.results import StudentResult
 from grader.submission_file import DEFAULT_MAX_BYTES, InvalidSubmission, read_submission
 from grader.submissions import Submission
@@ -37,18 +38,13 @@ def file_sha256(path: Path) -> str:
 def claimed_student(path: Path) -> str | None:
     """The student id a notebook's own metadata names, if any — only ever *reported*.
 
-    The generator writes ``metadata["eulertop"]["student"]``; ``"student_id"`` is accepted too.
-    Anything unreadable gives None (the execution stage reports what is wrong with the file);
-    it is parsed within the limits of :func:`grader.notebook_load.notebook_json`.
+    The generator writes ``metadata["eulertop"]["student"]``; ``"student_id"`` is accepted too
+    (:func:`grader.notebook_metadata.named_student`). Anything unreadable gives None (the
+    execution stage reports what is wrong with the file); it is parsed within the limits of
+    :func:`grader.notebook_load.notebook_json`.
     """
-    from grader.notebook_load import notebook_json
-
-    try:
-        meta = notebook_json(Path(path).read_bytes())["metadata"]["eulertop"]
-        claim = meta.get("student", meta.get("student_id"))
-    except Exception:
-        return None
-    return claim if isinstance(claim, str) else None
+    found = identity(Path(path).read_bytes())
+    return None if found is None else found.student
 
 
 def now() -> str:
@@ -56,11 +52,13 @@ def now() -> str:
     return datetime.now(UTC).isoformat(timespec="seconds")
 
 
-def _execution_record(execution: Any) -> dict:
+def _execution_record(execution: Any, foreign: str = "") -> dict:
     # no duration: it differs on every run, and graded_at is the record's one volatile field
     record = {"status": execution.status, "message": execution.message,
               "cell_errors": list(execution.cell_errors),
               "output_truncated": execution.output_truncated}
+    if foreign:  # the notebook that ran is not this assignment's, or another student's
+        record["foreign"] = foreign
     if getattr(execution, "retry", False):
         record["retry"] = True
     if getattr(execution, "isolation", ""):
@@ -76,7 +74,7 @@ class Run:
     problem: str = ""  # why it did not run, or could not be read: for a person
     fault: bool = False  # the grader's own failure, not the student's: graded again next time
     sha256: str | None = None  # of the bytes that ran; None when they could not be read
-    claim: str | None = None  # the student id the notebook's own metadata names, if any
+    identity: Identity | None = None  # what its metadata says it is (student, answer list)
 
 
 def scored(student_id: str, expected: Sequence[KeyAnswer], key_sha256: str, *, status: str,
@@ -100,21 +98,20 @@ def record(student_id: str, expected: Sequence[KeyAnswer], key_sha256: str,
     """The record of a submission that ran (or could not): its answers compared with
     ``expected``. A notebook that cannot be loaded, a kernel that dies, a time-out, or a grader
     fault gives a ``failed`` record saying so, with no points (fail closed)."""
-    notes = []
-    if run.claim is not None and run.claim != student_id:
-        notes.append(f"note: the notebook's metadata names student {run.claim!r}; it was "
-                     f"graded as {student_id!r}, from its file name")
-    if run.problem:
-        notes.insert(0, run.problem)
     execution = run.execution
-    extracted = execution.answers if execution is not None else {}
-    if execution is not None and (execution.status != "ok" or not extracted):
+    foreign = run.identity.not_for(student_id) if run.identity and execution else ""
+    notes = [run.problem] if run.problem else []
+    if execution is not None and (execution.status != "ok" or not execution.answers):
         notes.insert(0, execution.message or f"execution status {execution.status}")
+    if foreign:
+        notes.append(f"{foreign}; it was graded as {student_id!r}, from its file name, all the "
+                     "same")
+    extracted = execution.answers if execution is not None else {}
     return scored(
         student_id, expected, key_sha256,
         status="graded" if extracted else "failed",  # fail closed: nothing read, nothing given
         message="\n".join(notes), extracted=extracted,
-        execution=(_execution_record(execution) if execution is not None else
+        execution=(_execution_record(execution, foreign) if execution is not None else
                    {"retry": True} if run.fault else {}),
         sandboxed=bool(getattr(execution, "sandboxed", False)), submission_sha256=run.sha256)
 
@@ -205,12 +202,11 @@ def run_one(path: Path, variables: Sequence[str], limits: Any,
         fd = os.open(copy, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
         with os.fdopen(fd, "wb") as f:
             f.write(data)
-        claim = claimed_student(copy)
         for _ in range(RETRIES + 1):
             execution, problem, fault = _execute(copy, variables, execute, limits)
             if not (fault or getattr(execution, "retry", False)):
                 break
-        return Run(execution, problem, fault, sha, claim)
+        return Run(execution, problem, fault, sha, identity(data))
     finally:
         shutil.rmtree(folder, ignore_errors=True)
 

@@ -25,6 +25,7 @@ import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from grader.extract import UNREADABLE, invalid_reason
 from grader.plain_text import printable
 from grader.results import StudentResult
 from grader.statement_html import statement_html
@@ -34,15 +35,32 @@ MAX_SHOWN = 400
 """Characters of a submitted value or message shown before it is cut (the record keeps all)."""
 
 
+SHOWN_DIGITS = 4
+"""Significant figures of every point count shown (:func:`number`); records keep the float."""
+
+NOISE = 1e-9
+"""Point counts smaller than this are shown as ``0``: what is left of a sum of fractions such
+as ``1 - 0.9 - 0.1``, not points anyone gave."""
+
+
 def number(x: float) -> str:
-    """A point count for people and spreadsheets: ``3``, ``2.5``, ``0.3333333333``.
+    """A point count for people and spreadsheets, to :data:`SHOWN_DIGITS` significant figures
+    and never in exponent notation — the one rounding of every view (grades.csv, answers.csv,
+    the summary, feedback pages, the report, LMS imports, rescore's change lines).
 
     Examples
     --------
-    >>> number(3.0), number(2.5), number(1 / 3)
-    ('3', '2.5', '0.3333333333')
+    >>> number(3.0), number(2.5), number(22 / 3), number(14.999999999999998), number(-0.0)
+    ('3', '2.5', '7.333', '15', '0')
+    >>> number(12345.6), number(1 / 3000), number(1 - 0.9 - 0.1)
+    ('12350', '0.0003333', '0')
     """
-    return f"{x:.10g}"
+    import numpy as np
+
+    if abs(x) < NOISE:
+        x = 0.0  # -0.0 too
+    return np.format_float_positional(x, precision=SHOWN_DIGITS, unique=True, fractional=False,
+                                      trim="-")
 
 
 def _cut(text: str, limit: int = MAX_SHOWN) -> str:
@@ -107,7 +125,7 @@ def gradebook_rows(
 
 
 ANSWER_COLUMNS = ("id", "question", "answer", "variable", "submitted", "points", "max",
-                  "status", "mistake")
+                  "status", "mistake", "overridden")
 
 
 def answers_rows(rows: Sequence[Mapping[str, str]],
@@ -116,7 +134,9 @@ def answers_rows(rows: Sequence[Mapping[str, str]],
 
     Columns :data:`ANSWER_COLUMNS`: the student id, question number, the answer's name and
     notebook variable, the submitted value as JSON (empty when not set), points awarded and
-    possible, the verdict's status and the recognised mistake (empty when none). Students
+    possible, the verdict's status, the recognised mistake (empty when none), and for an
+    answer the instructor overrode (:mod:`grader.overrides`) what it had and why,
+    ``was 0: <reason>`` (``points`` is then the override's; empty for the others). Students
     without a record are left out.
     """
     table = [list(ANSWER_COLUMNS)]
@@ -126,19 +146,50 @@ def answers_rows(rows: Sequence[Mapping[str, str]],
             v = a.verdict
             submitted = "" if a.submitted is None else json.dumps(a.submitted, ensure_ascii=False)
             table.append([r.student_id, str(a.question), a.name, a.variable, submitted,
-                          number(v.points), number(v.max_points), v.status, v.mistake or ""])
+                          number(v.points), number(v.max_points), v.status, v.mistake or "",
+                          csv_cell(_overridden(r.overridden.get(a.variable)))])
     return table
+
+
+def _overridden(override: Mapping[str, Any] | None) -> str:
+    """An answer's override as one cell: ``was 0: <reason>``; ``""`` for none."""
+    return "" if override is None else f"was {number(override['was'])}: {override['reason']}"
 
 
 def reason(result: StudentResult) -> str:
     """Why a student has the status they have, in one line: the record's message (its first
-    line for a failed one, every line joined for notes on a graded one)."""
+    line for a failed one); for a graded one every line of it, then each cell that raised or
+    timed out (:func:`cell_notes`) and each answer that could not be read
+    (:func:`unreadable_notes`)."""
     if result.status == "failed":
         lines = [line for line in result.message.splitlines() if line.strip()]
         return lines[0] if lines else "could not be graded"
     if result.status == "missing":
         return result.message or "no submission"
-    return "; ".join(line.strip() for line in result.message.splitlines() if line.strip())
+    lines = [line.strip() for line in result.message.splitlines() if line.strip()]
+    return "; ".join([*lines, *cell_notes(result), *unreadable_notes(result)])
+
+
+_CELL = re.compile(r"cell \d+ \(")
+
+
+def unreadable_notes(result: StudentResult) -> list[str]:
+    """The verdicts of the answers whose value could not be read (``q2_x could not be read:
+    its value did not convert within 2 s …``: :data:`grader.extract.UNREADABLE`)."""
+    return [a.verdict.message for a in result.answers
+            if (invalid_reason(a.submitted) or "").startswith(UNREADABLE)]
+
+
+def cell_notes(result: StudentResult) -> list[str]:
+    """The record's lines for the cells that raised or timed out (``cell 7 (`while True:`):
+    timed out after 30 s and was interrupted``), but those its message already names — a
+    notebook whose time ran out says in its message which cell was running."""
+    notes = []
+    for line in result.execution.get("cell_errors") or ():
+        named = _CELL.match(str(line))
+        if named is None or named.group() not in result.message:
+            notes.append(str(line))
+    return notes
 
 
 _CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]+")
@@ -308,7 +359,7 @@ def summary_table(results: Sequence[StudentResult], problems: Sequence[Problem] 
     """A plain-text table, one line per student, then what was not graded and the counts."""
     header = ("id", "status", "points", "max", "note")
     lines = [(r.student_id, r.status, number(r.points), number(r.max_points),
-              _cut(r.message.splitlines()[0] if r.message else "", 70)) for r in results]
+              _cut(reason(r), 70)) for r in results]
     widths = [max(len(str(row[i])) for row in [header, *lines]) for i in range(4)]
     fmt = "  ".join(f"{{:<{w}}}" for w in widths) + "  {}"
     out = [fmt.format(*header).rstrip(), fmt.format(*("-" * w for w in widths), "----")]
@@ -316,6 +367,10 @@ def summary_table(results: Sequence[StudentResult], problems: Sequence[Problem] 
     counts = {s: sum(r.status == s for r in results) for s in ("graded", "missing", "failed")}
     out.append("")
     out.append(", ".join(f"{n} {s}" for s, n in counts.items()) + f" of {len(results)} students")
+    foreign = [r.student_id for r in results if r.execution.get("foreign")]
+    if foreign:
+        out.append(f"not this assignment's notebook, or another student's, graded all the same "
+                   f"({len(foreign)}): {', '.join(foreign)}")
     out += answer_counts(results)
     stray = [p for p in problems if p.student_id is None]
     if stray:

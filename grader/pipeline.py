@@ -65,7 +65,7 @@ from pathlib import Path
 from typing import Any
 
 from grader.assignment import Assignment, UsageError, load_assignment
-from grader.discover import discover
+from grader.discover import discover, require_handed_in
 from grader.executors import Interrupted
 from grader.executors.local import run_local, warm_kernels
 from grader.follow_through import FollowThrough
@@ -228,6 +228,7 @@ def grade_assignment(
     class_list: Sequence[Mapping[str, str]] = (),
     cluster: str | None = None,
     wait: float = LOCK_WAIT,
+    yes: bool = False,
 ) -> RunReport:
     """Grade every submission in ``submissions`` against the assignment ``hw``.
 
@@ -270,6 +271,9 @@ def grade_assignment(
         (``tcp://HOST:PORT``) or ``local:N`` (a LocalCluster of N workers); ``jobs`` is then
         unused (each worker grades as many at once as it has threads) and the sandbox is
         that of each worker's machine.
+    yes : bool
+        Grade a SUBMISSIONS folder that is the assignment's ``release/`` or ``solutions/``, or
+        a copy of one, all the same (:func:`grader.discover.require_handed_in`).
 
     Raises
     ------
@@ -296,6 +300,8 @@ def grade_assignment(
         a, overrides = _checked_state(Path(hw), out)
         rows = merge_rows(a.rows, class_list)
         found = None if archive else _discovered(submissions, a, rows)
+        if not archive:
+            require_handed_in(hw, submissions, found, yes)
         own_execute = execute is None  # not one a test or a benchmark injected
         execute, isolation, warm, sandboxed = _choose_executor(execute, cold_kernels, sandbox,
                                                                cluster)

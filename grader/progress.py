@@ -13,6 +13,7 @@ import sys
 import threading
 from typing import TextIO
 
+from grader.gradebook import number
 from grader.plain_text import printable
 from grader.results import StudentResult
 
@@ -39,7 +40,7 @@ class Progress:
             self.stream.flush()
 
     def _line(self, r: StudentResult) -> str:
-        score = f"{r.points:g}/{r.max_points:g}" if r.status == "graded" else r.status
+        score = f"{number(r.points)}/{number(r.max_points)}" if r.status == "graded" else r.status
         who = printable(r.student_id, newlines=False)
         if not self.tty:
             return f"[{self.done}/{self.total}] {who}: {score}\n"

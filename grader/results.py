@@ -150,7 +150,8 @@ class StudentResult:
         The student's key hash from ``key.json`` (``"sha256:…"``); resume compares both.
     execution : dict
         ``status``, ``message``, ``cell_errors`` (list), ``output_truncated``; ``{}`` when
-        nothing was executed. (No duration: it would differ on every run.)
+        nothing was executed. (No duration: it would differ on every run.) ``foreign``: why
+        the notebook that ran is not this assignment's, or another student's (issue 30).
     sandboxed : bool
         Whether the kernel ran inside the sandbox (:mod:`grader.sandbox`); False when graded
         with ``--no-sandbox``, or when nothing was executed.

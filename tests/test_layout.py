@@ -31,7 +31,7 @@ FLOORS = {
     # grader, floor 0: records and pure helpers
     "grader.limits": 20, "grader.plain_text": 20, "grader.statement_html": 20,
     "grader.results": 20, "grader.submissions": 20, "grader.submission_file": 20,
-    "grader.notebook_load": 20, "grader.extract": 20,
+    "grader.notebook_load": 20, "grader.extract": 20, "grader.notebook_metadata": 20,
     # 1–2: one disposable world; one kernel
     "grader.sandbox": 21,
     "grader.kernels": 22,

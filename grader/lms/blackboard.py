@@ -92,13 +92,15 @@ def match_download(folder: Path, students: Students) -> Matched | None:
 
 def write_import(grades: Grades) -> list[list[str]]:
     """Rows of the Grade Center upload (module docstring); the writer quotes every field."""
+    from grader.gradebook import number
+
     lacking = [r["id"] for r in grades.rows if not cell(r, "Username")]
     if lacking:
         raise ImportError_(
             "Blackboard matches students by Username, and the roster has none for "
             f"{', '.join(lacking[:5])}{' …' if len(lacking) > 5 else ''}: export with "
             "--roster <Blackboard Grade Center export>")
-    column = f"{grades.title} [Total Pts: {grades.max_points:.10g} Score]"
+    column = f"{grades.title} [Total Pts: {number(grades.max_points)} Score]"
     if grades.column_id:
         column += f" |{grades.column_id}"
     table = [["Last Name", "First Name", "Username", column]]

@@ -185,6 +185,8 @@ IMPORT_KEYS = ("ID", "SIS User ID", "SIS Login ID")
 
 def write_import(grades: Grades) -> list[list[str]]:
     """Rows of the file Canvas's gradebook import takes (module docstring)."""
+    from grader.gradebook import number
+
     lacking = [r["id"] for r in grades.rows if not any(cell(r, k) for k in IMPORT_KEYS)]
     if lacking:
         raise ImportError_(
@@ -193,7 +195,7 @@ def write_import(grades: Grades) -> list[list[str]]:
             "export with --roster <Canvas gradebook export>")
     column = f"{grades.title} ({grades.column_id})" if grades.column_id else grades.title
     table = [["Student", *IMPORT_KEYS, "Section", column],
-             ["Points Possible", "", "", "", "", f"{grades.max_points:.10g}"]]
+             ["Points Possible", "", "", "", "", number(grades.max_points)]]
     for r in grades.rows:
         table.append([cell(r, "Student"), *(cell(r, k) for k in IMPORT_KEYS),
                       cell(r, "Section"), grades.scores[r["id"]]])

@@ -56,7 +56,7 @@ def test_missing_and_malformed_answers_are_named_with_the_reason(generated_assig
     ("not_json", "not a notebook: not valid JSON"),
     ("no_metadata", "has no eulertop answer list in its metadata: check works on the notebook "
                     "you were given"),
-    ("damaged", "its eulertop metadata is damaged"),
+    ("damaged", "has eulertop metadata that is damaged: check works on the notebook"),
     # read as grade reads a submission (grader.grade_one.run_one): a regular file only
     ("link", "alice.ipynb is a symbolic link, not a file"),
 ])

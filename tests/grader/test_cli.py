@@ -83,6 +83,87 @@ def graded(tmp_path_factory):
     return hw, subs, code, stdout, stderr, results
 
 
+# -- what a row says (issue 30): a class graded with real kernels whose rows must say what
+# -- happened in words — a cell that raised and one stopped by --cell-timeout, a notebook made
+# -- for another student, one from elsewhere (no eulertop metadata), an answer that cannot
+# -- be read — graded all the same
+
+TOLD = ("ann", "ben", "cy", "dot", "eve")
+
+
+@pytest.fixture(scope="module")
+def told(tmp_path_factory):
+    """(hw, exit status, stdout, grades.csv rows by id, records by id)."""
+    from tests.grader.golden import UNREADABLE_CLASSES, code_cell
+
+    root = tmp_path_factory.mktemp("told")
+    hw, subs = root / "HW", root / "subs"
+    generate_assignment(Roster(("id",), tuple({"id": s} for s in TOLD)), hw, FAMILIES,
+                        problems=["inertia_tensor"], seed=8)
+    solution = lambda sid: json.loads((hw / "solutions" / f"{sid}.ipynb").read_text())  # noqa: E731
+    subs.mkdir()
+    ann = solution("ann")
+    ann["cells"][3:3] = [code_cell("ratio = 1 / 0", "raises"),
+                         code_cell("while True:\n    pass", "spins")]
+    elsewhere = solution("dot")
+    del elsewhere["metadata"]["eulertop"]  # e.g. a notebook of the student's own making
+    eve = solution("eve")
+    eve["cells"].append(code_cell(UNREADABLE_CLASSES + "q1_moments = wrapped(Hangs, q1_moments)",
+                                  "unreadable"))
+    for sid, nb in {"ann": ann, "ben": solution("cy"), "cy": solution("cy"), "dot": elsewhere,
+                    "eve": eve}.items():
+        (subs / f"{sid}.ipynb").write_text(json.dumps(nb))
+    stdout = io.StringIO()
+    with redirect_stdout(stdout), redirect_stderr(io.StringIO()):
+        code = main(["grade", str(hw), str(subs), "--jobs", "2", "--cell-timeout", "1"])
+    with open(hw / "graded" / "grades.csv", newline="") as f:
+        rows = {r["id"]: r for r in csv.DictReader(f)}
+    records = {s: read_result(hw / "graded" / "results" / f"{s}.json") for s in TOLD}
+    return hw, code, stdout.getvalue(), rows, records
+
+
+def test_a_row_names_the_cells_that_raised_or_timed_out(told):
+    hw, code, _, rows, _ = told
+    assert code == 0
+    assert rows["ann"]["status"] == "graded" and rows["ann"]["total"] == rows["ann"]["maximum"]
+    assert rows["ann"]["reason"] == ("cell 4 (`ratio = 1 / 0`): ZeroDivisionError: division by "
+                                     "zero; cell 5 (`while True:`): timed out after 1 s and was "
+                                     "interrupted")
+    assert rows["cy"]["reason"] == ""
+    page = (hw / "graded" / "feedback" / "ann.html").read_text()
+    assert "cell 5 (`while True:`): timed out after 1 s" in page
+
+
+def test_a_notebook_not_this_assignments_is_graded_and_named_so(told):
+    hw, _, stdout, rows, records = told
+    assert rows["ben"]["reason"] == ("another student's notebook: its metadata names student "
+                                     "'cy'; it was graded as 'ben', from its file name, all the "
+                                     "same")
+    assert rows["dot"]["reason"] == ("not this assignment's notebook: it has no eulertop answer "
+                                     "list in its metadata; it was graded as 'dot', from its "
+                                     "file name, all the same")
+    assert rows["dot"]["total"] == rows["dot"]["maximum"]  # its answers are right: credited
+    assert records["ben"].points < records["ben"].max_points  # cy's values on ben's key
+    assert {s for s, r in records.items() if r.execution.get("foreign")} == {"ben", "dot"}
+    assert "not this assignment's notebook, or another student's, graded all the same (2): " \
+           "ben, dot" in stdout
+    page = html.unescape((hw / "graded" / "feedback" / "dot.html").read_text())
+    assert "not this assignment's notebook: it has no eulertop answer list" in page
+
+
+def test_an_answer_that_cannot_be_read_is_named_in_its_row_and_fails_alone(told):
+    hw, _, _, rows, records = told
+    eve = records["eve"]
+    unread = {a.variable: a.verdict for a in eve.answers if a.verdict.status != "correct"}
+    assert list(unread) == ["q1_moments"]
+    message = "q1_moments could not be read: its value did not convert within 2 s (a loop " \
+              "that does not end?)"
+    assert unread["q1_moments"].message == message
+    assert rows["eve"]["reason"] == message
+    assert eve.points == eve.max_points - 1
+    assert html.escape(message, quote=True) in (hw / "graded" / "feedback" / "eve.html").read_text()
+
+
 def test_exit_status_one_lists_what_could_not_be_graded(graded):
     _, _, code, _, stderr, _ = graded
     assert code == 1

@@ -18,9 +18,10 @@ from pathlib import Path
 import pytest
 
 from grader.execute import OUT_OF_TIME_GRACE, execute_submission
+from grader.extract import INVALID
 from grader.kernels.base import kernel_environment
 from grader.limits import Limits
-from tests.grader.golden import CANARY, FAULTS, odd_values
+from tests.grader.golden import CANARY, FAULTS, odd_values, unreadable_choice
 
 
 @pytest.fixture
@@ -156,6 +157,31 @@ def test_odd_values_are_extracted_faithfully_despite_shadowed_names(
     key = generated_assignment.key_values()
     assert {k: v for k, v in result.answers.items() if k not in odd} == \
         {k: v for k, v in key.items() if k not in odd}
+
+
+@pytest.mark.parametrize("sandbox", [None, False], ids=["forked-in-sandbox", "cold-ipykernel"])
+def test_an_answer_that_cannot_be_read_fails_alone_and_named(write_golden, generated_assignment,
+                                                             fast_limits, sandbox):
+    """Issue 30: one answer whose reading did not end failed the whole submission after 10 s,
+    naming nothing. Each answer is read on its own with a time bound: the one that loops
+    (catching every exception, the interrupt too), the one that raises and the one that ends
+    the process reading it are marked, each saying why; every other answer is read."""
+    chosen = unreadable_choice(generated_assignment.specs())
+    hangs, raises, exits, looping_repr = chosen
+    result = execute_submission(write_golden("unreadable"), generated_assignment.variables(),
+                                fast_limits, sandbox=sandbox)
+    assert result.status == "ok" and result.cell_errors == (), result.message
+    assert result.answers[hangs] == {INVALID: "could not be read: its value did not convert "
+                                              "within 2 s (a loop that does not end?)"}
+    assert result.answers[raises] == {INVALID: "could not be read: reading it raised "
+                                               "RecursionError"}
+    assert result.answers[exits] == {INVALID: "could not be read: reading it ended the process"}
+    key = generated_assignment.key_values()
+    assert result.answers[looping_repr] == key[looping_repr]  # a float, whatever its repr
+    read = {k: v for k, v in result.answers.items() if k not in (hangs, raises, exits)}
+    assert read == {k: v for k, v in key.items() if k not in (hangs, raises, exits)}
+    assert result.duration < fast_limits.total_timeout / 2  # 2 s for the one that hangs
+    assert _kernels_of_this_process() == []  # the readers were reaped with the kernel
 
 
 def test_moved_cells_and_a_notebook_looking_for_the_key(write_golden, generated_assignment,

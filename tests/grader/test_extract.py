@@ -8,6 +8,8 @@ import builtins
 import fractions
 import json
 import math
+import os
+import time
 
 import mpmath
 import numpy as np
@@ -15,6 +17,7 @@ import pytest
 import sympy
 
 from grader.extract import (
+    ANSWER_SECONDS,
     INVALID,
     MAX_ELEMENTS,
     extraction_request,
@@ -163,3 +166,90 @@ def test_invalid_reason_recognises_only_well_formed_markers():
     assert invalid_reason({INVALID: "a dict"}) == "a dict"
     for value in ({INVALID: 3}, {INVALID: "a", "b": 1}, "a dict", None, [INVALID]):
         assert invalid_reason(value) is None
+
+
+# -- each answer read on its own, with a time bound (issue 30); in this process, as the kernel
+# -- would: the readers are child processes of this one
+
+
+class _Hangs(float):
+    def __float__(self):
+        # catches everything, as a hostile loop would: only a kill ends it — or, here, 30 s
+        # (far over ANSWER_SECONDS), so that a reader without a time bound fails, not hangs
+        end = time.monotonic() + 30
+        while time.monotonic() < end:
+            try:
+                while time.monotonic() < end:
+                    pass
+            except BaseException:
+                pass
+        return 2.0
+
+
+class _Raises(float):
+    def __float__(self):
+        raise ValueError("no")
+
+
+class _Exits(float):
+    def __float__(self):
+        os._exit(0)
+
+
+class _NoComparing(type):
+    """A metaclass whose comparisons run code: a type checked by ``==`` or ``in`` would run it."""
+
+    def __eq__(cls, other):
+        raise RuntimeError("the student's metaclass ran")
+
+    __hash__ = type.__hash__
+
+
+def test_each_answer_is_read_on_its_own_within_its_time(monkeypatch):
+    values = {"q1_a": 1.5, "q1_b": _Hangs(2.0), "q1_c": [_Raises(3.0)], "q1_d": _Exits(4.0),
+              "q1_e": sympy.Rational(1, 4), "q1_f": _NoComparing("F", (float,), {})(6.0),
+              "q1_g": np.arange(2.0)}
+    before, start = set(_children()), time.monotonic()
+    got = _in_kernel_namespace(values)
+    assert time.monotonic() - start < ANSWER_SECONDS + 2
+    assert got == {
+        "q1_a": 1.5,
+        "q1_b": {INVALID: "could not be read: its value did not convert within 2 s (a loop "
+                          "that does not end?)"},
+        "q1_c": {INVALID: "could not be read: reading it raised ValueError"},
+        "q1_d": {INVALID: "could not be read: reading it ended the process"},
+        "q1_e": 0.25, "q1_f": 6.0, "q1_g": [0.0, 1.0]}
+    assert set(_children()) <= before  # every reader killed and reaped
+
+
+def test_plain_values_are_read_without_a_child_and_without_one_all_are_read(monkeypatch):
+    forks = []
+    real = os.fork
+    monkeypatch.setattr(os, "fork", lambda: forks.append(1) or real())
+    plain = {"q1_a": 1.5, "q1_b": [1, 2.5, "x", None, True], "q1_c": np.float32(0.5),
+             "q1_d": np.array([[1, 2], [3, 4]])}
+    assert _in_kernel_namespace(plain) == {"q1_a": 1.5, "q1_b": [1, 2.5, "x", None, True],
+                                           "q1_c": 0.5, "q1_d": [[1, 2], [3, 4]]}
+    assert forks == []  # nothing of the student's runs when these are read
+    assert _in_kernel_namespace({"q1_a": sympy.Rational(1, 2)}) == {"q1_a": 0.5}
+    assert forks == [1]
+
+    def no_process():
+        raise BlockingIOError(11, "Resource temporarily unavailable")
+
+    monkeypatch.setattr(os, "fork", no_process)  # a kernel at its process limit
+    assert _in_kernel_namespace({"q1_a": sympy.Rational(1, 2), "q1_b": [_Raises(1.0)]}) == {
+        "q1_a": 0.5, "q1_b": {INVALID: "could not be read: reading it raised ValueError"}}
+
+
+def _children() -> list[int]:
+    """Processes whose parent is this one, zombies included (a reader never reaped)."""
+    found = []
+    for pid in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            stat = open(f"/proc/{pid}/stat").read()
+        except OSError:
+            continue
+        if int(stat.rsplit(")", 1)[1].split()[1]) == os.getpid():
+            found.append(int(pid))
+    return found

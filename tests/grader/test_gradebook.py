@@ -6,6 +6,7 @@ import csv
 import io
 import json
 import re
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -13,10 +14,12 @@ import pytest
 from grader.compare import compare, key_answers
 from grader.gradebook import (
     answer_counts,
+    answers_rows,
     feedback_html,
     gradebook_csv,
     gradebook_rows,
     number,
+    reason,
     summary_table,
 )
 from grader.results import StudentResult
@@ -125,7 +128,7 @@ def test_summary_lists_students_counts_and_strays(files):
     text = summary_table([alice, bob], [Problem(Path("eve.ipynb"), "eve.ipynb: not on roster")])
     lines = text.splitlines()
     assert re.match(r"alice\s+graded\s+(\d+)\s+\1$", lines[2])
-    assert re.match(r"bob\s+missing\s+0\s+\d+$", lines[3])
+    assert re.match(r"bob\s+missing\s+0\s+\d+\s+no submission$", lines[3])
     assert "1 graded, 1 missing, 0 failed of 2 students" in text
     assert "  eve.ipynb: not on roster" in lines
 
@@ -192,3 +195,53 @@ def test_summary_counts_each_answer_outcome_over_graded_submissions(files):
     assert list(table)[: len(q1)] == q1  # question order
     assert "\n".join(lines) in summary_table(students)
     assert answer_counts([students[-1]]) == []
+
+
+@pytest.mark.parametrize(("points", "shown"), [
+    (22 / 3, "7.333"), (14.999999999999998, "15"), (1 / 3, "0.3333"), (2.5, "2.5"), (3.0, "3"),
+    (12345.6, "12350"), (0.1 + 0.2, "0.3"), (1 - 0.9 - 0.1, "0"), (-0.0, "0"),
+    (1e20, "1" + "0" * 20),
+])
+def test_a_point_count_is_shown_to_four_significant_figures(points, shown):
+    assert number(points) == shown
+
+
+def test_every_view_of_a_record_shows_its_points_rounded(files):
+    """Issue 30: ``14.999999999999998`` of ``22/3`` in the gradebook, answers.csv, the summary
+    and the feedback page; the record keeps both floats."""
+    manifest, key = files
+    r = _record(key, "alice", _key_values(key, "alice"))
+    answers = tuple(replace(a, verdict=replace(a.verdict, points=1 / 3, max_points=15 / 7))
+                    for a in r.answers)
+    r = replace(r, answers=answers, points=22 / 3, max_points=14.999999999999998)
+    assert (r.points, r.max_points) == (22 / 3, 14.999999999999998)
+    rows = gradebook_rows(("id",), [{"id": "alice"}], (1, 2), {"alice": r})
+    assert len(key["students"]["alice"]["questions"][0]["answers"]) == 4  # inertia_tensor
+    assert rows[1][1:5][0::2] == ["1.333", "7.333"] and rows[1][4] == "15"
+    assert re.fullmatch(r"\d(\.\d{1,3})?", rows[1][2])  # question 2: a third per answer
+    assert {tuple(row[5:7]) for row in answers_rows([{"id": "alice"}], {"alice": r})[1:]} == \
+        {("0.3333", "2.143")}
+    assert re.search(r"^alice\s+graded\s+7\.333\s+15$", summary_table([r]), re.M)
+    page = feedback_html(manifest["title"], r, manifest["students"]["alice"]["questions"])
+    assert "7.333 of 15 points" in page and "0.3333 / 2.143" in page
+    assert "33333" not in page and "99999" not in page
+
+
+def test_a_graded_row_names_each_cell_that_raised_or_timed_out_once(files):
+    """Issue 30: a run whose cells raised or timed out left the row's reason empty. Cells its
+    message already names (the one running when the notebook's time ran out) are not said
+    twice."""
+    _, key = files
+    raised = "cell 4 (`x = 1/0`): ZeroDivisionError: division by zero"
+    spun = "cell 7 (`while True:`): timed out after 30 s and was interrupted"
+    ran = replace(_record(key, "alice", _key_values(key, "alice")),
+                  execution={"status": "ok", "message": "ran all 9 code cells; 2 did not finish "
+                             "normally", "cell_errors": [raised, spun]})
+    assert reason(ran) == f"{raised}; {spun}"
+    out_of_time = replace(ran, message="stopped at the time limit for the whole notebook (120 s) "
+                          "while cell 7 (`while True:`) was running: it was interrupted",
+                          execution={**ran.execution, "status": "timeout"})
+    assert reason(out_of_time) == f"{out_of_time.message}; {raised}"
+    row = gradebook_rows(("id",), [{"id": "alice"}], (1, 2), {"alice": ran})[1]
+    assert row[-1] == f"{raised}; {spun}"
+    assert f"{raised}; cell 7" in summary_table([ran])

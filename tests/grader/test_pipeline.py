@@ -10,6 +10,7 @@ from __future__ import annotations
 import ast
 import csv
 import json
+import re
 import shutil
 import threading
 import time
@@ -410,6 +411,73 @@ def test_a_class_where_one_student_handed_in_is_graded(hw, tmp_path):
     assert [r.status for r in report.results] == ["graded"] + ["missing"] * (len(ROSTER) - 1)
 
 
+def _generated_copy(hw: Path, folder: Path, kinds: dict[str, str]) -> Path:
+    """``folder`` holding, for each student of ``kinds``, their generated notebook of that kind
+    (``release`` or ``solutions``), copied byte for byte."""
+    folder.mkdir()
+    for sid, kind in kinds.items():
+        shutil.copyfile(hw / kind / f"{sid}.ipynb", folder / f"{sid}.ipynb")
+    return folder
+
+
+@pytest.mark.parametrize(("case", "fragment"), [
+    ("release", "is the assignment's release folder (the blank notebooks handed out), not "
+                "submissions: grading it would give every student 0"),
+    ("solutions", "is the assignment's solutions folder (the key's answers filled in), not "
+                  "submissions: grading it would give every student full marks"),
+    ("link to solutions", "is the assignment's solutions folder"),
+    ("copy of release", "every submission in {subs} (6) is byte for byte the notebook generated "
+                        "for its student (6 as in {hw}/release: a copy?)"),
+    ("copies of both", "(1 as in {hw}/release, 2 as in {hw}/solutions: a copy?), not one a "
+                       "student worked in: grading them would give 0 or full marks as they came"),
+])
+def test_the_assignments_own_notebooks_are_refused_as_submissions(hw, tmp_path, case, fragment):
+    """Issue 30: ``grade HW HW/release`` gave everyone 0 and ``HW/solutions`` full marks, with
+    exit status 0 and no warning; by real path or by content, the run is refused before it
+    writes anything."""
+    subs = {"release": hw / "release", "solutions": hw / "solutions"}.get(case)
+    if case == "link to solutions":
+        subs = tmp_path / "handed-in"
+        subs.symlink_to(hw / "solutions")
+    elif case == "copy of release":
+        subs = _generated_copy(hw, tmp_path / "subs", dict.fromkeys(ROSTER, "release"))
+    elif case == "copies of both":
+        subs = _generated_copy(hw, tmp_path / "subs", {"alice": "release", "bob": "solutions",
+                                                       "carol": "solutions"})
+    with pytest.raises(UsageError) as err:
+        _run(hw, subs, FakeExecute())
+    message = str(err.value)
+    assert fragment.format(subs=subs, hw=hw) in message, message
+    assert message.endswith("or --yes to grade it all the same")
+    assert not (hw / "graded").exists()
+
+
+def test_a_class_where_some_handed_in_the_notebook_as_generated_is_graded(hw, tmp_path):
+    subs = _generated_copy(hw, tmp_path / "subs", {"alice": "release", "bob": "solutions"})
+    (subs / "carol.ipynb").write_text(_notebook(hw, "carol"))  # worked in: other bytes
+    r = _by_id(_run(hw, subs, FakeExecute()))
+    assert r["alice"].points == 0 and r["bob"].points == r["carol"].points == r["bob"].max_points
+
+
+def test_yes_grades_the_solutions_folder_all_the_same(hw, capsys):
+    from eulertop.cli import build_parser
+    from grader.cli import run_grade
+
+    def grade(*options: str) -> int:
+        args = build_parser("grade").parse_args(["grade", str(hw), str(hw / "solutions"),
+                                                 *options])
+        return run_grade(args, execute=FakeExecute())
+
+    assert grade() == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"eulertop grade: {hw / 'solutions'} is the assignment's solutions")
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert not (hw / "graded").exists()
+    assert grade("--yes") == 0
+    with open(hw / "graded" / "grades.csv", newline="") as f:
+        assert all(row["total"] == row["maximum"] != "0" for row in csv.DictReader(f))
+
+
 @pytest.mark.parametrize("where", ["inside", "same"])
 def test_an_output_folder_inside_the_submissions_is_refused(hw, subs, where):
     out = subs / "graded" if where == "inside" else subs
@@ -490,3 +558,61 @@ def test_each_students_key_is_derived_once_per_run(hw, subs, monkeypatch, reveal
     monkeypatch.setattr(grader.assignment, "key_answers", counting)
     _run(hw, subs, FakeExecute(), reveal=reveal)
     assert sorted(derived) == sorted(ROSTER)
+
+
+def _cells(path: Path) -> list[list[str]]:
+    with open(path, newline="", encoding="utf-8") as f:
+        return list(csv.reader(f))
+
+
+def test_points_are_shown_to_four_significant_figures_and_recorded_exactly(hw, subs, capsys):
+    """Issue 30: totals were shown as ``7.333333333``. A third of a point given by an override
+    (``eulertop override``, then a grading run that applies it) is recorded as the float it is
+    and shown as 0.3333 — its totals as ``<n>.333`` — in every view: grades.csv, answers.csv,
+    the change lines, the progress and summary lines, the feedback page, the report's table
+    and the LMS imports."""
+    from eulertop.cli import build_parser, main
+    from grader.cli import run_grade
+    from grader.lms.export import build_grades
+
+    def grade() -> str:
+        args = build_parser("grade").parse_args(["grade", str(hw), str(subs), "--force"])
+        run_grade(args, execute=FakeExecute())
+        return "".join(capsys.readouterr())
+
+    grade()
+    variable = _variables(hw, "alice")[0]
+    assert main(["override", str(hw), "alice", variable, "--points", repr(1 / 3),
+                 "--reason", "a third of the way"]) == 0
+    said = capsys.readouterr().out
+    out = hw / "graded"
+    record = read_result(out / "results" / "alice.json")
+    whole = int(record.max_points) - 1  # every other answer right, one point each
+    q1 = len(_key(hw)["students"]["alice"]["questions"][0]["answers"]) - 1
+    assert record.points == whole + 1 / 3 and record.answers[0].verdict.points == 1 / 3
+    assert re.search(rf"alice\s+{variable}\s+1 → 0\.3333 ", said), said
+    assert re.search(rf"alice\s+total\s+{whole + 1} → {whole}\.333 ", said), said
+    printed = grade()
+    assert f"alice: {whole}.333/{whole + 1}" in printed  # the progress line
+    assert re.search(rf"^alice\s+graded\s+{whole}\.333\s+{whole + 1}$", printed, re.M)
+    grades = _cells(out / "grades.csv")
+    alice = dict(zip(grades[0], next(r for r in grades if r[0] == "alice"), strict=True))
+    assert (alice["q1"], alice["total"]) == (f"{q1}.333", f"{whole}.333")
+    answers = _cells(out / "answers.csv")
+    row = dict(zip(answers[0], next(r for r in answers if r[:1] + r[3:4] == ["alice", variable]),
+                   strict=True))
+    assert (row["points"], row["max"]) == ("0.3333", "1")
+    assert row["overridden"] == "was 1: a third of the way"  # and no other answer is marked
+    assert [r[0] for r in answers[1:] if r[-1]] == ["alice"]
+    page = (out / "feedback" / "alice.html").read_text()
+    assert f"{whole}.333 of {whole + 1} points" in page and "0.3333 / 1" in page
+    report = _cells(out / "report.csv")
+    assert dict(zip(report[0], next(r for r in report if r[0] == "alice"),
+                    strict=True))["points"] == f"{whole}.333"
+    grades, _, _ = build_grades(hw, out)  # what every LMS import writes
+    assert grades.scores["alice"] == f"{whole}.333"
+    assert grades.feedback["alice"].startswith(f"{whole}.333 of {whole + 1} points; Q1 {q1}.333/")
+    for path in (out / "grades.csv", out / "answers.csv", out / "report.csv",
+                 out / "feedback" / "alice.html"):
+        assert "3333333" not in path.read_text(), path
+    assert "3333333" not in said + printed

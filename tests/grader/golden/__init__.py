@@ -116,6 +116,49 @@ def odd_values(specs: Sequence[dict]) -> dict[str, tuple[str, Any]]:
     }
 
 
+UNREADABLE_CLASSES = """\
+class Hangs(float):  # reading it never ends, and catches the interrupt
+    def __float__(self):
+        while True:
+            try:
+                while True:
+                    pass
+            except BaseException:
+                pass
+
+class Raises(float):
+    def __float__(self):
+        return self.__float__()
+
+class Exits(float):  # reading it ends the process that reads it
+    def __float__(self):
+        import os
+        os._exit(3)
+
+class LoopingRepr(float):  # issue 30's: a float whose repr never ends; its value reads well
+    __repr__ = lambda self: self.__repr__()
+
+def wrapped(cls, value):
+    return [wrapped(cls, v) for v in value] if isinstance(value, list) else cls(value)
+"""
+
+
+def unreadable_choice(specs: Sequence[dict]) -> dict[str, str]:
+    """variable → the class of :data:`UNREADABLE_CLASSES` its (right) value is wrapped in by
+    :func:`unreadable`: four numeric answers."""
+    numeric = [s["variable"] for s in specs if s["kind"] in ("scalar", "angle", "vector")]
+    return dict(zip(numeric, ("Hangs", "Raises", "Exits", "LoopingRepr"), strict=False))
+
+
+def unreadable(solutions: dict, release: dict, specs: Sequence[dict], hw: Path) -> dict:
+    """The solutions, then four right answers wrapped in float subclasses whose reading does
+    not end (catching every exception), raises, ends its process, or has a looping repr."""
+    lines = [f"{name} = wrapped({cls}, {name})" for name, cls in unreadable_choice(specs).items()]
+    nb = copy.deepcopy(solutions)
+    nb["cells"].append(code_cell(UNREADABLE_CLASSES + "\n" + "\n".join(lines), "unreadable"))
+    return nb
+
+
 SHADOWING = ("json = 'not json'\nprint = None\nfloat = str\nlist = dict\nstr = int\n"
              "isinstance = lambda *a: False\ntype = None\nrepr = None\ndict = set\nexec = None\n"
              "__import__ = None\n")
@@ -208,4 +251,5 @@ BUILDERS: dict[str, Builder] = {
     "partly_answered": partly_answered,
     "not_json": not_json,
     "empty_notebook": empty_notebook,
+    "unreadable": unreadable,
 }

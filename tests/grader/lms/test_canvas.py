@@ -141,7 +141,7 @@ def test_answers_csv_is_the_long_format_of_the_records(canvas):
     hw, _, report = canvas
     table = read_csv(hw / "graded" / "answers.csv")
     assert table[0] == ["id", "question", "answer", "variable", "submitted", "points", "max",
-                        "status", "mistake"]
+                        "status", "mistake", "overridden"]
     got = results(report)
     for sid, r in got.items():
         mine = [row for row in table[1:] if row[0] == sid]
