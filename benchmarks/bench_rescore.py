@@ -82,7 +82,9 @@ def widen(hw: Path, rtol: float) -> None:
     from dataclasses import replace
 
     from grader.assignment import load_assignment
-    from grader.key_edit import set_answer, write_key
+    from grader.key_edit import set_answer
+    from grader.results import atomic_write_text
+    from problems.generate import json_text
 
     a = load_assignment(hw)
     names = {f"q{q['question']}_{x['name']}" for e in a.key["students"].values()
@@ -90,7 +92,7 @@ def widen(hw: Path, rtol: float) -> None:
     for name in sorted(names):
         key, _ = set_answer(a, name, rtol=rtol)
         a = replace(a, key=key)
-    write_key(hw, a.key)
+    atomic_write_text(hw / "key.json", json_text(a.key))
 
 
 def timed(command: list[str]) -> tuple[float, str]:

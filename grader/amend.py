@@ -170,6 +170,7 @@ def key_change(args: argparse.Namespace):
         students = len({c.student for c in changes})
         return Amendment("key set", f"key set {args.answer}: {', '.join(fields)}", key=key,
                          details={"key_changes": [c.as_dict() for c in changes]},
+                         students=frozenset(),  # those whose key entry changed
                          lines=(f"{args.answer} of {students} student(s):",
                                 *_lines(changes)))
 
@@ -193,6 +194,7 @@ def rekey_change(a, overrides):
         return Amendment(unchanged="the key is as the families compute it", lines=head)
     return Amendment("rekey", "rekey: the key recomputed from the recorded parameters",
                      key=key, details={"key_changes": [c.as_dict() for c in changes]},
+                     students=frozenset(),  # those whose key entry changed
                      lines=head + _lines(changes))
 
 
@@ -219,11 +221,12 @@ def override_change(args: argparse.Namespace):
             if len(kept) == len(existing):
                 raise UsageError(f"no override of {args.student}'s {what} to remove")
             return Amendment("override removed", f"override of {args.student}'s {what} removed",
-                             overrides=kept)
+                             overrides=kept, students=frozenset({args.student}))
         if args.points is None or not args.reason:
             raise UsageError("give --points P and --reason TEXT (or --remove)")
         new = Override(args.student, args.answer, args.points, args.reason, who(), now())
-        return Amendment("override", args.reason, overrides=(*kept, new))
+        return Amendment("override", args.reason, overrides=(*kept, new),
+                         students=frozenset({args.student}))
 
     return change
 

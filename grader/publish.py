@@ -82,17 +82,17 @@ def stage_report(tx: Transaction, a: Assignment, out: Path,
 
 def stage_views(tx: Transaction, a: Assignment, out: Path,
                 results: Mapping[str, StudentResult | None], reveal: bool,
-                published: Set[str] = frozenset()) -> None:
-    """Stage the gradebook, the answers table and every feedback page from ``results``; but the
-    pages of ``published`` (staged with their records). A file whose text is unchanged is left
-    as it is (:meth:`Transaction.write`)."""
+                published: Set[str] = frozenset(), pages: Set[str] | None = None) -> None:
+    """Stage the gradebook, the answers table and the feedback pages of ``pages`` (None: every
+    student) from ``results``; but the pages of ``published`` (staged with their records). A
+    file whose text is unchanged is left as it is (:meth:`Transaction.write`)."""
     present = {sid: r for sid, r in results.items() if r is not None}
     unsandboxed = any(ran_code(r) and not r.sandboxed for r in present.values())
     table = gradebook_rows(a.columns, a.rows, a.questions, present, sandbox_column=unsandboxed)
     tx.write(out / GRADES, gradebook_csv(table), durable=False)
     tx.write(out / ANSWERS, gradebook_csv(answers_rows(a.rows, present)), durable=False)
     for sid, r in present.items():
-        if sid not in published:
+        if sid not in published and (pages is None or sid in pages):
             tx.write(out / FEEDBACK / f"{sid}.html", _page(a, r, reveal), durable=False)
 
 

@@ -95,6 +95,7 @@ class Amendment:
     lines: tuple[str, ...] = ()  # the change itself, for the person (key changes)
     unchanged: str = ""
     files: dict = field(default_factory=dict)  # other files the change writes: path → text
+    students: frozenset[str] | None = None  # whom it reaches beyond a changed key (None: all)
 
 
 Amend = Callable[[Assignment, tuple[Override, ...]], Amendment]
@@ -107,7 +108,7 @@ class Rescore:
     """What a rescore did (or, with ``dry_run``, would do)."""
 
     changes: tuple[Change, ...]
-    rescored: tuple[str, ...]  # the students with a record
+    rescored: tuple[str, ...]  # the students rescored: those the change reaches, with a record
     unchanged: int  # of them, how many kept every point
     dry_run: bool
     amendment: Amendment = Amendment()
@@ -193,39 +194,54 @@ def rescore(hw: Path, out: Path | None = None, *, change: Amend | None = None,
         amendment = change(a, overrides) if change is not None else Amendment()
         if amendment.unchanged:
             return Rescore((), (), 0, dry_run, amendment)
-        a, overrides = _amended(a, overrides, amendment)
+        scope = _reached(a, amendment)
+        a, overrides = _amended(a, overrides, amendment, scope)
         old = records(a, out)
-        report, new = _rescored_class(a, old, overrides, amendment)
+        report, new = _rescored_class(a, old, overrides, amendment, scope)
         report = replace(report, dry_run=dry_run)
         if not dry_run:
-            _commit(a, hw, out, old, new, report, reveal, command)
+            _commit(a, hw, out, old, new, report, reveal, command, scope)
     return report
 
 
-def _amended(a: Assignment, overrides: tuple[Override, ...],
-             amendment: Amendment) -> tuple[Assignment, tuple[Override, ...]]:
-    """The assignment and overrides as ``amendment`` makes them, checked together."""
+def _reached(a: Assignment, amendment: Amendment) -> frozenset[str] | None:
+    """The students ``amendment`` reaches (None: the whole class): those it names, and those
+    whose key entry it changes; the others' records are kept as they are, unread."""
+    if amendment.students is None:
+        return None
+    reached = set(amendment.students)
+    if amendment.key is not None:
+        old, new = a.key["students"], amendment.key["students"]
+        reached |= {sid for sid in a.ids if old[sid] != new[sid]}  # not the hash: hand edits
+    return frozenset(reached)
+
+
+def _amended(a: Assignment, overrides: tuple[Override, ...], amendment: Amendment,
+             scope: frozenset[str] | None) -> tuple[Assignment, tuple[Override, ...]]:
+    """The assignment and overrides as ``amendment`` makes them, checked together (the key of
+    every student in ``scope``: None, all)."""
     if amendment.key is not None:
         a = replace(a, key=amendment.key)
     if amendment.overrides is not None:
         overrides = tuple(amendment.overrides)
-    a.check_key()
+    for sid in a.ids if scope is None else sorted(scope):
+        a.expected(sid)  # UsageError naming a student whose key entry cannot be read
     check_overrides(a, overrides, None if amendment.overrides is not None else OVERRIDES)
     return a, overrides
 
 
 def _rescored_class(a: Assignment, old: Mapping[str, StudentResult | None],
-                    overrides: Sequence[Override],
-                    amendment: Amendment) -> tuple[Rescore, dict[str, StudentResult | None]]:
-    """Every record rescored and settled (nothing written): the report, and the new records
-    (an unchanged one is the old one, its bytes kept)."""
+                    overrides: Sequence[Override], amendment: Amendment,
+                    scope: frozenset[str] | None = None,
+                    ) -> tuple[Rescore, dict[str, StudentResult | None]]:
+    """Every record of ``scope`` (None: all) rescored and settled (nothing written): the
+    report, and the new records (an unchanged one is the old one, its bytes kept)."""
     follow = FollowThrough.of(a)
-    new: dict[str, StudentResult | None] = {}
+    new: dict[str, StudentResult | None] = dict(old)
     changes: list[Change] = []
     try:
         for sid, record in old.items():
-            if record is None:
-                new[sid] = None
+            if record is None or (scope is not None and sid not in scope):
                 continue
             result = settled(a, rescored(a, record), follow, overrides)
             new[sid] = record if same_record(record, result) else result
@@ -233,7 +249,8 @@ def _rescored_class(a: Assignment, old: Mapping[str, StudentResult | None],
     finally:
         if follow is not None:
             follow.close()  # its worker, if one was started
-    done = tuple(sid for sid, r in old.items() if r is not None)
+    done = tuple(sid for sid, r in old.items()
+                 if r is not None and (scope is None or sid in scope))
     unread = {sid: tuple(r.execution[UNREAD]) for sid, r in new.items()
               if r is not None and r.execution.get(UNREAD)}
     touched = {c.student for c in changes}
@@ -243,7 +260,7 @@ def _rescored_class(a: Assignment, old: Mapping[str, StudentResult | None],
 
 def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult | None],
             new: Mapping[str, StudentResult | None], report: Rescore, reveal: bool,
-            command: str) -> None:
+            command: str, scope: frozenset[str] | None = None) -> None:
     """The change, its records and their views, and its line of the trail, as one
     transaction."""
     amendment, details = report.amendment, dict(report.amendment.details)
@@ -259,7 +276,8 @@ def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult 
     changed = {sid for sid, r in new.items() if r is not None and r is not old[sid]}
     for sid in changed:
         stage_record(tx, a, out, new[sid], reveal)
-    stage_views(tx, a, out, new, reveal, published=changed)
+    stage_views(tx, a, out, new, reveal, published=changed,
+                pages=None if scope is None else frozenset())
     stage_report(tx, a, out, new, report_notebooks(out), command)
     tx.trail(amendment.event, (c.as_dict() for c in report.changes), why=amendment.why,
              students=len(report.rescored), unchanged=report.unchanged,

@@ -404,3 +404,33 @@ def test_a_held_lock_makes_a_command_wait_then_give_up(graded, capsys):
     err = capsys.readouterr().err
     assert "waiting for another command" in err and "eulertop grade" in err
     assert "still holds this folder after 0.3 s" in err
+
+
+# -- a change touches only whom it reaches
+
+
+def _bytes(hw: Path) -> dict[str, bytes]:
+    return {p.relative_to(hw).as_posix(): p.read_bytes()
+            for p in (hw / "graded").rglob("*") if p.is_file()}
+
+
+@pytest.mark.parametrize("command", ["override", "key set one", "key set all", "rescore"])
+def test_a_change_rewrites_only_the_records_and_pages_it_reaches(graded, capsys, command):
+    hw, _ = graded
+    variable = _variable(hw, "ben")
+    argv = {"override": ["override", str(hw), "ben", variable, "--points", "0",
+                         "--reason", "r"],
+            "key set one": ["key", "set", str(hw), f"ben:{variable}", "--rtol", "0.9"],
+            "key set all": ["key", "set", str(hw), variable, "--rtol", "0.9"],
+            "rescore": ["rescore", str(hw)]}[command]
+    reached = {"override": {"ben"}, "key set one": {"ben"}, "key set all": set(STUDENTS),
+               "rescore": set()}[command]  # a rescore of an unchanged key changes nobody
+    before = _bytes(hw)
+    time.sleep(1.0)  # a record rewritten now would have a later graded_at
+    assert main(argv) == 0
+    after = _bytes(hw)
+    for sid in STUDENTS:
+        for path in (f"graded/results/{sid}.json", f"graded/feedback/{sid}.html"):
+            assert (after[path] != before[path]) == (sid in reached), (command, path)
+    said = capsys.readouterr().out
+    assert f"{len(reached) if reached else len(STUDENTS)} student(s) rescored" in said
