@@ -126,8 +126,9 @@ def _accepted(texts: list[str]) -> list:
 
 
 def _with_key(args: argparse.Namespace, command: str, key: dict, lines: list[str],
-              event: str, why: str, details: dict) -> int:
-    """Rescore against ``key`` (written first unless ``--dry-run``)."""
+              event: str, why: str, details: dict, manifest: dict | None = None) -> int:
+    """Rescore against ``key`` (written first unless ``--dry-run``; ``manifest``: the
+    ``assignment.json`` a dry run reads, where it differs from the file's)."""
     from grader.assignment import load_assignment
     from grader.key_edit import write_key
     from grader.rescore import rescore
@@ -137,7 +138,7 @@ def _with_key(args: argparse.Namespace, command: str, key: dict, lines: list[str
     if len(lines) > SHOWN:
         print(f"  … and {len(lines) - SHOWN} more")
     a = load_assignment(args.hw)
-    changed = replace(a, key=key)
+    changed = replace(a, key=key, manifest=manifest or a.manifest)
     if args.dry_run:
         _say_rescore(command, rescore(changed, args.out, dry_run=True))
         return 0
@@ -180,24 +181,56 @@ def run_key(args: argparse.Namespace) -> int:
 def run_rekey(args: argparse.Namespace) -> int:
     """Run ``eulertop rekey``."""
     from grader.assignment import load_assignment
-    from grader.key_edit import rekeyed
+    from grader.key_edit import rekeyed, write_manifest
+    from grader.rescore import rescore
     from problems.templates import FAMILIES
 
     command = "eulertop rekey"
 
     def body() -> int:
-        a = load_assignment(args.hw)
+        a, edited = _edited_families_recorded(command, load_assignment(args.hw), args.dry_run)
         key, changes = rekeyed(a, FAMILIES)
+        if edited and not args.dry_run:
+            write_manifest(a.folder, a.manifest)
         print(f"{command}: {len(changes)} value(s) of the key differ from what today's "
               "solver gives" + (":" if changes else ""))
-        if not changes:
+        if not changes and not edited:
             print(f"{command}: the key is as the families compute it; nothing changed")
             return 0
-        return _with_key(args, command, key, _lines(changes), "rekey",
-                         "rekey: the key recomputed from the recorded parameters",
-                         {"key_changes": [c.as_dict() for c in changes]})
+        why = "rekey: the key recomputed from the recorded parameters"
+        details = {"key_changes": [c.as_dict() for c in changes]}
+        if edited:
+            details["family_files"] = edited
+        if changes:
+            return _with_key(args, command, key, _lines(changes), "rekey", why, details,
+                             a.manifest)
+        _say_rescore(command, rescore(a, args.out, dry_run=args.dry_run, reveal=args.reveal,
+                                      why=why, event="rekey", **details))
+        return 0
 
     return _run(command, body)
+
+
+def _edited_families_recorded(command: str, a, dry_run: bool):
+    """``a`` recording the SHA-256 each family file edited since ``generate`` has now (the
+    caller writes it), named in the output, and those files for the trail; UsageError for
+    one that is gone."""
+    from grader.assignment import UsageError
+    from grader.follow_through import edited_message
+    from problems.family_files import edited_families, with_family_hashes
+
+    edited = edited_families(a.manifest, a.folder)
+    if not edited:
+        return a, []
+    if any(e.now is None for e in edited):
+        raise UsageError(f"{edited_message(a.folder, edited)}: put it back to recompute the key "
+                         "with it")
+    done = "would be recorded (--dry-run)" if dry_run else "recorded"
+    print(f"{command}: {edited_message(a.folder, edited)}: the key and follow-through credit "
+          f"are recomputed with it; its new sha256 {done} in {a.folder / 'assignment.json'}")
+    return replace(a, manifest=with_family_hashes(a.manifest, edited)), \
+        [{"family": e.name, "file": str(e.path), "was": e.recorded, "now": e.now}
+         for e in edited]
 
 
 def run_override(args: argparse.Namespace) -> int:

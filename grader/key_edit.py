@@ -185,6 +185,12 @@ def _same(x: Any, y: Any) -> bool:
     return x == y
 
 
+def write_manifest(hw: Path, manifest: Mapping) -> None:
+    """Write ``HW/assignment.json`` (atomically, as the generator writes it): ``rekey``
+    recording the SHA-256 of family files edited since ``generate``."""
+    atomic_write_text(Path(hw) / "assignment.json", json_text(manifest))
+
+
 def write_key(hw: Path, key: Mapping) -> Path:
     """Write ``HW/key.json`` (mode 0600, atomically), the old one kept beside it as
     ``key.json.<UTC time>``; the old one's path."""

@@ -82,16 +82,15 @@ def rescored(a: Assignment, old: StudentResult,
         for k in expected:
             extracted.setdefault(k.variable, None)
         answers = compare(expected, extracted)
-        if follow is not None:
-            answers = follow.credit(sid, expected, answers)
     else:
         answers = compare(expected, None)
-    return StudentResult(
+    result = StudentResult(
         student_id=sid, status=old.status, message=old.message, answers=answers,
         points=sum(x.verdict.points for x in answers) if old.status == "graded" else 0.0,
         max_points=sum(k.answer.points for k in expected),
         submission_sha256=old.submission_sha256, key_sha256=a.key_hash(sid),
         execution=old.execution, sandboxed=old.sandboxed, graded_at=now())
+    return result if follow is None else follow.apply(result, expected)
 
 
 def changes_between(old: StudentResult, new: StudentResult, why: str) -> list[Change]:
