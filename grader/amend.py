@@ -181,6 +181,7 @@ def run_key(args: argparse.Namespace) -> int:
 def run_rekey(args: argparse.Namespace) -> int:
     """Run ``eulertop rekey``."""
     from grader.assignment import load_assignment
+    from grader.graded_folder import RESULTS, graded_folder
     from grader.key_edit import rekeyed, write_manifest
     from grader.rescore import rescore
     from problems.templates import FAMILIES
@@ -204,6 +205,9 @@ def run_rekey(args: argparse.Namespace) -> int:
         if changes:
             return _with_key(args, command, key, _lines(changes), "rekey", why, details,
                              a.manifest)
+        if not (graded_folder(a.folder, args.out) / RESULTS).is_dir():
+            print(f"{command}: nothing graded yet, so nothing to rescore")
+            return 0
         _say_rescore(command, rescore(a, args.out, dry_run=args.dry_run, reveal=args.reveal,
                                       why=why, event="rekey", **details))
         return 0

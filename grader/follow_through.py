@@ -88,9 +88,11 @@ def _load(family: str, path: str | None) -> Any:
     key = (family, path)
     if key not in _loaded:
         if path is None:
-            from problems.family_files import catalogue
+            from problems.family_files import entry_point_families
+            from problems.templates import FAMILIES
 
-            _loaded[key] = catalogue()[family]
+            _loaded[key] = FAMILIES[family] if family in FAMILIES else \
+                {f.name: f for f in entry_point_families()}[family]
         else:
             from problems.family_files import load_family_file
 
@@ -295,23 +297,34 @@ class FollowThrough:
             raise
         except Exception:  # a recomputation that fails, or leaves the physics: no credit
             return None
-        others = [Given(key.answer, by_variable[v].submitted) for v, key in keys.items()
-                  if key.question == k.question and v in by_variable]
+        mine = [key for key in keys.values() if key.question == k.question]
+        others = [Given(key.answer, by_variable[key.variable].submitted) for key in mine
+                  if key.variable in by_variable]
         reason = reply["degenerate"] or default_reason(
             k.answer, list(earlier.values()), reply["value"], params, others,
             question.get("param_units", {}))
-        if reason is not None:
-            names = [*(key.answer.name for key in keys.values() if key.question == k.question),
-                     *question.get("params", {})]
-            why = named(reason, k.question, names).replace("{", "").replace("}", "")
-            return replace(a, verdict=replace(a.verdict, message=f"{a.verdict.message}; no "
-                                                                 f"follow-through: {why}"))
-        points = round(self.fraction * k.answer.points, 12)
-        source = ", ".join(f"q{k.question}_{name} = {value_text(g.value)}"
-                           for name, g in earlier.items())
-        return replace(a, verdict=Verdict("follows", points, k.answer.points,
-                                          f"follows from your {source} (right for that "
-                                          "value; the key's differs)"))
+        if reason is None:
+            return _follows(a, k, earlier, self.fraction)
+        names = [*(key.answer.name for key in mine), *question.get("params", {})]
+        return _refused(a, named(reason, k.question, names))
+
+
+def _follows(a: AnswerResult, k: KeyAnswer, earlier: Mapping[str, Given],
+             fraction: float) -> AnswerResult:
+    """``a`` with the verdict ``follows``: ``fraction`` of its points, and what from."""
+    source = ", ".join(f"q{k.question}_{name} = {value_text(g.value)}"
+                       for name, g in earlier.items())
+    return replace(a, verdict=Verdict("follows", round(fraction * k.answer.points, 12),
+                                      k.answer.points, f"follows from your {source} (right "
+                                      "for that value; the key's differs)"))
+
+
+def _refused(a: AnswerResult, reason: str) -> AnswerResult:
+    """``a`` as it was, its message saying why it has no follow-through credit (braces left
+    around a name that is no notebook variable dropped)."""
+    why = reason.replace("{", "").replace("}", "")
+    said = a.verdict.message.rstrip(".")
+    return replace(a, verdict=replace(a.verdict, message=f"{said}; no follow-through: {why}"))
 
 
 def _earlier(k: KeyAnswer, by_variable: Mapping[str, AnswerResult],

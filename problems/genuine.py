@@ -83,7 +83,8 @@ def default_reason(later: Answer, earlier: Sequence[Given], followed: Any,
             if reason is not None:
                 return reason
     units = units or {}
-    alike = [(n, v) for n, v in given if units.get(n) == later.unit]
+    alike = [(label, v) for label, v in given
+             if units.get(label.removeprefix("an entry of ").strip("{}")) == later.unit]
     return _trivial_reason(later, followed, alike,
                            [o for o in others if o.answer.unit == later.unit])
 
@@ -102,7 +103,8 @@ def statement_number(value: Any, params: Mapping[str, Any], key: Any = None) -> 
     """
     mine = np.atleast_1d(np.asarray(value, dtype=float))
     key = np.full(mine.shape, np.nan) if key is None else np.atleast_1d(np.asarray(key, float))
-    return _copy_of(mine, key, list(_given_numbers(params)), SAME)
+    copied = _copy_of(mine, key, list(_given_numbers(params)), SAME)
+    return None if copied is None else copied.removeprefix("an entry of ").strip("{}")
 
 
 def named(reason: str, question: int, names: Iterable[str]) -> str:
@@ -140,7 +142,7 @@ def _earlier_reason(e: Given, later: Answer,
                 f"have: no ground for {_ref(later.name)}")
     copied = _copy_of(mine, key, given, SAME)
     if copied is not None:
-        return f"{yours} is {_ref(copied)} of the statement, copied, not worked out"
+        return f"{yours} is {copied}, copied from the statement, not worked out"
     return None
 
 
@@ -164,12 +166,12 @@ def _trivial_reason(later: Answer, followed: Any, given: Sequence[tuple[str, NDA
         return f"{from_yours} zero: nothing is left to work out"
     copied = _copy_of(mine, key, given, COPY_RTOL)
     if copied is not None:
-        return f"{from_yours} {_ref(copied)} of the statement: a copy, not worked out"
-    answers = [(o.answer.name, numbers_of(o.answer, o.value)) for o in others
+        return f"{from_yours} {copied} of the statement: a copy, not worked out"
+    answers = [(_ref(o.answer.name), numbers_of(o.answer, o.value)) for o in others
                if o.answer.name != later.name]
     copied = _copy_of(mine, key, [(n, v) for n, v in answers if v is not None], COPY_RTOL)
     if copied is not None:
-        return f"{from_yours} your {_ref(copied)}: a copy, not worked out"
+        return f"{from_yours} your {copied}: a copy, not worked out"
     return None
 
 
@@ -182,7 +184,8 @@ def _ref(name: str) -> str:
 
 
 def _given_numbers(params: Mapping[str, Any]) -> Iterable[tuple[str, NDArray]]:
-    """The statement's numbers: each numeric parameter, whole and (for an array) each entry."""
+    """The statement's numbers, each with how a reason names it: each numeric parameter
+    (``{name}``), whole and (for an array) each entry (``an entry of {name}``)."""
     for name, value in params.items():
         try:
             numbers = np.asarray(value, dtype=float).ravel()
@@ -190,15 +193,16 @@ def _given_numbers(params: Mapping[str, Any]) -> Iterable[tuple[str, NDArray]]:
             continue  # a label
         if numbers.size == 0 or not np.all(np.isfinite(numbers)):
             continue
-        yield name, numbers
+        yield _ref(name), numbers
         if numbers.size > 1:
-            yield from ((name, numbers[i:i + 1]) for i in range(numbers.size))
+            yield from ((f"an entry of {_ref(name)}", numbers[i:i + 1])
+                        for i in range(numbers.size))
 
 
 def _copy_of(mine: NDArray, key: NDArray, candidates: Sequence[tuple[str, NDArray]],
              rtol: float) -> str | None:
-    """The first candidate ``mine`` is a copy of (to ``rtol``; up to order) and ``key`` is
-    not."""
+    """How a reason names the first candidate ``mine`` is a copy of (to ``rtol``; up to
+    order) and ``key`` is not."""
     for name, value in candidates:
         if value.shape == mine.shape and _size(value) > 0 and \
                 _same(np.sort(mine), np.sort(value), rtol) and \

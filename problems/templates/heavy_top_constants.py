@@ -531,6 +531,6 @@ def degenerate(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any])
     key = float(np.atleast_1d(constants_of_motion(*state_args(top, state))[1])[0])
     copied = statement_number(p_gamma, params, key)
     if copied is not None:
-        return (f"your {{p_gamma}} is {{{copied}}} of the statement, copied, not R15's momentum "
+        return (f"your {{p_gamma}} is the statement's {{{copied}}}, copied, not R15's momentum "
                 "worked out: {E_prime} from it shows nothing")
     return None

@@ -299,6 +299,6 @@ def degenerate(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any])
     top = top_from_params(params)
     copied = statement_number(critical, params, float(critical_spin(top.I1, top.I3, top.Mgl)))
     if copied is not None:
-        return (f"your {{omega3_c}} is {{{copied}}} of the statement, copied: {{stable}} then "
+        return (f"your {{omega3_c}} is the statement's {{{copied}}}, copied: {{stable}} then "
                 "follows with nothing of R19 worked out")
     return None

@@ -275,6 +275,6 @@ def degenerate(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any])
     d = _draw_of(params)
     copied = statement_number(rate, params, float(body_precession_rate(d.I1, d.I3, d.omega0[2])))
     if copied is not None:
-        return (f"your {{Omega}} is {{{copied}}} of the statement, copied, not R8's rate worked "
-                "out: {T_body} from it shows nothing")
+        return (f"your {{Omega}} is a number of the statement's {{{copied}}}, copied, not R8's "
+                "rate worked out: {T_body} from it shows nothing")
     return None

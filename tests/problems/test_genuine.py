@@ -89,7 +89,10 @@ def test_a_number_of_the_statement_copied_is_degenerate():
     for name in ("t", "I1"):
         reason = default_reason(later, [Given(key, PARAMS[name])], 2 * math.pi / PARAMS[name],
                                 PARAMS, (), UNITS)
-        assert reason == f"your {{Omega}} is {{{name}}} of the statement, copied, not worked out"
+        assert reason == f"your {{Omega}} is {{{name}}}, copied from the statement, not " \
+                         "worked out"
+    reason = default_reason(later, [Given(key, 0.3)], 2 * math.pi / 0.3, PARAMS, (), UNITS)
+    assert reason == "your {Omega} is an entry of {r}, copied from the statement, not worked out"
     assert default_reason(later, [Given(key, 0.76)], 2 * math.pi / 0.76, PARAMS, (),
                           UNITS) is None  # near t, not t
 
