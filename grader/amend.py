@@ -18,6 +18,10 @@ import json
 import sys
 from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from grader.assignment import Assignment
 
 SHOWN = 50
 """Changes printed at most (the audit trail has them all)."""
@@ -215,7 +219,8 @@ def run_rekey(args: argparse.Namespace) -> int:
     return _run(command, body)
 
 
-def _edited_families_recorded(command: str, a, dry_run: bool):
+def _edited_families_recorded(command: str, a: Assignment,
+                              dry_run: bool) -> tuple[Assignment, list[dict]]:
     """``a`` recording the SHA-256 each family file edited since ``generate`` has now (the
     caller writes it), named in the output, and those files for the trail; UsageError for
     one that is gone."""

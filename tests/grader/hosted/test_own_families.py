@@ -209,3 +209,58 @@ def test_an_edited_family_stops_the_gradescope_package(graded, tmp_path):
         gradescope_zip(load_assignment(edited), tmp_path / "a.zip", _wheel(tmp_path),
                        {"sandbox": "auto", "kernel_user": None, "limits": LIMITS})
     assert not (tmp_path / "a.zip").exists()
+
+
+HOST_BROKEN = "EULERTOP_TEST_FAMILY_BROKEN"
+FRAGILE = '''
+import os
+
+from eulertop.family import Answer, Parameter, follows_from
+
+if os.environ.get("HOST_BROKEN"):
+    raise ImportError("this host lacks what the family imports")
+
+NAME = "fragile"
+TITLE = "A chain whose family cannot be loaded everywhere"
+SUMMARY = "a = 2x, then b = a + 1 from your a"
+PARAMETERS = {"x": Parameter(low=1.0, high=2.0, figures=3)}
+
+
+def answers(params):
+    a = 2 * params["x"]
+    return (Answer("a", "scalar", a), follows_from(Answer("b", "scalar", a + 1), "a"))
+
+
+def statement(params):
+    return "Compute $a = 2x$, then $b = a + 1$ from your $a$."
+
+
+def follow(name, params, earlier):
+    return earlier["a"] + 1
+'''.replace("HOST_BROKEN", HOST_BROKEN)
+
+
+def test_a_family_the_platform_cannot_load_is_reported_never_swallowed(public_tmp,
+                                                                       monkeypatch):
+    """Packaged where the family loads, graded where it does not: the platform's run fails
+    as the package's fault, naming the family; no score is given without its credit."""
+    mine = public_tmp / "mine"
+    mine.mkdir()
+    (mine / "fragile.py").write_text(FRAGILE)
+    (public_tmp / "roster.csv").write_text("id\nann\n")
+    assert main(["generate", "--roster", str(public_tmp / "roster.csv"), "--families",
+                 str(mine), "--problems", "fragile", "--out", str(public_tmp / "HW")]) == 0
+    hw = public_tmp / "HW"
+    a = key_values(hw, "ann")["q1_a"]
+    _literal(gradescope, monkeypatch)
+    base = public_tmp / "host"
+    base.mkdir()
+    root = gradescope_layout(base, HW(hw, json.loads((hw / "key.json").read_text())),
+                             notebook({"q1_a": 1.1 * a, "q1_b": 1.1 * a + 1}).encode(),
+                             [{"email": "", "sid": "ann"}], sandbox="auto")
+    monkeypatch.setenv(HOST_BROKEN, "1")
+    results, status = run_gradescope(root, monkeypatch)
+    assert status == 1 and results["score"] == 0
+    assert "this is not your fault" in results["output"]
+    assert "family 'fragile' cannot be loaded for follow-through credit" in results["output"]
+    assert "this host lacks what the family imports" in results["output"]
