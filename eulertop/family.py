@@ -5,8 +5,11 @@ A family is one Python file (or package) that defines ``NAME``, ``TITLE``, ``SUM
 each with its known :class:`Mistake` s) and ``statement(params)``, and optionally ``draw(rng)``
 (default: :func:`draw_parameters`). An answer the statement asks to compute from earlier ones
 is declared with :func:`follows_from`, and ``follow(name, params, earlier)`` recomputes it from
-a student's own earlier values (follow-through credit). ``eulertop new-family NAME --out DIR``
-writes a working, commented example; ``eulertop problems test FILE`` checks one.
+a student's own earlier values (follow-through credit); ``degenerate(name, params, earlier)``
+may say why such values leave nothing to work out (one line, or None), beside the defaults
+every family gets (:mod:`problems.genuine`; :func:`statement_number` names a parameter a value
+copies). ``eulertop new-family NAME --out DIR`` writes a working, commented example;
+``eulertop problems test FILE`` checks one.
 
 Examples
 --------
@@ -19,5 +22,7 @@ from __future__ import annotations
 
 from problems.answers import Answer, Mistake
 from problems.family import IllPosed, Parameter, draw_parameters, follows_from
+from problems.genuine import statement_number
 
-__all__ = ["Answer", "IllPosed", "Mistake", "Parameter", "draw_parameters", "follows_from"]
+__all__ = ["Answer", "IllPosed", "Mistake", "Parameter", "draw_parameters", "follows_from",
+           "statement_number"]

@@ -17,6 +17,10 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from grader.assignment import Assignment
 
 from grader.transaction import LOCK_WAIT
 
@@ -182,25 +186,59 @@ def run_key(args: argparse.Namespace) -> int:
     return _rescore(args, "eulertop key set", key_change(args))
 
 
-def rekey_change(a, overrides):
-    """``eulertop rekey``'s change: the key recomputed from the recorded parameters."""
+def rekey_change(args: argparse.Namespace):
+    """``eulertop rekey``'s change: the key recomputed from the recorded parameters, with each
+    family file edited since ``generate`` named and its new SHA-256 recorded."""
     from grader.key_edit import rekeyed
     from grader.rescore import Amendment
     from problems.templates import FAMILIES
 
-    key, changes = rekeyed(a, FAMILIES)
-    head = (f"{len(changes)} value(s) of the key differ from what today's solver gives",)
-    if not changes:
-        return Amendment(unchanged="the key is as the families compute it", lines=head)
-    return Amendment("rekey", "rekey: the key recomputed from the recorded parameters",
-                     key=key, details={"key_changes": [c.as_dict() for c in changes]},
-                     students=frozenset(),  # those whose key entry changed
-                     lines=head + _lines(changes))
+    def change(a, overrides) -> Amendment:
+        a, edited = _edited_families_recorded("eulertop rekey", a, args.dry_run)
+        key, changes = rekeyed(a, FAMILIES)
+        head = (f"{len(changes)} value(s) of the key differ from what today's solver gives",)
+        if not changes and not edited:
+            return Amendment(unchanged="the key is as the families compute it", lines=head)
+        details = {"key_changes": [c.as_dict() for c in changes]}
+        if edited:
+            details["family_files"] = edited
+        return Amendment("rekey", "rekey: the key recomputed from the recorded parameters",
+                         key=key, details=details, manifest=a.manifest if edited else None,
+                         # an edited family may credit anyone who has it: everyone, then
+                         students=None if edited else frozenset(),
+                         lines=head + _lines(changes))
+
+    return change
 
 
 def run_rekey(args: argparse.Namespace) -> int:
     """Run ``eulertop rekey``."""
-    return _rescore(args, "eulertop rekey", rekey_change)
+    return _rescore(args, "eulertop rekey", rekey_change(args))
+
+
+def _edited_families_recorded(command: str, a: Assignment,
+                              dry_run: bool) -> tuple[Assignment, list[dict]]:
+    """``a`` recording the SHA-256 each family file edited since ``generate`` has now (the
+    caller writes it), named in the output, and those files for the trail; UsageError for
+    one that is gone."""
+    from dataclasses import replace
+
+    from grader.assignment import UsageError
+    from grader.follow_through import edited_message
+    from problems.family_files import edited_families, with_family_hashes
+
+    edited = edited_families(a.manifest, a.folder)
+    if not edited:
+        return a, []
+    if any(e.now is None for e in edited):
+        raise UsageError(f"{edited_message(a.folder, edited)}: put it back to recompute the key "
+                         "with it")
+    done = "would be recorded (--dry-run)" if dry_run else "recorded"
+    print(f"{command}: {edited_message(a.folder, edited)}: the key and follow-through credit "
+          f"are recomputed with it; its new sha256 {done} in {a.folder / 'assignment.json'}")
+    return replace(a, manifest=with_family_hashes(a.manifest, edited)), \
+        [{"family": e.name, "file": str(e.path), "was": e.recorded, "now": e.now}
+         for e in edited]
 
 
 def override_change(args: argparse.Namespace):

@@ -57,6 +57,7 @@ from grader.publish import (
 from grader.results import StudentResult, non_finite_read
 from grader.transaction import LOCK_WAIT, Transaction, class_lock
 from problems.answers import Verdict
+from problems.generate import json_text
 
 NUMERIC = ("scalar", "angle", "vector")
 UNREAD = "unread"
@@ -94,7 +95,7 @@ class Amendment:
     details: dict = field(default_factory=dict)
     lines: tuple[str, ...] = ()  # the change itself, for the person (key changes)
     unchanged: str = ""
-    files: dict = field(default_factory=dict)  # other files the change writes: path → text
+    manifest: dict | None = None  # a new assignment.json (rekey: edited families' hashes)
     students: frozenset[str] | None = None  # whom it reaches beyond a changed key (None: all)
 
 
@@ -222,6 +223,8 @@ def _amended(a: Assignment, overrides: tuple[Override, ...], amendment: Amendmen
     every student in ``scope``: None, all)."""
     if amendment.key is not None:
         a = replace(a, key=amendment.key)
+    if amendment.manifest is not None:
+        a = replace(a, manifest=amendment.manifest)
     if amendment.overrides is not None:
         overrides = tuple(amendment.overrides)
     for sid in a.ids if scope is None else sorted(scope):
@@ -271,8 +274,8 @@ def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult 
         details["old_key"] = stage_key(tx, hw, amendment.key).name
     if amendment.overrides is not None:
         tx.write(out / OVERRIDES, overrides_toml(amendment.overrides))
-    for path, text in amendment.files.items():
-        tx.write(path, text)
+    if amendment.manifest is not None:
+        tx.write(hw / "assignment.json", json_text(amendment.manifest))  # as generate writes it
     changed = {sid for sid, r in new.items() if r is not None and r is not old[sid]}
     for sid in changed:
         stage_record(tx, a, out, new[sid], reveal)

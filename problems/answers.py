@@ -80,6 +80,8 @@ __all__ = [
     "check_spec",
     "comparison_rule",
     "grade",
+    "numbers_of",
+    "read_value",
 ]
 
 KINDS = ("scalar", "vector", "angle", "boolean", "choice", "expression")
@@ -376,6 +378,39 @@ def grade(answer: Answer, submitted: Any) -> Verdict:
     if rounded is not None:
         return _verdict(form, "wrong", f"{_show(form, value)}: {rounded}", mistake=TOO_FEW_FIGURES)
     return _verdict(form, "wrong", f"{_show(form, value)}: {_not_within(answer)}")
+
+
+def read_value(answer: Answer, value: Any) -> Any:
+    """``value`` in ``answer``'s normal form — a float (scalar, angle), a numpy array
+    (vector), a bool, the option as ``options`` spells it, the expression's text — or None
+    when it is not well formed for ``answer`` (:func:`check_form` says why)."""
+    read, unreadable = _reading(_Form.of(answer), value)
+    return None if unreadable else read
+
+
+def numbers_of(answer: Answer, value: Any) -> NDArray[np.float64] | None:
+    """``value`` as the numbers ``answer``'s comparison looks at: a scalar or an angle as one
+    number, a vector as its components, an expression as its values at the answer's sample
+    points (those where the key is defined; NaN where the value is not). None for a boolean,
+    a choice, or a value not well formed.
+
+    Examples
+    --------
+    >>> numbers_of(Answer("L", "vector", [1.0, 2.0, 2.0]), (0, 0, 3)).tolist()
+    [0.0, 0.0, 3.0]
+    >>> numbers_of(Answer("up", "boolean", True), True) is None
+    True
+    """
+    if answer.kind in ("boolean", "choice"):
+        return None
+    form = _Form.of(answer)
+    read, unreadable = _reading(form, value)
+    if unreadable:
+        return None
+    if answer.kind != "expression":
+        return np.atleast_1d(np.asarray(read, dtype=float))
+    with np.errstate(all="ignore"):
+        return np.asarray(evaluate_expression(read, form.symbols, form.sample), dtype=float)
 
 
 TOO_FEW_FIGURES = "too_few_figures"

@@ -16,6 +16,12 @@ parameters; default ``TITLE``), ``RESULTS`` (R-ids of ``docs/physics/index.md``)
 (one-time work, done before the generator forks its workers) and ``MAX_ATTEMPTS`` (draws before
 giving up).
 
+An answer the statement asks to compute from earlier answers of its question is declared with
+:func:`follows_from`; then ``follow(name, params, earlier)`` recomputes it from a student's own
+earlier values (follow-through credit), and ``degenerate(name, params, earlier) -> str | None``
+may say why such values are no ground for that credit — a value that leaves nothing to work out
+(the defaults every family gets, :mod:`problems.genuine`, apply besides).
+
 Drawing is kept apart from answering, so that a key can be recomputed from the parameters an
 assignment recorded: :meth:`Family.variant` is ``answers(params)`` and ``statement(params)``
 and nothing else. A draw that is ill-posed (turning points that nearly coincide, a known mistake
@@ -306,6 +312,19 @@ class Family:
             raise LookupError(f"{self.where}: no follow() for answer {name!r}")
         return own(name, dict(params), dict(earlier))
 
+    def degenerate(self, name: str, params: Mapping[str, Any],
+                   earlier: Mapping[str, Any]) -> str | None:
+        """Why a student's earlier values ``earlier`` make answer ``name`` follow trivially —
+        one line, naming answers and parameters as ``{name}`` — or None: the family's own
+        ``degenerate`` (None where it has none), checked before the defaults of
+        :mod:`problems.genuine`. TypeError naming the family for a reply that is not text."""
+        own = getattr(self.module, "degenerate", None)
+        reason = None if own is None else own(name, dict(params), dict(earlier))
+        if reason is not None and (not isinstance(reason, str) or not reason.strip()):
+            raise TypeError(f"{self.where}: degenerate() must return a reason (text) or None, "
+                            f"got {reason!r}")
+        return reason
+
     def heading(self, params: Mapping[str, Any]) -> str:
         """The question's title for ``params``: the family's ``heading``, else ``TITLE``."""
         own = getattr(self.module, "heading", None)
@@ -398,7 +417,7 @@ def check_contract(module: Any, where: str) -> None:
         text = getattr(module, attr)
         if not isinstance(text, str) or not text.strip() or "\n" in text:
             raise FamilyError(f"{where}: {attr} must be one line of text, got {text!r}")
-    for attr in ("answers", "statement", "draw", "heading", "prepare", "follow"):
+    for attr in ("answers", "statement", "draw", "heading", "prepare", "follow", "degenerate"):
         if hasattr(module, attr) and not callable(getattr(module, attr)):
             raise FamilyError(f"{where}: {attr} must be a function")
     from problems.conventions import TOPICS

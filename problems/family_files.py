@@ -11,6 +11,9 @@ imported under a private module name (``eulertop_family_<name>_<hash of its path
 folders may both hold a ``pendulum.py``, and its own relative imports work when it is a
 package.
 
+An assignment records the SHA-256 of each family file it was generated with
+(``assignment.json``'s ``families``); :func:`edited_families` names those that changed since.
+
 Any problem — a file that does not parse or fails when imported, a missing ``NAME`` or
 ``answers``, a ``NAME`` that is already taken — raises :class:`~problems.family.FamilyError`
 with one line naming the file (and the line, where there is one).
@@ -25,6 +28,7 @@ import traceback
 from collections.abc import Iterable, Mapping, Sequence
 from importlib import metadata
 from pathlib import Path
+from typing import NamedTuple
 
 from problems.family import Family, FamilyError
 
@@ -125,3 +129,40 @@ def catalogue(folders: Sequence[Path] = (), *, entry_points: bool = True,
                                   "give this family another NAME")
             families[family.name] = family
     return families
+
+
+class EditedFamily(NamedTuple):
+    """A family file that is not the one an assignment was generated with."""
+
+    name: str
+    path: Path  # as the manifest records it, relative to the assignment folder
+    recorded: str  # its SHA-256 at generate
+    now: str | None  # its SHA-256 now; None: the file is gone
+
+
+def file_sha256(path: Path) -> str:
+    """The hex SHA-256 of the file ``path``'s bytes (what ``assignment.json`` records)."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def edited_families(manifest: Mapping, folder: Path) -> list[EditedFamily]:
+    """The family files ``manifest`` (an ``assignment.json``) records whose bytes, read
+    relative to ``folder``, are no longer those it hashed at generate: edited, or gone. Families
+    of installed packages are not files of the assignment's and are not checked."""
+    edited = []
+    for name, where in manifest.get("families", {}).items():
+        if "file" not in where or "sha256" not in where:
+            continue
+        path = Path(folder) / where["file"]
+        now = file_sha256(path) if path.is_file() else None
+        if now != where["sha256"]:
+            edited.append(EditedFamily(name, Path(where["file"]), where["sha256"], now))
+    return edited
+
+
+def with_family_hashes(manifest: Mapping, edited: Iterable[EditedFamily]) -> dict:
+    """A copy of ``manifest`` recording the SHA-256 each of ``edited`` has now."""
+    record = {name: dict(where) for name, where in manifest.get("families", {}).items()}
+    for e in edited:
+        record[e.name]["sha256"] = e.now
+    return {**manifest, "families": record}

@@ -34,7 +34,8 @@ seed that reproduces it and what failed:
     An answer that declares ``depends_on`` names other answers of its question, and the
     family's ``follow`` given the recorded parameters and the key's values of those answers
     recomputes it to within its own tolerance (the consistency follow-through credit relies
-    on: a student whose earlier answers are right is judged as by the key). A family without
+    on: a student whose earlier answers are right is judged as by the key); the family's
+    ``degenerate``, where it has one, calls those values no degenerate case. A family without
     such answers passes it trivially.
 ``parameters printed as in the cell``
     Every number the statement (and the question's title) prints for a parameter is that
@@ -284,6 +285,13 @@ def _follow_problem(family: Family, variant: Variant) -> str | None:
         if verdict.status != "correct":
             return f"follow({answer.name!r}) from the key's own values is graded " \
                    f"{verdict.status}: {verdict.message}"
+        try:
+            reason = family.degenerate(answer.name, recorded,
+                                       {n: key[n] for n in answer.depends_on})
+        except Exception as e:
+            return f"degenerate({answer.name!r}) of the key raised {type(e).__name__}: {e}"
+        if reason is not None:
+            return f"degenerate({answer.name!r}) calls the key's own values degenerate: {reason}"
     return None
 
 

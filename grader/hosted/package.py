@@ -4,8 +4,8 @@ Gradescope (:func:`gradescope_zip`)
     A zip with, at its root (Gradescope's "Autograder Specifications"): ``setup.sh``, which
     installs eulertop from the wheel in the zip into ``/opt/eulertop`` (its dependencies from
     the package index, pinned to the versions this eulertop runs with: ``constraints.txt``),
-    ``run_autograder``, the assignment's manifest and key (``assignment/``, nothing else of
-    HW), and :data:`grader.hosted.grading.CONFIG`.
+    ``run_autograder``, the assignment's manifest and key and its own families' files
+    (``assignment/``, nothing else of HW), and :data:`grader.hosted.grading.CONFIG`.
 
 PrairieLearn (:func:`prairielearn_question`)
     ``OUT/questions/<name>/``: a question for a course repository — ``info.json`` (external
@@ -15,6 +15,13 @@ PrairieLearn (:func:`prairielearn_question`)
     the variants' key, the settings; PrairieLearn copies it to ``/grade/tests``, never to
     students). ``OUT/grader-image/``: a ``Dockerfile`` that builds the grading image from the
     wheel. ``OUT/solutions/<name>/``: each variant's solutions, for the instructor only.
+
+Families of the instructor's own (a file, or an installed package's module) go into the
+package (``assignment/families/<name>/``, :func:`ship_families`) and its manifest names those
+copies, so that the platform grades follow-through credit exactly as ``eulertop grade`` does.
+Each is loaded from its copy, in a process of its own, before the package is written: one that
+cannot be is a :class:`PackageError`, as is (for Gradescope, which carries HW's key) a family
+file edited since ``eulertop generate``.
 
 Floor 8 of grader/ (front ends; grader/API.md).
 """
@@ -192,19 +199,113 @@ def settings(args: argparse.Namespace, limits: Limits, **more: object) -> dict:
 
 def gradescope_zip(a: Assignment, out: Path, wheel: Path, config: dict) -> Path:
     """Write Gradescope's autograder zip ``out`` (module docstring); its path."""
+    from grader.follow_through import unchanged_families
+
     values = {"VENV": VENV, "WHEEL": wheel.name}
+    try:
+        unchanged_families(a)  # the zip carries HW's key: the families must be the key's
+    except UsageError as e:
+        raise PackageError(str(e)) from None
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(f".{out.name}.part")
-    with zipfile.ZipFile(tmp, "w") as zf:
+    with tempfile.TemporaryDirectory(prefix="eulertop-package-") as staging, \
+            zipfile.ZipFile(tmp, "w") as zf:
+        assignment = staged_assignment(a.manifest, a.folder, a.folder / "key.json",
+                                       Path(staging) / "assignment")
         _add(zf, "setup.sh", _text(SETUP_SH, **values), executable=True)
         _add(zf, "run_autograder", _text(RUN_AUTOGRADER, **values), executable=True)
         _add(zf, wheel.name, wheel.read_bytes())
         _add(zf, "constraints.txt", "\n".join(pinned_requirements()) + "\n")
         _add(zf, CONFIG, json.dumps(config, indent=1) + "\n")
-        for name in ("assignment.json", "key.json"):
-            _add(zf, f"assignment/{name}", (a.folder / name).read_bytes())
+        for path in sorted(p for p in assignment.rglob("*") if p.is_file()):
+            _add(zf, f"assignment/{path.relative_to(assignment).as_posix()}", path.read_bytes())
     tmp.replace(out)
     return out
+
+
+# --------------------------------------------------------------------------------------------
+# the assignment's own families
+
+FAMILY_FILES = "families"
+"""Where a package's assignment folder holds the families of the instructor's own."""
+
+
+def staged_assignment(manifest: dict, source: Path, key: Path, dest: Path) -> Path:
+    """``dest``: the assignment as a package carries it — ``manifest`` naming the copies of its
+    own families (:func:`ship_families`; their files relative to ``source``), the key file
+    ``key`` — checked as the platform will load it (:func:`check_families`)."""
+    from problems.generate import json_text
+
+    dest.mkdir(parents=True)
+    shipped = ship_families(manifest, source, dest)
+    (dest / "assignment.json").write_text(json_text(shipped), encoding="utf-8")
+    shutil.copyfile(key, dest / "key.json")
+    check_families(dest)
+    return dest
+
+
+def ship_families(manifest: dict, source: Path, dest: Path) -> dict:
+    """Copy each family ``manifest`` records from outside the package — a file (relative to
+    ``source``), a package's folder, or an installed package's module — into
+    ``dest/families/<name>/``; ``manifest`` naming those copies (and the SHA-256 it
+    recorded)."""
+    record = {}
+    for name, where in manifest.get("families", {}).items():
+        path = _family_source(name, where, source)
+        target = dest / FAMILY_FILES / name
+        if path.name == "__init__.py":  # a package: its folder
+            shutil.copytree(path.parent, target / path.parent.name,
+                            ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+            copy = target / path.parent.name / "__init__.py"
+        else:
+            target.mkdir(parents=True)
+            copy = target / path.name
+            shutil.copyfile(path, copy)
+        record[name] = {"file": copy.relative_to(dest).as_posix(),
+                        "sha256": where.get("sha256")}
+    return {**manifest, "families": record} if record else dict(manifest)
+
+
+def _family_source(name: str, where: dict, source: Path) -> Path:
+    """The file a recorded family comes from (an installed package's: its module's)."""
+    from problems.family import FamilyError
+    from problems.family_files import entry_point_families
+
+    if "file" in where:
+        path = Path(source) / where["file"]
+        if not path.is_file():
+            raise PackageError(f"{path}: family {name!r}'s file is gone; the package must carry "
+                               "it (put it back where 'eulertop generate' found it)")
+        return path
+    try:
+        installed = {f.name: f for f in entry_point_families()}
+    except FamilyError as e:
+        raise PackageError(str(e)) from None
+    if name not in installed or installed[name].path is None:
+        raise PackageError(f"family {name!r} ({where.get('origin')}) is not installed here, "
+                           "so the package cannot carry it")
+    return installed[name].path
+
+
+def check_families(folder: Path) -> None:
+    """Load each own family of the assignment ``folder`` as the platform's grader will (its
+    follow-through worker, a process of its own); :class:`PackageError` naming the first
+    that cannot be."""
+    from grader.follow_through import FamilyUnavailable, FollowThrough
+
+    try:
+        follow = FollowThrough.of(load_assignment(folder))
+    except UsageError as e:  # a copy that is not the file the key was computed with
+        raise PackageError(str(e)) from None
+    if follow is None:
+        return  # no follow-through credit: the families are never loaded there
+    try:
+        follow.load_families()
+    except FamilyUnavailable as e:
+        raise PackageError(f"family {e.family!r} cannot be loaded as the package carries it "
+                           f"(in {FAMILY_FILES}/{e.family}/): {e.cause}") from None
+    finally:
+        follow.close()
 
 
 # --------------------------------------------------------------------------------------------
@@ -307,12 +408,11 @@ def prairielearn_question(a: Assignment, out: Path, wheel: Path, config: dict,
         pool = pool_assignment(a, args.variants, Path(tmp) / "pool")
         staged = Path(tmp) / "question"
         (staged / "variants").mkdir(parents=True)
-        (staged / "tests" / "assignment").mkdir(parents=True)
         ids = variant_ids(args.variants)
         for v in ids:
             shutil.copyfile(pool / "release" / f"{v}.ipynb", staged / "variants" / f"{v}.ipynb")
-        for name in ("assignment.json", "key.json"):
-            shutil.copyfile(pool / name, staged / "tests" / "assignment" / name)
+        manifest = json.loads((pool / "assignment.json").read_text(encoding="utf-8"))
+        staged_assignment(manifest, pool, pool / "key.json", staged / "tests" / "assignment")
         (staged / "tests" / CONFIG).write_text(json.dumps(config, indent=1) + "\n")
         run = staged / "tests" / "run"
         run.write_text(_text(PL_RUN, VENV=VENV))

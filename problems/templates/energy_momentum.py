@@ -31,6 +31,7 @@ from scipy.spatial.transform import Rotation
 
 from problems.answers import Answer, Mistake
 from problems.family import Parameter, follows_from, redrawn_until_well_posed, reject_unless
+from problems.genuine import SAME
 from problems.rounding import format_sig, latex_sig, round_sig
 from solver.inertia import angular_momentum, kinetic_energy, shape_tensor
 from solver.parameters import principal_moments
@@ -244,7 +245,27 @@ def follow(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> 
     askew)."""
     if name != "angle":
         raise LookupError(name)
+    return _angle(np.array(earlier["L"], dtype=float), _omega_vector(params))
+
+
+def degenerate(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> str | None:
+    """Why a student's ``L`` leaves nothing to work out for ``angle`` (R5: ``L = I·ω`` is
+    along ω only when ω is along a principal axis, which no draw is): ``L`` zero, or parallel
+    (or antiparallel) to the given ω — ω itself copied, or ``L = I ω`` with a scalar ``I`` —
+    which makes the angle 0 (or π) with nothing computed. None otherwise."""
+    if name != "angle":
+        raise LookupError(name)
+    L, omega = np.array(earlier["L"], dtype=float), _omega_vector(params)
+    if not np.any(L):
+        return "your {L} is zero: there is no angle {angle} to find (R5)"
+    if np.linalg.norm(np.cross(L, omega)) <= SAME * np.linalg.norm(L) * np.linalg.norm(omega):
+        return ("your {L} is parallel to ω, which makes {angle} zero with nothing of R5 worked "
+                "out (L = I·ω turns away from ω)")
+    return None
+
+
+def _omega_vector(params: Mapping[str, Any]) -> np.ndarray:
+    """ω as a vector: given, or along the axle (z) for the disc askew."""
     omega = params["omega"]
-    omega = np.array(omega if params["scene"] == "tumbling_satellite" else [0.0, 0.0, omega],
-                     dtype=float)
-    return _angle(np.array(earlier["L"], dtype=float), omega)
+    return np.array(omega if params["scene"] == "tumbling_satellite" else [0.0, 0.0, omega],
+                    dtype=float)

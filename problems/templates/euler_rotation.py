@@ -217,3 +217,21 @@ def follow(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> 
     if name == "F_body" and "F_lab" in params:
         return to_body(R, np.array(params["F_lab"])).tolist()
     raise LookupError(name)
+
+
+def degenerate(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> str | None:
+    """Why a student's ``R`` leaves nothing to work out for ``r_lab`` or ``F_body`` (R11):
+    the identity (the given vector copied), or any matrix of only 0 and ±1 entries (its
+    components reordered or their signs flipped) — which no draw's angles give. None
+    otherwise."""
+    if name not in ("r_lab", "F_body"):
+        raise LookupError(name)
+    given = "{r_body}" if name == "r_lab" else "{F_lab}"
+    R = np.array(earlier["R"], dtype=float).reshape(3, 3)
+    if np.array_equal(R, np.eye(3)):
+        return (f"your {{R}} is the identity matrix, which makes {{{name}}} a copy of the "
+                f"given {given} (R11)")
+    if np.all(np.isin(R, (-1.0, 0.0, 1.0))):
+        return (f"your {{R}} has only 0 and ±1 entries, which makes {{{name}}} the given "
+                f"{given} reordered or with signs flipped: nothing of R11 worked out")
+    return None

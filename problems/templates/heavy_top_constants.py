@@ -54,6 +54,7 @@ import numpy as np
 
 from problems.answers import Answer, Mistake
 from problems.family import Parameter, reject_unless
+from problems.genuine import statement_number
 from problems.rounding import latex_sig, round_sig
 from solver.heavy_top import constants_of_motion, turning_points
 from solver.inertia import centre_of_mass_offset, parallel_axis, shape_tensor
@@ -513,3 +514,23 @@ def follow(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> 
                            for x in constants_of_motion(*state_args(top, state)))
     energy = e_prime + p_gamma**2 / (2 * top.I3)
     return energy - float(earlier["p_gamma"]) ** 2 / (2 * top.I3)
+
+
+def degenerate(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> str | None:
+    """Why a student's ``p_gamma`` is no ground for ``E_prime = E − p_γ²/(2 I3)`` (R15, R16):
+    zero (``E'`` is then the energy ``E`` itself, the reduction left out), or a number of the
+    statement copied (``γ̇0``, say), not ``p_γ = I3 (α̇ cos β + γ̇)`` worked out. None
+    otherwise."""
+    if name != "E_prime":
+        raise LookupError(name)
+    p_gamma = float(earlier["p_gamma"])
+    if p_gamma == 0:
+        return ("your {p_gamma} is zero, which makes {E_prime} the energy E itself: R16's "
+                "reduction is left out")
+    top, state = top_from_params(params), state_from_params(params)
+    key = float(np.atleast_1d(constants_of_motion(*state_args(top, state))[1])[0])
+    copied = statement_number(p_gamma, params, key)
+    if copied is not None:
+        return (f"your {{p_gamma}} is the statement's {{{copied}}}, copied, not R15's momentum "
+                "worked out: {E_prime} from it shows nothing")
+    return None

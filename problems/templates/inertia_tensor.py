@@ -33,6 +33,7 @@ import numpy as np
 
 from problems.answers import Answer, Mistake
 from problems.family import Parameter, follows_from, redrawn_until_well_posed, reject_unless
+from problems.genuine import SAME
 from problems.rounding import format_sig, latex_sig, round_sig
 from solver.inertia import parallel_axis, point_mass_tensor, principal_axes, shape_tensor
 
@@ -287,3 +288,24 @@ def follow(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> 
     if name == "axis_max":
         return _positive_z(axes[:, 2]).tolist()
     raise LookupError(name)
+
+
+_READ_OFF = {"moments": "{moments} a copy of your diagonal",
+             "axis_max": "{axis_max} a coordinate axis read off your diagonal"}
+
+
+def degenerate(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> str | None:
+    """Why a student's tensor leaves nothing to work out for ``moments`` or ``axis_max`` (R4:
+    the eigenvalues and eigenvectors of the tensor): products of inertia that are all zero
+    where the body's are not (a diagonal tensor's eigenvalues are its diagonal, its axes the
+    coordinate axes), or a diagonal that is zero. None otherwise."""
+    if name not in _READ_OFF:
+        raise LookupError(name)
+    diag, products = (np.asarray(earlier[n], dtype=float) for n in ("I_diag", "I_offdiag"))
+    tensor, _ = SCENES[params["scene"]][1](params)
+    key = np.array([tensor[0, 1], tensor[0, 2], tensor[1, 2]])
+    if np.any(key) and np.linalg.norm(products) <= SAME * np.linalg.norm(key):
+        return f"your {{I_offdiag}} is zero, which makes {_READ_OFF[name]} (R4)"
+    if not np.any(diag):
+        return f"your {{I_diag}} is zero: no ground for {{{name}}} (R4)"
+    return None

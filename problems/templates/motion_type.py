@@ -225,3 +225,23 @@ def follow(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> 
     if scale == 0 or min(abs(r) for r in rates) <= RTOL * scale:
         return "cusps"
     return "loops" if rates[0] * rates[1] < 0 else "waves"
+
+
+def degenerate(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> str | None:
+    """Why a student's precession rates leave nothing to work out for ``motion`` (R18: the
+    figure is read off the rates at the turning points): both zero (a top that never
+    precesses traces no figure, and "cusps" follows), or one zero where the top's rate there
+    is not (a cusp by fiat). None otherwise."""
+    if name != "motion":
+        raise LookupError(name)
+    rates = [float(earlier[n]) for n in ("alpha_dot1", "alpha_dot2")]
+    if not any(rates):
+        return ("your {alpha_dot1} and {alpha_dot2} are both zero: a top that never precesses "
+                "traces no figure, and {motion} follows with nothing of R18 worked out")
+    solution = solve_heavy_top(*state_args(top_from_params(params), state_from_params(params)))
+    key = (solution["alpha_dot_beta1"], solution["alpha_dot_beta2"])
+    for n, rate, right in zip(("alpha_dot1", "alpha_dot2"), rates, key, strict=True):
+        if rate == 0 and right:
+            return (f"your {{{n}}} is zero where the top precesses, which makes {{motion}} "
+                    "cusps with nothing of R18 worked out")
+    return None

@@ -41,6 +41,7 @@ import numpy as np
 
 from problems.answers import Answer, Mistake
 from problems.family import Parameter, distinguishable, reject_unless
+from problems.genuine import statement_number
 from problems.rounding import latex_sig, round_sig
 from solver.heavy_top import critical_spin, sleeping_top_stable
 from solver.inertia import centre_of_mass_offset, parallel_axis, shape_tensor
@@ -283,3 +284,21 @@ def follow(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> 
     if name != "stable":
         raise LookupError(name)
     return bool(params["omega3"] >= float(earlier["omega3_c"]))
+
+
+def degenerate(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> str | None:
+    """Why a student's ``omega3_c`` leaves nothing to work out for ``stable`` (R19: the top
+    sleeps when ω3 ≥ ω3_c): a critical spin that is not positive (every spin is above it), or a
+    number of the statement copied (the given spin itself, say). None otherwise."""
+    if name != "stable":
+        raise LookupError(name)
+    critical = float(earlier["omega3_c"])
+    if critical <= 0:
+        return ("your {omega3_c} is not a positive spin: every spin is above it, so {stable} "
+                "follows with nothing of R19 worked out")
+    top = top_from_params(params)
+    copied = statement_number(critical, params, float(critical_spin(top.I1, top.I3, top.Mgl)))
+    if copied is not None:
+        return (f"your {{omega3_c}} is the statement's {{{copied}}}, copied: {{stable}} then "
+                "follows with nothing of R19 worked out")
+    return None

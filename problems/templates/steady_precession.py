@@ -44,6 +44,7 @@ import numpy as np
 
 from problems.answers import Answer, Mistake
 from problems.family import Parameter, distinguishable, reject_unless
+from problems.genuine import SAME
 from problems.rounding import latex_sig, round_sig
 from problems.templates.sleeping_top import TOP_KINDS, TOP_PARAMETERS, draw_top
 from solver.heavy_top import fast_top_rates, steady_precession_rates
@@ -211,3 +212,19 @@ def follow(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> 
         raise LookupError(name)
     slow, approx = float(earlier["slow"]), float(earlier["slow_approx"])
     return (approx - slow) / slow
+
+
+def degenerate(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> str | None:
+    """Why a student's rates leave nothing to work out for ``slow_error`` (R21: the fast-top
+    approximation is off the exact slow rate by ≳ 1/(4s), never nothing): ``slow`` zero (no
+    relative error of it), or ``slow`` and ``slow_approx`` the same number (the error is then
+    zero, nothing compared). None otherwise."""
+    if name != "slow_error":
+        raise LookupError(name)
+    slow, approx = float(earlier["slow"]), float(earlier["slow_approx"])
+    if slow == 0:
+        return "your {slow} is zero: there is no relative error {slow_error} of it (R21)"
+    if abs(approx - slow) <= SAME * abs(slow):
+        return ("your {slow} and {slow_approx} are the same number, which makes {slow_error} "
+                "zero with nothing compared (R21)")
+    return None

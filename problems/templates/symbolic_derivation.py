@@ -369,3 +369,23 @@ def follow(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> 
         raise LookupError(name)
     points = {n: np.array([float(params[n])]) for n in q.symbols}
     return float(evaluate_expression(str(earlier[f"{q.name}_expr"]), q.symbols, points)[0])
+
+
+def degenerate(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> str | None:
+    """Why a student's expression leaves nothing to work out for its value: it has none of the
+    symbols (a number, not a derivation from R14's Lagrangian), or it is one symbol alone (its
+    value a number of the statement copied). None otherwise."""
+    from problems.expressions import parse_expression
+
+    q, _ = _quantity(params)
+    if name != q.name:
+        raise LookupError(name)
+    expression = f"{q.name}_expr"
+    expr = parse_expression(str(earlier[expression]), q.symbols)
+    if not expr.free_symbols:
+        return (f"your {{{expression}}} has none of the symbols: a number, not a derivation "
+                f"from R14's Lagrangian, so {{{name}}} from it shows nothing")
+    if expr.is_Symbol:
+        return (f"your {{{expression}}} is one given symbol alone, which makes {{{name}}} a "
+                "number of the statement copied, nothing derived from R14's Lagrangian")
+    return None

@@ -26,6 +26,7 @@ from scipy.spatial.transform import Rotation
 
 from problems.answers import Answer, Mistake
 from problems.family import Parameter, distinguishable, reject_unless
+from problems.genuine import statement_number
 from problems.rounding import latex_sig, round_sig
 from solver.inertia import shape_tensor
 from solver.parameters import ParameterError
@@ -260,3 +261,20 @@ def follow(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> 
     if name != "T_body":
         raise LookupError(name)
     return 2 * math.pi / abs(float(earlier["Omega"]))
+
+
+def degenerate(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any]) -> str | None:
+    """Why a student's ``Omega`` is no ground for ``T_body = 2π/|Ω|`` (R8): zero (a body that
+    does not precess has no period), or a number of the statement copied (ω3 itself, say) —
+    not the rate ``Ω = ω3 (I3 − I1)/I1`` worked out. None otherwise."""
+    if name != "T_body":
+        raise LookupError(name)
+    rate = float(earlier["Omega"])
+    if rate == 0:
+        return "your {Omega} is zero: a body that does not precess has no period {T_body} (R8)"
+    d = _draw_of(params)
+    copied = statement_number(rate, params, float(body_precession_rate(d.I1, d.I3, d.omega0[2])))
+    if copied is not None:
+        return (f"your {{Omega}} is a number of the statement's {{{copied}}}, copied, not R8's "
+                "rate worked out: {T_body} from it shows nothing")
+    return None

@@ -8,12 +8,16 @@ definitions (numpy, sympy, the R-ids) — not the families' code paths:
 - from the key's own earlier values, ``follow`` gives the key back within its tolerance (a
   student whose earlier answers are right is judged as by the key);
 - from perturbed earlier values, it gives what the statement's definition gives for them;
-- and that differs from the key (a numeric answer), so follow-through credit is a real change.
+- and that differs from the key (a numeric answer), so follow-through credit is a real change;
+- each family declares the earlier values that leave nothing to work out for the later answer
+  (``degenerate``, issue 30), and calls neither the key's own values nor a plausible wrong
+  one so.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable
 
 import numpy as np
@@ -250,3 +254,79 @@ def test_depends_on_round_trips_through_the_key_record():
     assert record["depends_on"] == ["omega3_c"]
     assert Answer.from_dict(record) == answer
     assert "depends_on" not in _answers(_variant("sleeping_top", 0))["omega3_c"].to_dict()
+
+
+# -- each family's own degenerate cases (issue 30): earlier values that leave nothing to work
+# out for the later answer, as the family's docstring declares them; written out here from the
+# statements, never taken from the family's code
+
+
+def _rotation(values):
+    return np.reshape(values["R"], (3, 3))
+
+
+DEGENERATE: dict[str, Callable] = {  # family -> (params, key values) -> [(changed, earlier)]
+    "sleeping_top": lambda p, k: [("omega3_c", {"omega3_c": 0.0}),
+                                  ("omega3_c", {"omega3_c": -k["omega3_c"]}),
+                                  ("omega3_c", {"omega3_c": p["omega3"]})],
+    "symmetric_free_top": lambda p, k: [("Omega", {"Omega": 0.0})] + (
+        [("Omega", {"Omega": p["omega0"][2]})] if k["Omega"] != p["omega0"][2] else []),
+    "heavy_top_constants": lambda p, k: [("p_gamma", {"p_gamma": 0.0}),
+                                         ("p_gamma", {"p_gamma": p["gamma_dot0"]})],
+    "inertia_tensor": lambda p, k: [("I_offdiag", {"I_offdiag": [0.0, 0.0, 0.0]}),
+                                    ("I_diag", {"I_diag": [0.0, 0.0, 0.0]})],
+    "energy_momentum": lambda p, k: [
+        ("L", {"L": [0.0, 0.0, 0.0]}),
+        *(("L", {"L": (f * _omega(p)).tolist()}) for f in (1.0, 2.5, -0.7))],
+    "euler_rotation": lambda p, k: [
+        ("R", {"R": np.eye(3).ravel().tolist()}),
+        ("R", {"R": np.diag([-1.0, -1.0, 1.0]).ravel().tolist()}),
+        ("R", {"R": [0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0]})],
+    "steady_precession": lambda p, k: [
+        ("slow", {"slow": 0.0}),
+        ("slow", {"slow": k["slow_approx"], "slow_approx": k["slow_approx"]})],
+    "motion_type": lambda p, k: [
+        ("alpha_dot1", {"alpha_dot1": 0.0, "alpha_dot2": 0.0}),
+        *((n, {n: 0.0}) for n in ("alpha_dot1", "alpha_dot2") if k[n] != 0)],
+    "symbolic_derivation": lambda p, k: [
+        (e, {e: text}) for e in k if e.endswith("_expr")
+        for text in ("0", "7.5", _symbols(p)[0])],
+}
+
+
+def _omega(params):
+    omega = params["omega"]
+    return np.array(omega if np.ndim(omega) else [0.0, 0.0, omega], dtype=float)
+
+
+def _symbols(params):
+    """The symbols of a symbolic_derivation variant: its parameters that are numbers."""
+    return [n for n, v in params.items() if not isinstance(v, str)]
+
+
+@pytest.mark.parametrize("chain", sorted(CHAINS), ids="/".join)
+def test_each_family_declares_its_degenerate_cases(chain):
+    family, answer = chain
+    names, checked = CHAINS[chain], 0
+    module = FAMILIES[family].module
+    assert module.degenerate.__doc__ and re.search(r"\bR\d+\b", module.degenerate.__doc__)
+    for seed, variant, key in _variants_with(family, answer, 8):
+        values = {n: a.value for n, a in key.items()}
+        own = {n: values[n] for n in names}
+        assert FAMILIES[family].degenerate(answer, variant.parameters, own) is None, seed
+        first = names[seed % len(names)]
+        plausible = {**own, first: _perturbed(first, own[first], seed)}
+        assert FAMILIES[family].degenerate(answer, variant.parameters, plausible) is None, seed
+        for changed, case in DEGENERATE[family](variant.parameters, values):
+            reason = FAMILIES[family].degenerate(answer, variant.parameters, {**own, **case})
+            assert reason is not None, (seed, case)
+            assert f"{{{changed}}}" in reason and f"{{{answer}}}" in reason, reason
+            assert re.search(r"\bR\d+\b", reason), reason
+            checked += 1
+    assert checked >= 8
+
+
+def test_degenerate_is_asked_of_a_chained_answer_only():
+    variant = _variant("sleeping_top", 0)
+    with pytest.raises(LookupError):
+        FAMILIES["sleeping_top"].degenerate("omega3_c", variant.parameters, {})

@@ -249,6 +249,34 @@ def test_a_typed_tolerance_is_caught():
     assert count == len(SEEDS) and "types a tolerance" in shown[0]
 
 
+def _chained(degenerate) -> Family:
+    """The dropped ball asking, after t, the speed v = g t from the student's own t."""
+    from problems.family import follows_from
+
+    def answers(p):
+        t = math.sqrt(2 * p["h"] / p["g"])
+        return (Answer("t", "scalar", t, unit="s"),
+                follows_from(Answer("v", "scalar", p["g"] * t, unit="m/s"), "t"))
+
+    def statement(p):
+        return (f"A ball is dropped from $h = {p['h']:g}$ m (`h`); $g = {p['g']:g}$ m/s² "
+                "(`g`).\n\n1. `t`: how long it falls;\n2. `v`: its speed then, from your t.")
+
+    return falling(answers=answers, statement=statement, degenerate=degenerate,
+                   follow=lambda name, p, earlier: p["g"] * earlier["t"])
+
+
+def test_a_degenerate_that_refuses_the_key_s_own_values_is_caught():
+    check = "follow-through gives back the key"
+    sound = _chained(lambda name, p, earlier: "your {t} is zero" if earlier["t"] == 0 else None)
+    assert failures(self_test(sound, range(3)), check)[0] == 0
+    refusing = _chained(lambda name, p, earlier: "your {t} is a guess")
+    count, shown = failures(self_test(refusing, range(3)), check)
+    assert count == 3
+    assert shown[0] == "seed 0: degenerate('v') calls the key's own values degenerate: your " \
+                       "{t} is a guess"
+
+
 def test_a_slow_family_is_caught(monkeypatch):
     monkeypatch.setattr(selftest, "MAX_SECONDS", 0.0)
     count, shown = failures(self_test_graded(falling(), range(3)), "time per variant")
