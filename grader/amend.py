@@ -83,6 +83,38 @@ def add_override_arguments(parser: argparse.ArgumentParser) -> None:
                         help="take back the override of that answer (or total)")
 
 
+def add_late_arguments(parser: argparse.ArgumentParser) -> None:
+    """``eulertop late set HW [--due T] [--grace D] [--penalty 10%/day] [--max 50%] [--close T]
+    …`` and ``eulertop late extend HW STUDENT --due T --reason TEXT | --remove``."""
+    actions = parser.add_subparsers(dest="action", metavar="ACTION", required=True)
+    change = actions.add_parser("set", help="set or change the deadline and the late penalty, "
+                                "then rescore", description="Set or change the assignment's "
+                                "deadline and late policy; then rescore (no notebook runs).")
+    _common(change)
+    change.add_argument("--due", metavar="TIME", help="the due time, ISO 8601 with its offset "
+                        "(2026-03-14T23:59:00-05:00)")
+    change.add_argument("--grace", metavar="DURATION", help="no penalty this long after the "
+                        "due time (15m, 2h)")
+    change.add_argument("--penalty", metavar="RATE", help="per started period: 10%%/day, "
+                        "5%%/hour")
+    change.add_argument("--max", metavar="PERCENT", help="the most the penalty takes (50%%)")
+    change.add_argument("--close", metavar="TIME", help="after it no credit ('none': no close)")
+    change.add_argument("--after-close", choices=("zero", "practice"),
+                        help="after the close: no credit (zero), or graded as practice")
+    change.add_argument("--of", choices=("earned", "total"),
+                        help="the penalty's base: the points earned (default) or the total")
+    change.add_argument("--zone", metavar="NAME", help="time zone (America/Chicago) for times "
+                        "an LMS writes without an offset")
+    extend = actions.add_parser("extend", help="give one student their own due time, then "
+                                "rescore them", description="Give one student an extension "
+                                "(or take it back with --remove); then rescore them.")
+    _common(extend)
+    extend.add_argument("student", metavar="STUDENT", help="the student's id")
+    extend.add_argument("--due", metavar="TIME", help="their due time, ISO 8601 with its offset")
+    extend.add_argument("--reason", metavar="TEXT", help="why (shown to the student)")
+    extend.add_argument("--remove", action="store_true", help="take the extension back")
+
+
 def _say_rescore(command: str, report) -> None:
     from grader.rescore import change_lines
 
@@ -272,3 +304,109 @@ def override_change(args: argparse.Namespace):
 def run_override(args: argparse.Namespace) -> int:
     """Run ``eulertop override``."""
     return _rescore(args, "eulertop override", override_change(args))
+
+
+def late_change(args: argparse.Namespace):
+    """``eulertop late set`` / ``late extend``'s change: the policy ``assignment.json`` records,
+    changed (:mod:`problems.deadlines`); refused (UsageError) when it cannot be read."""
+    from grader.assignment import UsageError
+    from grader.late import policy_of
+    from grader.rescore import Amendment
+    from problems.deadlines import PolicyError
+
+    def change(a, overrides) -> Amendment:
+        before = policy_of(a.manifest)
+        try:
+            after = _policy_set(before, args) if args.action == "set" else \
+                _extension_set(before, args, a)
+        except PolicyError as e:
+            raise UsageError(str(e)) from None
+        if after == before:
+            return Amendment(unchanged="the late policy is already so")
+        lines = tuple(_policy_lines(before, after))
+        who = None if args.action == "set" else frozenset({args.student})
+        return Amendment(f"late {args.action}", "; ".join(lines),
+                         manifest={**a.manifest, "late": after.record()}, students=who,
+                         details={"late": {"before": None if before is None else before.record(),
+                                           "after": after.record()}}, lines=lines)
+
+    return change
+
+
+def _policy_set(policy, args: argparse.Namespace):
+    """``policy`` (None: none yet) with ``late set``'s options applied."""
+    from dataclasses import replace
+
+    from problems.deadlines import (
+        LatePolicy,
+        PolicyError,
+        duration,
+        instant,
+        penalty_rate,
+        zone_named,
+    )
+
+    zone = zone_named(args.zone if args.zone is not None else getattr(policy, "zone", None))
+    if policy is None:
+        if args.due is None:
+            raise PolicyError("the assignment has no late policy yet: give --due")
+        policy = LatePolicy(due=instant(args.due, "--due", zone))
+    changes: dict = {}
+    if args.due is not None:
+        changes["due"] = instant(args.due, "--due", zone)
+    if args.grace is not None:
+        changes["grace"] = duration(args.grace, "--grace")
+    if args.penalty is not None:
+        changes["percent"], changes["per"] = penalty_rate(args.penalty)
+    if args.max is not None:
+        changes["max_percent"] = penalty_rate(f"{args.max}/day")[0]
+    if args.close is not None:
+        changes["close"] = None if args.close == "none" else instant(args.close, "--close", zone)
+    for name in ("after_close", "of", "zone"):
+        if getattr(args, name) is not None:
+            changes[name] = getattr(args, name)
+    return replace(policy, **changes)
+
+
+def _extension_set(policy, args: argparse.Namespace, a):
+    """``policy`` with ``late extend``'s extension given or taken back."""
+    from grader.assignment import UsageError
+    from problems.deadlines import Extension, PolicyError, instant, zone_named
+
+    if policy is None:
+        raise PolicyError("the assignment has no late policy: set one first ('eulertop late "
+                          "set HW --due …')")
+    if args.student not in a.ids:
+        raise UsageError(f"no student {args.student!r} in the assignment's roster")
+    if args.remove:
+        if args.student not in policy.extensions:
+            raise UsageError(f"{args.student} has no extension to take back")
+        return policy.with_extension(args.student, None)
+    if args.due is None or not args.reason:
+        raise UsageError("give --due TIME and --reason TEXT (or --remove)")
+    due = instant(args.due, "--due", zone_named(policy.zone))
+    return policy.with_extension(args.student, Extension(due, args.reason))
+
+
+def _policy_lines(before, after) -> list[str]:
+    """What changed between two policies, a line each: ``due: … → …``."""
+    old = {} if before is None else before.record()
+    new = after.record()
+    lines = []
+    for name in dict.fromkeys([*old, *new]):
+        if name == "extensions":
+            continue
+        if old.get(name) != new.get(name):
+            lines.append(f"{name}: {old.get(name, '—')} → {new.get(name, '—')}")
+    was, now = old.get("extensions", {}), new.get("extensions", {})
+    for sid in sorted(set(was) | set(now)):
+        if was.get(sid) != now.get(sid):
+            lines.append(f"extension of {sid}: " + (
+                "taken back" if sid not in now else
+                f"due {now[sid]['due']} ({now[sid]['reason']})"))
+    return lines
+
+
+def run_late(args: argparse.Namespace) -> int:
+    """Run ``eulertop late set`` / ``eulertop late extend``."""
+    return _rescore(args, f"eulertop late {args.action}", late_change(args))

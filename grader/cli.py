@@ -93,6 +93,10 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> None:
                              "one is recorded as invalid without being read")
     parser.add_argument("--force", action="store_true",
                         help="regrade every submission, even those unchanged since last run")
+    parser.add_argument("--times", type=Path, metavar="FILE",
+                        help="when each submission came in (CSV id,submitted_at in ISO 8601 "
+                             "with its offset), for the late policy, where the LMS download "
+                             "does not say")
     parser.add_argument("--wait", type=float, default=600.0, metavar="SECONDS",
                         help="wait this long for another command on the output folder to "
                              "finish (default 600)")
@@ -159,7 +163,7 @@ def run_grade(args: argparse.Namespace, execute=None) -> int:
             on_plan=lambda n: Progress(n), cold_kernels=getattr(args, "cold_kernels", False),
             sandbox=not getattr(args, "no_sandbox", False), class_list=class_list,
             cluster=getattr(args, "cluster", None), wait=args.wait,
-            yes=getattr(args, "yes", False),
+            yes=getattr(args, "yes", False), times=getattr(args, "times", None),
         )
     except (UsageError, RosterError) as e:
         print(f"eulertop grade: {e}", file=sys.stderr)

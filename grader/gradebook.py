@@ -83,6 +83,7 @@ def gradebook_rows(
     results: Mapping[str, StudentResult],
     sandbox_column: bool = False,
     override_column: bool | None = None,
+    late_columns: bool | None = None,
 ) -> list[list[str]]:
     """The gradebook as rows of strings, header first.
 
@@ -91,7 +92,11 @@ def gradebook_rows(
     pipeline sets it when some submission was graded without a sandbox, ``--no-sandbox``) a last
     column ``sandboxed``: ``yes`` / ``no`` (``""`` when nothing was executed); and, when some
     record holds an instructor's override (``override_column``, default: whether one does), a
-    last column ``overridden``: what was, ``q3_T_nut; total`` (``""`` for the others).
+    last column ``overridden``: what was, ``q3_T_nut; total`` (``""`` for the others). Where
+    the assignment has a late policy (``late_columns``, default: whether a record holds a
+    late entry), ``raw`` (the points before the penalty), ``late_by`` (how late, ``""`` when
+    on time or the time is unknown) and ``penalty`` (the points it took) follow ``maximum``:
+    ``total`` stays what the student gets.
 
     ``status`` keeps three kinds of student apart: ``graded`` (the notebook ran and its answers
     were compared; ``reason`` is empty, or a note such as a cell that raised), ``missing`` (no
@@ -103,17 +108,22 @@ def gradebook_rows(
     others = [c for c in columns if c != "id"]
     if override_column is None:
         override_column = any(r.overridden for r in results.values())
-    table = [["id", *others, *(f"q{k}" for k in questions), "total", "maximum", "status",
-              "reason", *(["sandboxed"] if sandbox_column else []),
+    if late_columns is None:
+        late_columns = any(r.late for r in results.values())
+    late_head = ["raw", "late_by", "penalty"] if late_columns else []
+    table = [["id", *others, *(f"q{k}" for k in questions), "total", "maximum", *late_head,
+              "status", "reason", *(["sandboxed"] if sandbox_column else []),
               *(["overridden"] if override_column else [])]]
     for row in rows:
         r = results.get(row["id"])
         if r is None:
-            cells = [""] * (len(questions) + 2) + ["not graded yet", ""]
+            cells = [""] * (len(questions) + 2 + len(late_head)) + ["not graded yet", ""]
         else:
             per_question = r.question_points()
             cells = [number(per_question.get(k, 0.0)) for k in questions]
-            cells += [number(r.points), number(r.max_points), r.status, reason(r)]
+            cells += [number(r.points), number(r.max_points)]
+            cells += late_cells(r) if late_columns else []
+            cells += [r.status, reason(r)]
         if sandbox_column:
             cells.append("" if r is None else "yes" if r.sandboxed else "no" if ran_code(r)
                          else "")
@@ -122,6 +132,24 @@ def gradebook_rows(
         table.append([csv_cell(c) for c in [row["id"], *(row.get(c, "") for c in others),
                                             *cells]])
     return table
+
+
+def raw_points(result: StudentResult) -> float:
+    """The points before the late penalty and an override of the total: the answers' sum."""
+    return sum(a.verdict.points for a in result.answers)
+
+
+def late_cells(result: StudentResult) -> list[str]:
+    """``raw``, ``late_by`` and ``penalty`` of one row (:func:`gradebook_rows`)."""
+    from datetime import timedelta
+
+    from problems.deadlines import spoken
+
+    late = result.late
+    late_by = late.get("late_by_seconds", 0.0)
+    return [number(raw_points(result)),
+            spoken(timedelta(seconds=late_by)) if late_by > 0 else "",
+            number(late["points"]) if late.get("points") else ""]
 
 
 ANSWER_COLUMNS = ("id", "question", "answer", "variable", "submitted", "points", "max",
@@ -299,6 +327,48 @@ def _answers_table(question: Mapping[str, Any], result: StudentResult,
     return f"<table><tr>{head}</tr>{''.join(rows)}</table>"
 
 
+def _when(iso: str, like: str | None = None) -> str:
+    """An ISO 8601 time for people, ``2026-03-16 23:59 -05:00`` (in the offset of the time
+    ``like`` where given, so that two times of one sentence read alike)."""
+    from datetime import datetime
+
+    moment = datetime.fromisoformat(iso)
+    if like is not None:
+        moment = moment.astimezone(datetime.fromisoformat(like).tzinfo)
+    offset = moment.strftime("%z")
+    return moment.strftime("%Y-%m-%d %H:%M") + (f" {offset[:3]}:{offset[3:]}" if offset else "")
+
+
+def late_sentence(result: StudentResult) -> str:
+    """What the late policy made of ``result`` (its ``late`` entry), in words for the student:
+    the deadline that applied, when the work came in, how late, and what it cost."""
+    from datetime import timedelta
+
+    from problems.deadlines import spoken
+
+    late, came = result.late, result.submitted
+    due = f"Deadline: {_when(late['due'])}"
+    if late.get("extension"):
+        due += f" (your extension: {late['extension']})"
+    source = f" ({came['source']})" if came.get("source") else ""
+    seconds = late.get("late_by_seconds", 0.0)
+    submitted = _when(came["at"], late["due"])
+    if seconds <= 0:
+        return f"{due}. Submitted {submitted}{source}: on time."
+    late_by = spoken(timedelta(seconds=seconds))
+    head = f"{due}. Submitted {submitted}{source}: {late_by} late"
+    if late.get("closed"):
+        what = "practice: graded, for no credit" if late["closed"] == "practice" else "no credit"
+        return f"{head}, after the assignment closed — {what} (−{number(late['points'])} points)."
+    if not late.get("periods"):
+        return f"{head}, within the grace period: no penalty."
+    unit = late.get("per", "day")
+    count = f"{late['periods']} started {unit}{'s' if late['periods'] != 1 else ''}"
+    base = "of the points earned" if late.get("of", "earned") == "earned" else "of the total"
+    return (f"{head}: {count}, {number(late['percent'])} % {base} — "
+            f"−{number(late['points'])} points.")
+
+
 def feedback_html(
     title: str,
     result: StudentResult,
@@ -338,6 +408,8 @@ def feedback_html(
             f"— {_e(_cut(o['reason']))}</li>" for what, o in result.overridden.items())
         parts.append(f"<div class=\"override\"><p>Changed by your instructor:</p><ul>{items}"
                      "</ul></div>")
+    if result.late:
+        parts.append(f"<p class=\"late\">{_e(late_sentence(result))}</p>")
     errors = result.execution.get("cell_errors") or []
     if errors:
         items = "".join(f"<li><code>{_e(_cut(line))}</code></li>" for line in errors)
@@ -367,6 +439,11 @@ def summary_table(results: Sequence[StudentResult], problems: Sequence[Problem] 
     counts = {s: sum(r.status == s for r in results) for s in ("graded", "missing", "failed")}
     out.append("")
     out.append(", ".join(f"{n} {s}" for s, n in counts.items()) + f" of {len(results)} students")
+    late = [r.student_id for r in results if r.late.get("late_by_seconds", 0) > 0]
+    if late:
+        taken = sum(r.late.get("points", 0.0) for r in results)
+        out.append(f"late ({len(late)}): {', '.join(late)}; the late policy took "
+                   f"{number(taken)} points in all")
     foreign = [r.student_id for r in results if r.execution.get("foreign")]
     if foreign:
         out.append(f"not this assignment's notebook, or another student's, graded all the same "

@@ -28,7 +28,9 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from grader.assignment import Assignment, UsageError
+from grader.late import late_entry, submitted_time
 from grader.results import AnswerResult, StudentResult
+from problems.deadlines import LatePolicy
 
 OVERRIDES = "overrides.toml"
 TOTAL = "total"
@@ -99,29 +101,30 @@ def overrides_toml(overrides: Iterable[Override]) -> str:
 
 
 def without_overrides(result: StudentResult) -> StudentResult:
-    """``result`` as it was before any override: each overridden answer's points back to what
-    the comparison gave, the total their sum."""
-    if not result.overridden:
+    """``result`` as it was before any override and late penalty: each overridden answer's
+    points back to what the comparison gave, the total their sum."""
+    if not result.overridden and not result.late:
         return result
     was = {k: v["was"] for k, v in result.overridden.items()}
     answers = tuple(_with_points(a, was[a.variable]) if a.variable in was else a
                     for a in result.answers)
     return replace(result, answers=answers, points=sum(a.verdict.points for a in answers),
-                   overridden={})
+                   overridden={}, late={})
 
 
 def _with_points(answer: AnswerResult, points: float) -> AnswerResult:
     return replace(answer, verdict=replace(answer.verdict, points=points))
 
 
-def apply_overrides(result: StudentResult, overrides: Iterable[Override]) -> StudentResult:
-    """``result`` with the overrides of its student applied (an answer's first, then the total),
-    each noted in ``overridden``; any applied before are taken back first. The overrides are
-    those :func:`check_overrides` accepted for the key ``result`` was compared with."""
+def apply_overrides(result: StudentResult, overrides: Iterable[Override],
+                    late: LatePolicy | None = None) -> StudentResult:
+    """``result`` with the overrides of its student and the late policy ``late`` applied, in
+    this order: the overrides of answers, the late penalty (:mod:`grader.late`), the override
+    of the total — each noted in the record (``overridden``, ``late``); any applied before are
+    taken back first. The overrides are those :func:`check_overrides` accepted for the key
+    ``result`` was compared with."""
     result = without_overrides(result)
     mine = [o for o in overrides if o.student == result.student_id]
-    if not mine:
-        return result
     answers = {a.variable: a for a in result.answers}
     overridden = {}
     for o in (o for o in mine if o.answer is not None):
@@ -129,10 +132,22 @@ def apply_overrides(result: StudentResult, overrides: Iterable[Override]) -> Stu
         answers[o.answer] = _with_points(answers[o.answer], o.points)
     kept = tuple(answers[a.variable] for a in result.answers)
     points = sum(a.verdict.points for a in kept)
+    entry, points = _penalised(result, late, points)
     for o in (o for o in mine if o.answer is None):
         overridden[TOTAL] = _note(o, points)
         points = o.points
-    return replace(result, answers=kept, points=points, overridden=overridden)
+    return replace(result, answers=kept, points=points, overridden=overridden, late=entry)
+
+
+def _penalised(result: StudentResult, late: LatePolicy | None,
+               earned: float) -> tuple[dict, float]:
+    """The record's ``late`` entry and its points after the penalty (none without a policy, a
+    known time, or a graded notebook)."""
+    when = submitted_time(result.submitted) if late is not None else None
+    if when is None or result.status != "graded":
+        return {}, earned
+    entry, taken = late_entry(late, result.student_id, when, earned, result.max_points)
+    return entry, earned - taken
 
 
 def check_overrides(a: Assignment, overrides: Iterable[Override],

@@ -59,7 +59,7 @@ import threading
 import uuid
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import ExitStack, contextmanager, suppress
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -72,6 +72,7 @@ from grader.follow_through import FollowThrough
 from grader.grade_one import Execute, submission_bytes, ungraded_result, unreadable
 from grader.gradebook import gradebook_csv, ran_code
 from grader.graded_folder import DOWNLOAD, FEEDBACK, LMS_SUBMISSIONS, RESULTS, graded_folder
+from grader.late import policy_of
 from grader.lms.classlist import merge_rows
 from grader.overrides import apply_overrides, check_overrides, read_overrides
 from grader.publish import (
@@ -229,6 +230,7 @@ def grade_assignment(
     cluster: str | None = None,
     wait: float = LOCK_WAIT,
     yes: bool = False,
+    times: Path | None = None,
 ) -> RunReport:
     """Grade every submission in ``submissions`` against the assignment ``hw``.
 
@@ -266,6 +268,9 @@ def grade_assignment(
     wait : float
         Seconds to wait for another command holding the output folder (default
         :data:`grader.transaction.LOCK_WAIT`).
+    times : Path, optional
+        ``--times FILE``: when each submission came in (CSV ``id,submitted_at``), for those
+        an LMS download does not say (:mod:`grader.late`).
     cluster : str, optional
         Grade on a Dask cluster (:mod:`grader.executors.dask`): a scheduler address
         (``tcp://HOST:PORT``) or ``local:N`` (a LocalCluster of N workers); ``jobs`` is then
@@ -312,7 +317,8 @@ def grade_assignment(
             submissions, found = _unpacked(submissions, out, a, rows)
         to_run, to_write, kept, packages = _plan(a, found, out, force, sandboxed,
                                                  submission_bytes(limits))
-        writer = _Writer(a, out, overrides, reveal, progress)
+        writer = _Writer(a, out, overrides, reveal, progress,
+                         _submission_times(a, found, times))
         stack.callback(writer.close)
         from grader.kernels.preload import preload_for
 
@@ -402,9 +408,10 @@ class _Writer:
     the end, the views and the run's own line (:meth:`finish`)."""
 
     def __init__(self, a: Assignment, out: Path, overrides: Sequence[Any], reveal: bool,
-                 progress: Callable[[StudentResult], None] | None) -> None:
+                 progress: Callable[[StudentResult], None] | None,
+                 times: Mapping[str, dict]) -> None:
         self.a, self.out, self.overrides, self.reveal = a, out, tuple(overrides), reveal
-        self.progress = progress
+        self.progress, self.times = progress, times
         self.follow = FollowThrough.of(a)
         self.before = records(a, out)
         self.run = uuid.uuid4().hex  # names the run's lines in the trail
@@ -412,6 +419,7 @@ class _Writer:
         self._lock = threading.Lock()
 
     def __call__(self, result: StudentResult) -> None:
+        result = replace(result, submitted=self.times.get(result.student_id, {}))
         result = settled(self.a, result, self.follow, self.overrides)
         with self._lock:
             tx = Transaction(self.out)
@@ -434,8 +442,8 @@ class _Writer:
         transaction; every record as it now is."""
         tx = Transaction(self.out)
         results = records(self.a, self.out)
-        rewritten = _overrides_kept(tx, self.a, self.out, results, kept, self.overrides,
-                                    self.reveal)
+        rewritten = _resettled(tx, self.a, self.out, results, kept, self.overrides,
+                               self.times, self.reveal)
         stage_views(tx, self.a, self.out, results, self.reveal,
                     published=set(self.graded) | set(rewritten))
         notebooks = {s.student_id: s.path for s in found.submissions}
@@ -449,24 +457,48 @@ class _Writer:
         return results
 
 
-def _overrides_kept(tx: Transaction, a: Assignment, out: Path,
-                    results: dict[str, StudentResult | None], kept: Sequence[str],
-                    overrides: Sequence[Any], reveal: bool) -> tuple[str, ...]:
-    """The records kept unchanged by this run, with the overrides as they are now (added or
-    taken back since they were written), staged into ``tx`` and put into ``results``; their
-    ids."""
+def _resettled(tx: Transaction, a: Assignment, out: Path,
+               results: dict[str, StudentResult | None], kept: Sequence[str],
+               overrides: Sequence[Any], times: Mapping[str, dict],
+               reveal: bool) -> tuple[str, ...]:
+    """The records kept unchanged by this run with the overrides, the late policy and the
+    submission times as they are now (an override added or taken back since they were
+    written, a deadline moved, a time now known), staged into ``tx`` and put into
+    ``results``; their ids."""
+    policy = policy_of(a.manifest)
     rewritten = []
     for sid in kept:
         record = results.get(sid)
         if record is None:
             continue
-        now_overridden = apply_overrides(record, overrides)
-        if now_overridden.overridden != record.overridden or \
-                now_overridden.points != record.points:
-            stage_record(tx, a, out, now_overridden, reveal)
-            results[sid] = now_overridden
+        now = apply_overrides(replace(record, submitted=times.get(sid, record.submitted)),
+                              overrides, policy)
+        if now != record:
+            stage_record(tx, a, out, now, reveal)
+            results[sid] = now
             rewritten.append(sid)
     return tuple(rewritten)
+
+
+def _submission_times(a: Assignment, found: Any, times: Path | None) -> dict[str, dict]:
+    """When each submission came in (:mod:`grader.late`): the LMS download's time where it
+    gives one, else ``--times FILE``'s; :class:`UsageError` naming the row or file of a time
+    that cannot be read."""
+    from grader.late import download_time, read_times
+
+    policy = a.manifest.get("late")
+    zone = (policy or {}).get("zone")
+    given = read_times(times, set(a.ids), zone) if times is not None else {}
+    for s in found.submissions:
+        if not s.submitted_at:
+            continue
+        try:
+            given[s.student_id] = download_time(s.submitted_at, s.time_source,
+                                                f"{s.student_id}: {s.time_source}", zone)
+        except UsageError:
+            if policy is not None:  # without a policy there is nothing to apply it to
+                raise
+    return given
 
 
 def _graded_change(old: StudentResult | None, new: StudentResult) -> dict:

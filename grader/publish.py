@@ -20,6 +20,7 @@ from grader.assignment import Assignment
 from grader.follow_through import FollowThrough
 from grader.gradebook import answers_rows, feedback_html, gradebook_csv, gradebook_rows, ran_code
 from grader.graded_folder import ANSWERS, FEEDBACK, GRADES, REPORT, RESULTS
+from grader.late import policy_of
 from grader.overrides import Override, apply_overrides
 from grader.results import StudentResult, result_json
 from grader.transaction import Transaction
@@ -28,10 +29,12 @@ from grader.transaction import Transaction
 def settled(a: Assignment, result: StudentResult, follow: FollowThrough | None,
             overrides: Sequence[Override]) -> StudentResult:
     """``result`` (compared with the key) as it is recorded: follow-through credit, then the
-    overrides — the one way every record of a grading run and of a rescore is finished."""
+    overrides of answers, the late penalty and an override of the total
+    (:func:`grader.overrides.apply_overrides`) — the one way every record of a grading run and
+    of a rescore is finished."""
     if follow is not None:
         result = follow.apply(result, a.expected(result.student_id))
-    return apply_overrides(result, overrides)
+    return apply_overrides(result, overrides, policy_of(a.manifest))
 
 
 def _page(a: Assignment, result: StudentResult, reveal: bool) -> str:
@@ -88,7 +91,8 @@ def stage_views(tx: Transaction, a: Assignment, out: Path,
     file whose text is unchanged is left as it is (:meth:`Transaction.write`)."""
     present = {sid: r for sid, r in results.items() if r is not None}
     unsandboxed = any(ran_code(r) and not r.sandboxed for r in present.values())
-    table = gradebook_rows(a.columns, a.rows, a.questions, present, sandbox_column=unsandboxed)
+    table = gradebook_rows(a.columns, a.rows, a.questions, present, sandbox_column=unsandboxed,
+                           late_columns="late" in a.manifest or None)
     tx.write(out / GRADES, gradebook_csv(table), durable=False)
     tx.write(out / ANSWERS, gradebook_csv(answers_rows(a.rows, present)), durable=False)
     for sid, r in present.items():

@@ -138,9 +138,9 @@ def rescored(a: Assignment, old: StudentResult) -> StudentResult:
         extracted.update({k.variable: None for k in expected if k.variable not in extracted})
         if unread:
             execution[UNREAD] = list(unread)
-    new = scored(sid, expected, a.key_hash(sid), status=old.status, message=old.message,
-                 extracted=extracted, execution=execution, sandboxed=old.sandboxed,
-                 submission_sha256=old.submission_sha256)
+    new = replace(scored(sid, expected, a.key_hash(sid), status=old.status, message=old.message,
+                         extracted=extracted, execution=execution, sandboxed=old.sandboxed,
+                         submission_sha256=old.submission_sha256), submitted=old.submitted)
     if not unread:
         return new
     answers = tuple(replace(x, verdict=Verdict("missing", 0.0, x.verdict.max_points,

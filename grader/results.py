@@ -47,6 +47,9 @@ STATUSES = ("graded", "missing", "failed")
 that could not be graded (the message says why) — it earns nothing (fail closed)."""
 
 TEMP_SUFFIX = ".tmp"
+OPTIONAL = ("overridden", "submitted", "late")
+"""Fields of a record left out of its file when empty (a record without them reads as
+before)."""
 _NON_FINITE = {"NaN": math.nan, "Infinity": math.inf, "-Infinity": -math.inf}
 UNSTORABLE = ("note: some text of this record (a submitted value, a message or a file name) "
               "held characters no file can hold (lone surrogates); each is kept as its escape, "
@@ -162,6 +165,14 @@ class StudentResult:
         The instructor's overrides applied to this record (:mod:`grader.overrides`): answer
         variable, or ``"total"`` → ``{"points", "was", "reason", "by", "at"}``; ``{}`` when
         none (then absent from the file, which reads as before).
+    submitted : dict
+        When the submission came in and where that time came from (:mod:`grader.late`):
+        ``{"at": ISO 8601 with its offset, "source": "Gradescope's submission time" …}``;
+        ``{}`` when unknown (absent from the file).
+    late : dict
+        What the assignment's late policy made of it (:func:`grader.late.late_entry`: the due
+        time that applied, how late, the percentage and points taken); ``{}`` when there is
+        no policy or no time (absent from the file).
     """
 
     student_id: str
@@ -176,6 +187,8 @@ class StudentResult:
     sandboxed: bool
     graded_at: str
     overridden: dict = field(default_factory=dict)
+    submitted: dict = field(default_factory=dict)
+    late: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.status not in STATUSES:
@@ -184,7 +197,8 @@ class StudentResult:
         object.__setattr__(self, "points", float(self.points))
         object.__setattr__(self, "max_points", float(self.max_points))
         object.__setattr__(self, "execution", plain_json(self.execution))
-        object.__setattr__(self, "overridden", plain_json(self.overridden))
+        for name in OPTIONAL:
+            object.__setattr__(self, name, plain_json(getattr(self, name)))
         record = self.to_dict()
         kept = _storable(record)
         if kept != record:  # rebuilt from the storable text, saying so (module docstring)
@@ -204,8 +218,9 @@ class StudentResult:
         """Plain JSON; ``StudentResult.from_dict(r.to_dict()) == r``."""
         d = {f.name: getattr(self, f.name) for f in fields(self)}
         d["answers"] = [a.to_dict() for a in self.answers]
-        if not d["overridden"]:
-            del d["overridden"]
+        for name in OPTIONAL:
+            if not d[name]:
+                del d[name]
         return d
 
     @classmethod
@@ -215,7 +230,7 @@ class StudentResult:
         unknown = sorted(set(d) - names)
         if unknown:
             raise ValueError(f"unknown fields {unknown} in a result record")
-        kw = {name: d[name] for name in names if name in d or name != "overridden"}
+        kw = {name: d[name] for name in names if name in d or name not in OPTIONAL}
         kw["answers"] = tuple(AnswerResult.from_dict(a) for a in d["answers"])
         return cls(**kw)
 

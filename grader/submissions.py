@@ -21,6 +21,8 @@ class Submission:
     path: Path
     late: bool = False  # the LMS marked it late (grader/lms)
     source: str = ""  # how an LMS download matched it to the student (grader/lms)
+    submitted_at: str = ""  # when it came in, as the LMS wrote it ("": it does not say)
+    time_source: str = ""  # where that time is from, for people ("Gradescope's created_at")
 
 
 @dataclass(frozen=True)

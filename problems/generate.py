@@ -67,6 +67,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from problems.answers import Answer
+from problems.deadlines import LatePolicy
 from problems.family import Family, FamilyError
 from problems.notebook import build_notebooks, notebook_text
 from problems.roster import Roster
@@ -487,6 +488,7 @@ def generate_assignment(
     seed: int | None = None,
     title: str | None = None,
     follow_through: float | None = None,
+    late: LatePolicy | None = None,
     force: bool = False,
     progress: Progress | None = None,
     jobs: int | None = None,
@@ -499,7 +501,8 @@ def generate_assignment(
 
     ``follow_through`` (0 to 1; the spec's setting) is recorded in the manifest as the fraction
     of points an answer that follows from the student's own wrong earlier answer earns
-    (:mod:`grader.follow_through`; absent: 1.0, 0: none).
+    (:mod:`grader.follow_through`; absent: 1.0, 0: none). ``late`` (the spec's ``[late]``)
+    is recorded as the manifest's ``late`` (:meth:`problems.deadlines.LatePolicy.record`).
 
     ``jobs`` processes draw the students' questions and write their notebooks (default: one
     per usable core, from :data:`PARALLEL_MIN` students on); the files are byte-identical to
@@ -525,6 +528,8 @@ def generate_assignment(
     title = out.name if title is None else title
     manifest = _new_manifest(title, seed, questions, roster, follow_through,
                              _outside_families(families, questions, out))
+    if late is not None:
+        manifest["late"] = late.record()
     key = {"format": "eulertop-key", "format_version": FORMAT_VERSION, "title": title,
            "seed": seed, "students": {}}
     plan = _Plan(title, seed, questions, families, rerolls)

@@ -52,6 +52,7 @@ from typing import Any
 
 import numpy as np
 
+from problems.deadlines import LatePolicy, PolicyError, read_policy
 from problems.family import Family
 from problems.settings import AnswerSetting, ParameterSetting, QuestionSettings
 
@@ -59,7 +60,7 @@ PROBE_ATTEMPTS = 400
 """Draws :func:`check_spec` tries per family of a question before it calls the settings
 ill-posed (and the most it keeps to learn the answers' names from)."""
 
-_TOP_KEYS = ("title", "seed", "roster", "families", "follow_through", "questions")
+_TOP_KEYS = ("title", "seed", "roster", "families", "follow_through", "late", "questions")
 _QUESTION_KEYS = ("family", "pool", "points", "answers", "parameters")
 _ANSWER_KEYS = ("points", "rtol", "atol")
 
@@ -93,6 +94,7 @@ class Spec:
     families: tuple[Path, ...]
     questions: tuple[QuestionSpec, ...]
     follow_through: float | None = None  # fraction of points follow-through earns (issue 26)
+    late: LatePolicy | None = None  # the deadline and late policy, [late] (issue 32)
 
     def error(self, key: Sequence[str | int], problem: str) -> SpecError:
         """A :class:`SpecError` for ``key`` (a path into the TOML document)."""
@@ -216,7 +218,20 @@ def read_spec(path: Path) -> Spec:
     questions = tuple(_question(draft, q, i) for i, q in enumerate(entries))
     base = path.parent
     return Spec(path, text, title, seed, None if roster is None else base / roster,
-                tuple(base / f for f in folders or ()), questions, follow)
+                tuple(base / f for f in folders or ()), questions, follow,
+                _late(draft, document))
+
+
+def _late(spec: Spec, document: Mapping) -> LatePolicy | None:
+    """The ``[late]`` table as a policy (:mod:`problems.deadlines`), None when absent."""
+    if "late" not in document:
+        return None
+    try:
+        return read_policy(document["late"])
+    except PolicyError as e:
+        key, _, problem = str(e).partition(": ")
+        parts = ("late", *key.split(".")) if problem and " " not in key else ("late",)
+        raise spec.error(parts, problem if len(parts) > 1 else str(e)) from None
 
 
 def _known(spec: Spec, table: Any, key: tuple, allowed: Sequence[str]) -> None:

@@ -40,7 +40,7 @@ FLOORS = {
     # 4: the unit, and what it is graded against, and where its records go
     "grader.assignment": 24, "grader.graded_folder": 24, "grader.grade_one": 24,
     "grader.overrides": 24, "grader.audit": 24, "grader.follow_through": 24,
-    "grader.key_edit": 24, "grader.transaction": 24,
+    "grader.key_edit": 24, "grader.transaction": 24, "grader.late": 24,
     # 5: views of records, and file formats
     "grader.gradebook": 25, "grader.progress": 25, "grader.lms": 25, "grader.report": 25,
     # 6: where grade_one runs; where submissions come from

@@ -85,8 +85,11 @@ def match_download(folder: Path, students: Students) -> Matched | None:
             found.unmatched(entry, "its username is not on the roster")
         else:
             ids = students.by_column(key, user)
-            found.candidates.append(Candidate(ids[0], entry, (m["time"],),
-                                              how=f"Blackboard username {user!r}"))
+            day, clock = m["time"][:10], m["time"][11:].replace("-", ":")
+            found.candidates.append(Candidate(
+                ids[0], entry, (m["time"],), how=f"Blackboard username {user!r}",
+                submitted_at=f"{day}T{clock}",  # the server's local time: no offset
+                time_source=f"Blackboard's attempt time in {entry.name}"))
     return found
 
 

@@ -53,6 +53,8 @@ class Candidate:
     newness: tuple | None
     late: bool = False
     how: str = ""
+    submitted_at: str = ""  # when it came in, as the LMS wrote it (ISO 8601, maybe no offset)
+    time_source: str = ""
 
 
 @dataclass
@@ -160,7 +162,9 @@ def settle(student_ids: Sequence[str], matched: Matched,
             message = f"invalid submission: {'; '.join(why)}" if why else note
             problems.append(Problem(found[0].path, message, sid))
             continue
-        submissions.append(Submission(sid, chosen.path, late=chosen.late, source=chosen.how))
+        submissions.append(Submission(sid, chosen.path, late=chosen.late, source=chosen.how,
+                                      submitted_at=chosen.submitted_at,
+                                      time_source=chosen.time_source))
         if note:
             notes.append(note)
         if chosen.late and chosen.path not in refused:
@@ -195,13 +199,13 @@ def submissions_table(found: Discovery, root: Path) -> list[list[str]]:
     """``OUT/submissions.csv``: every file of an LMS download — the one graded for each student
     and how it was matched, then each one set aside or not graded, with its owner where known
     and why."""
-    table = [["id", "file", "late", "matched by", "not graded"]]
+    table = [["id", "file", "late", "submitted at", "matched by", "not graded"]]
     for s in found.submissions:
-        table.append([s.student_id, _relative(s.path, root), "yes" if s.late else "", s.source,
-                      ""])
+        table.append([s.student_id, _relative(s.path, root), "yes" if s.late else "",
+                      s.submitted_at, s.source, ""])
     listed = {p.path for p in found.set_aside}
     for p in (*found.set_aside, *(p for p in found.problems if p.path not in listed)):
-        table.append([p.student_id or "", _relative(p.path, root), "", "", p.message])
+        table.append([p.student_id or "", _relative(p.path, root), "", "", "", p.message])
     return table
 
 

@@ -47,6 +47,9 @@ def add_export_arguments(parser: argparse.ArgumentParser) -> None:
                              "id; Blackboard: the Grade Center column id)")
     parser.add_argument("--missing-as-zero", action="store_true",
                         help="give 0 to students with no submission (default: leave blank)")
+    parser.add_argument("--no-late", action="store_true",
+                        help="the points before the late penalty, for an LMS that applies its "
+                             "own late policy (an override of a total still stands)")
 
 
 class ExportError(ValueError):
@@ -87,9 +90,16 @@ def _feedback(result) -> str:
     return "; ".join(p for p in parts if p)
 
 
+def _before_penalty(result) -> float:
+    """A record's total without the late penalty; an override of the total stands."""
+    if "total" in result.overridden:
+        return result.points
+    return result.points + result.late.get("points", 0.0)
+
+
 def build_grades(hw: Path, graded: Path, roster: Path | None = None,
                  roster_format: str | None = None, column_id: str | None = None,
-                 missing_as_zero: bool = False):
+                 missing_as_zero: bool = False, no_late: bool = False):
     """The :class:`~grader.lms.classlist.Grades` of a graded assignment, and its records."""
     from grader.assignment import load_assignment
     from grader.gradebook import number
@@ -104,7 +114,8 @@ def build_grades(hw: Path, graded: Path, roster: Path | None = None,
     scores = {}
     for sid, r in results.items():
         blank = r is None or r.status == "missing"
-        scores[sid] = ("0" if missing_as_zero else "") if blank else number(r.points)
+        scores[sid] = ("0" if missing_as_zero else "") if blank else \
+            number(_before_penalty(r) if no_late else r.points)
     maxima = [r.max_points for r in results.values() if r is not None]
     max_points = max(maxima) if maxima else 0.0
     rows = _rows(a, roster, roster_format)
@@ -116,7 +127,7 @@ def write_export(hw: Path, lms: str, out: Path | None = None, graded: Path | Non
                  **options) -> tuple[Path, Path]:
     """Write the import file of ``lms`` and ``answers.csv``; their paths.
 
-    ``options``: ``roster``, ``roster_format``, ``column_id``, ``missing_as_zero`` of
+    ``options``: ``roster``, ``roster_format``, ``column_id``, ``missing_as_zero``, ``no_late`` of
     :func:`build_grades`. Raises :class:`ExportError`, ``grader.assignment.UsageError``,
     ``problems.roster.RosterError`` or ``grader.lms.classlist.ImportError_`` on bad input.
     """
@@ -158,7 +169,7 @@ def run_export(args: argparse.Namespace) -> int:
         out, answers = write_export(
             args.hw, args.to, args.out, args.graded, roster=args.roster,
             roster_format=args.roster_format, column_id=args.assignment_id,
-            missing_as_zero=args.missing_as_zero)
+            missing_as_zero=args.missing_as_zero, no_late=args.no_late)
     except (ExportError, UsageError, RosterError, ImportError_) as e:
         print(f"eulertop export: {e}", file=sys.stderr)
         return 2

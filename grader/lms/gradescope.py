@@ -67,6 +67,20 @@ def created_at(value: object) -> float:
     return datetime.fromisoformat(m.group(1).replace(" ", "T") + zone).timestamp()
 
 
+def _iso(value: object) -> str:
+    """``:created_at:`` as ISO 8601 (its offset kept; ``""`` when absent or unreadable: the
+    grading run then names it)."""
+    if isinstance(value, datetime):
+        return value.isoformat()
+    m = _TIME.match(str(value or ""))
+    if not m:
+        return str(value or "")
+    zone = (m.group(2) or "").replace("Z", "+00:00")
+    if zone and ":" not in zone:
+        zone = zone[:3] + ":" + zone[3:]
+    return m.group(1).replace(" ", "T") + zone
+
+
 def _metadata(path: Path) -> dict | str:
     """The metadata as a dict, or why it cannot be read."""
     import yaml
@@ -136,8 +150,10 @@ def _submission(folder: Path, record: dict, students: Students, found: Matched) 
             found.problems.append(Problem(folder, f"{folder.name}: {who} submitted no "
                                                    "notebook (.ipynb)"))
         for nb in notebooks:
-            found.candidates.append(Candidate(ids[0], nb, (when, number) if len(notebooks) == 1
-                                              else None, how=f"Gradescope {how}"))
+            found.candidates.append(Candidate(
+                ids[0], nb, (when, number) if len(notebooks) == 1 else None,
+                how=f"Gradescope {how}", submitted_at=_iso(_field(record, "created_at")),
+                time_source=f"Gradescope's :created_at: of {folder.name}"))
 
 
 def write_import(grades: Grades) -> list[list[str]]:

@@ -197,7 +197,24 @@ def scores_section(report: ClassReport) -> str:
             f"<p>{len(data.ids)} students on the roster: {status['graded']} graded, "
             f"{status['failed']} could not be graded, "
             f"{status['missing']} handed in nothing. Graded scores: {stats}.</p>"
+            + late_paragraph(data)
             + img(figures.score_histogram(percent), "histogram of the scores"))
+
+
+def late_paragraph(data) -> str:
+    """How many came in late, and what the late policy took (none without a policy)."""
+    entries = [r.late for r in data.results.values() if r.late]
+    if not entries and "late" not in data.assignment.manifest:
+        return ""
+    late = [x for x in entries if x.get("late_by_seconds", 0) > 0]
+    penalised = [x for x in late if x.get("points")]
+    closed = [x for x in late if x.get("closed")]
+    extended = sum(1 for x in entries if x.get("extension"))
+    taken = sum(x["points"] for x in penalised)
+    return (f"<p>Late: {len(late)} of {len(entries)} submissions with a known time came in "
+            f"after their deadline; {len(penalised)} lost points to the penalty "
+            f"({taken:.4g} in all), {len(closed)} after the close; {extended} "
+            "student(s) had an extension.</p>")
 
 
 def _stats_rows(stats: Sequence[ItemStats]) -> list[list[str]]:

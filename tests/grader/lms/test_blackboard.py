@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from grader.gradebook import number
@@ -102,3 +104,34 @@ def test_a_students_file_name_neither_changes_the_layout_nor_claims_a_classmate(
     assert got["jmuller"].points == got["jmuller"].max_points > 0
     assert (got["znunez"].status, got["znunez"].points) == ("graded", 0)
     assert report.not_graded == ()
+
+
+def test_attempt_times_need_the_policy_s_zone(blackboard, tmp_path):
+    """Blackboard writes attempt times in the server's clock, without an offset (issue 32):
+    without a late policy they are not needed; with one they are read in its ``zone``, and
+    without a zone the run refuses, naming the file, before it writes anything."""
+    import json
+    import shutil
+    from datetime import datetime, timedelta, timezone
+
+    from grader.assignment import UsageError
+    from problems.deadlines import LatePolicy
+
+    hw, report = blackboard
+    assert results(report)["jmuller"].submitted == {}
+    copy = Path(shutil.copytree(hw, tmp_path / "HW"))
+    manifest = json.loads((copy / "assignment.json").read_text())
+    due = datetime(2024, 3, 1, 9, 0, tzinfo=timezone(timedelta(hours=-6)))
+    manifest["late"] = LatePolicy(due=due, percent=10).record()
+    (copy / "assignment.json").write_text(json.dumps(manifest))
+    download = next(hw.parent.glob("gradebook_HW1.zip"))
+    before = {p: p.read_bytes() for p in copy.rglob("*") if p.is_file()}
+    with pytest.raises(UsageError, match=r"jmuller: Blackboard's attempt time in .*"
+                                         r"has no time zone offset"):
+        grade(copy, download)
+    assert {p: p.read_bytes() for p in copy.rglob("*") if p.is_file()} == before
+    manifest["late"]["zone"] = "America/Chicago"
+    (copy / "assignment.json").write_text(json.dumps(manifest))
+    got = results(grade(copy, download))
+    assert got["jmuller"].submitted["at"] == "2024-03-01T10:00:00-06:00"
+    assert got["jmuller"].late["periods"] == 1  # an hour after a 09:00 due time

@@ -75,12 +75,13 @@ def test_the_newest_upload_is_graded_and_lateness_kept(canvas):
                for n in report.notes)
     assert "4505: submitted late (weili_LATE_4505_90006_homework.ipynb)" in report.notes
     table = read_csv(hw / "graded" / "submissions.csv")
-    assert table[0] == ["id", "file", "late", "matched by", "not graded"]
-    rows = {r[0]: r for r in table[1:] if not r[4]}
+    assert table[0] == ["id", "file", "late", "submitted at", "matched by", "not graded"]
+    rows = {r[0]: r for r in table[1:] if not r[5]}
     assert rows["4505"][2] == "yes" and rows["jmuller"][2] == ""
+    assert rows["4505"][3] == ""  # Canvas's download says late, not when
     assert rows["znunez"][1] == "ñúñezzoë_4502_90010_hw-1.ipynb"
-    assert rows["jmuller"][3] == "Canvas user id 4501"
-    set_aside = {r[1]: (r[0], r[4]) for r in table[1:] if r[4]}
+    assert rows["jmuller"][4] == "Canvas user id 4501"
+    set_aside = {r[1]: (r[0], r[5]) for r in table[1:] if r[5]}
     assert set_aside["ñúñezzoë_4502_90002_hw.ipynb"] == (
         "znunez", "older than ñúñezzoë_4502_90010_hw-1.ipynb, which was graded")
     assert set_aside["dropdrop_4999_90007_hw.ipynb"][0] == ""

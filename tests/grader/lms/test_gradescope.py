@@ -71,7 +71,7 @@ def test_submitters_are_matched_by_sid_and_groups_share_their_notebook(gradescop
     assert "names student 'S1002'; it was graded as 'S1003'" in got["S1003"].message
     rows = {r[0]: r for r in read_csv(hw / "graded" / "submissions.csv")[1:]}
     assert rows["S1003"][1] == rows["S1002"][1] == f"{TOP}/submission_2002/hw.ipynb"
-    assert rows["S1002"][3] == "Gradescope SID 'S1002'"
+    assert rows["S1002"][4] == "Gradescope SID 'S1002'"
 
 
 def test_of_two_submissions_the_newest_by_the_clock_is_graded(gradescope):
@@ -99,3 +99,15 @@ def test_export_is_the_score_upload(gradescope):
     scores = [r[2] for r in table[1:]]
     assert scores[:2] + scores[3:] == [full, full, "0", full, ""]
     assert scores[2] == number(results(report)["S1003"].points)
+
+
+def test_each_submission_s_time_is_recorded_from_the_metadata(gradescope):
+    """For the late policy (issue 32): ``:created_at:`` with its offset, and where it came
+    from; the newest of two submissions gives its own time."""
+    _, report = gradescope
+    got = results(report)
+    assert got["S1001"].submitted == {
+        "at": "2024-03-01T20:00:00.123456-08:00",  # as YAML reads it: to the microsecond
+        "source": "Gradescope's :created_at: of submission_2001"}
+    assert got["S1004"].submitted["at"] == "2024-03-02T01:30:00-08:00"
+    assert got["S1006"].submitted == {}  # missing

@@ -223,4 +223,4 @@ def test_one_students_unsafe_upload_is_their_invalid_submission_alone(tmp_path, 
     assert re.match(rf"invalid submission: '{re.escape(prefix)}[_/].*{why}",
                     got["S1002"].message)
     listed = [r for r in read_csv(out / "submissions.csv")[1:] if r[0] == "S1002"]
-    assert listed and all(re.search(why, r[4]) for r in listed)
+    assert listed and all(re.search(why, r[5]) for r in listed)
