@@ -40,19 +40,13 @@ from typing import Any
 import nbformat
 from nbformat import v4
 
-from problems.answers import comparison_rule
+from problems.answers import comparison_rule, kind_hint
 from problems.conventions import conventions_text
 from problems.variant import Variant, answer_spec, variable_name
 
 FORMAT_VERSION = 1
 KERNELSPEC = {"name": "python3", "display_name": "Python 3 (ipykernel)", "language": "python"}
 _READ_ONLY = {"editable": False, "deletable": False}
-
-_KIND_HINTS = {
-    "scalar": "a number",
-    "angle": "an angle (a number)",
-    "boolean": "True or False",
-}
 
 TITLE_CELL = """\
 # {title}
@@ -99,18 +93,6 @@ def python_literal(value: Any) -> str:
 
 def _one_line(text: str) -> str:
     return " ".join(text.split())
-
-
-def kind_hint(spec: Mapping[str, Any]) -> str:
-    """How an answer must look, in words, from its public spec."""
-    kind = spec["kind"]
-    if kind == "vector":
-        return f"a list of {spec['length']} numbers"
-    if kind == "choice":
-        return "one of " + ", ".join(f'"{o}"' for o in spec["options"])
-    if kind == "expression":
-        return "an expression in " + ", ".join(spec["symbols"])
-    return _KIND_HINTS.get(kind, kind)
 
 
 def answer_line(spec: Mapping[str, Any], value: Any = None) -> str:
