@@ -280,6 +280,7 @@ def _generate(args: argparse.Namespace, class_lists: Mapping[str, Any] | None = 
         roster, args.out, families, problems=problems, questions=questions,
         spec_file=None if spec is None else spec.path, seed=seed, title=title,
         follow_through=None if spec is None else spec.follow_through,
+        install=None if spec is None else spec.install,
         force=args.force, progress=_progress,
     )
 
