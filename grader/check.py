@@ -101,9 +101,9 @@ def run_check(args: argparse.Namespace, prog: str = "eulertop check") -> int:
 def answer_specs(path: Path, max_bytes: int | None = None) -> tuple[dict, ...]:
     """The public answer specs in the notebook's ``metadata["eulertop"]``, in question order.
 
-    The file is read as a submission is (:func:`grader.submission_file.read_submission`: a
-    regular file of at most ``max_bytes``, default ``--max-size``'s), then parsed within the
-    grader's limits (:func:`grader.notebook_load.notebook_json`).
+    The file is read as the grader reads a submission (:func:`grader.notebook_load.read_notebook`:
+    a regular file of at most ``max_bytes``, default ``--max-size``'s, parsed within the
+    grader's limits).
 
     Raises
     ------
@@ -111,22 +111,17 @@ def answer_specs(path: Path, max_bytes: int | None = None) -> tuple[dict, ...]:
         No such file, not a regular file, too large, not a notebook, no (or damaged) eulertop
         metadata.
     """
-    from grader.notebook_load import SubmissionError, notebook_json
+    from grader.notebook_load import SubmissionError, read_notebook
     from grader.notebook_metadata import NoAnswerList, answer_list
-    from grader.submission_file import DEFAULT_MAX_BYTES, InvalidSubmission, read_submission
+    from grader.submission_file import DEFAULT_MAX_BYTES
 
     path = Path(path)
     if not os.path.lexists(path):
         raise CheckUsageError(f"{path}: no such file")
     try:
-        document = notebook_json(read_submission(path, max_bytes or DEFAULT_MAX_BYTES))
-    except InvalidSubmission as err:
-        raise CheckUsageError(f"{err}") from None
+        metadata = read_notebook(path, max_bytes or DEFAULT_MAX_BYTES).notebook.get("metadata")
     except SubmissionError as err:
         raise CheckUsageError(f"{path}: {err}") from None
-    except OSError as err:
-        raise CheckUsageError(f"{path}: cannot read it ({err.strerror or err})") from None
-    metadata = document.get("metadata", {}) if isinstance(document, dict) else {}
     try:
         return answer_list(metadata)
     except NoAnswerList as err:

@@ -1,7 +1,7 @@
 """The student package is built from modules of this repository, listed here, and no others
 (issue 33): each file is the repository's own, not a copy, so the check a student runs is the
 grader's. Everything else of the repository — the solver, the problem families, the key, the
-comparison with it, the records and the report — stays out (``tests/test_student_package.py``
+comparison with it, the records and the report — stays out (``tests/grader/test_student_package.py``
 builds the wheel and checks its list).
 """
 

@@ -190,11 +190,12 @@ def _no_input(*args: Any, **kwargs: Any) -> str:
 
 
 def _own_store(shell: Any) -> None:
-    """``%store``'s database in this kernel's own profile folder (``IPYTHONDIR``, in its
-    control folder), not the zygote's: what one kernel stores, no later one can read."""
+    """``%store``'s database in this kernel's own working folder (where it runs), not the
+    zygote's profile (read-only, and shared by every kernel of the slot): what one kernel
+    stores, no later one can read."""
     import os
 
-    folder = os.path.join(os.environ.get("IPYTHONDIR") or os.getcwd(), "profile_default", "db")
+    folder = os.path.join(os.getcwd(), ".ipython", "profile_default", "db")
     with contextlib.suppress(Exception):
         shell.db = type(shell.db)(folder)
 
