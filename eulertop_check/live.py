@@ -160,7 +160,7 @@ def _with_saved_run(found: Found, specs: Sequence[dict], live: Mapping[str, Any]
     with tempfile.TemporaryDirectory(prefix="eulertop-check-") as folder:
         path = found.path or _written(found.document, Path(folder))
         try:
-            report = check_notebook(path, limits)
+            report = _in_a_thread(check_notebook, path, limits)
         except CheckUsageError as err:
             raise CheckError(str(err)) from None
     execution = report.execution
@@ -171,6 +171,15 @@ def _with_saved_run(found: Found, specs: Sequence[dict], live: Mapping[str, Any]
     notes += tuple(f"Your saved notebook: {e}." for e in execution.cell_errors)
     return [_compared(row, live.get(row.variable), execution.answers.get(row.variable))
             for row in rows], notes
+
+
+def _in_a_thread(function: Any, *args: Any) -> Any:
+    """``function(*args)`` in a thread of its own: the run drives its kernel with
+    ``asyncio.run``, which cannot start inside the live kernel's own running event loop."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(1) as pool:
+        return pool.submit(function, *args).result()
 
 
 def _written(document: Mapping[str, Any], folder: Path) -> Path:
