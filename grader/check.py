@@ -2,8 +2,8 @@
 formed?
 
 For a student, before submitting. The notebook runs exactly as in ``eulertop grade``
-(:func:`grader.grade_one.run_one`: the same safe read, private copy, kernel start and retries;
-default :class:`~grader.limits.Limits`), then each
+(:func:`grader.run_file.run_one`: the same safe read, private copy, kernel start and retries;
+default :class:`~grader.limits.Limits`, and the same ``--max-size``), then each
 answer listed in the notebook's own ``metadata["eulertop"]`` (the public answer spec written
 by the generator: names, kinds, units, vector lengths, options, symbols — never values) is
 reported as *well formed*, *missing* or *malformed and why*
@@ -20,8 +20,12 @@ grade``, in contrast, refuses to run without a sandbox unless told ``--no-sandbo
 
 Exit status: 0 when every answer is present and well formed; 1 otherwise (or when the notebook
 could not be run to the end); 2 on usage errors — no such file, not a notebook, no eulertop
-metadata, not a regular file or over the size limit (as ``eulertop grade`` would refuse it) —
-with one line saying what to do, never a traceback.
+metadata, not a regular file (a named pipe, a device, a link: refused at once, never opened) or
+over the size limit (as ``eulertop grade`` would refuse it) — with one line saying what to do,
+never a traceback.
+
+The same module is the student package's command, ``eulertop-check NOTEBOOK``
+(:mod:`eulertop_check.cli`, issue 33): one implementation, one set of verdicts.
 
 Module-level imports stay light: ``eulertop --help`` imports this module.
 
@@ -31,6 +35,7 @@ Floor 8 of grader/ (front ends; grader/API.md).
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -69,40 +74,52 @@ class CheckReport:
 
 
 def add_check_arguments(parser: argparse.ArgumentParser) -> None:
-    """Arguments of ``eulertop check``."""
+    """Arguments of ``eulertop check`` (and ``eulertop-check``)."""
+    from grader.submission_file import MAX_SIZE_HELP, size_argument
+
     parser.add_argument("notebook", type=Path, metavar="NOTEBOOK.ipynb",
                         help="your notebook, as you will submit it")
+    parser.add_argument("--max-size", type=size_argument, metavar="SIZE", help=MAX_SIZE_HELP)
 
 
-def run_check(args: argparse.Namespace) -> int:
-    """Run ``eulertop check``; the exit status (module docstring)."""
+def run_check(args: argparse.Namespace, prog: str = "eulertop check") -> int:
+    """Run ``eulertop check`` (``prog`` names the command in its messages); the exit status
+    (module docstring)."""
     from grader.limits import Limits
 
+    max_size = getattr(args, "max_size", None)
+    limits = Limits() if max_size is None else Limits(submission_bytes=max_size)
     try:
-        report = check_notebook(args.notebook, Limits())
+        report = check_notebook(args.notebook, limits)
     except CheckUsageError as err:
-        print(f"eulertop check: {err}", file=sys.stderr)
+        print(f"{prog}: {err}", file=sys.stderr)
         return 2
-    print(format_report(report, args.notebook))
+    print(format_report(report, args.notebook, prog))
     return 0 if report.all_well_formed else 1
 
 
-def answer_specs(path: Path) -> tuple[dict, ...]:
+def answer_specs(path: Path, max_bytes: int | None = None) -> tuple[dict, ...]:
     """The public answer specs in the notebook's ``metadata["eulertop"]``, in question order.
+
+    The file is read as the grader reads a submission (:func:`grader.notebook_load.read_notebook`:
+    a regular file of at most ``max_bytes``, default ``--max-size``'s, parsed within the
+    grader's limits).
 
     Raises
     ------
     CheckUsageError
-        No such file, not a notebook, no (or damaged) eulertop metadata.
+        No such file, not a regular file, too large, not a notebook, no (or damaged) eulertop
+        metadata.
     """
     from grader.notebook_load import SubmissionError, read_notebook
     from grader.notebook_metadata import NoAnswerList, answer_list
+    from grader.submission_file import DEFAULT_MAX_BYTES
 
     path = Path(path)
-    if not path.exists():
+    if not os.path.lexists(path):
         raise CheckUsageError(f"{path}: no such file")
     try:
-        metadata = read_notebook(path).notebook.get("metadata", {})
+        metadata = read_notebook(path, max_bytes or DEFAULT_MAX_BYTES).notebook.get("metadata")
     except SubmissionError as err:
         raise CheckUsageError(f"{path}: {err}") from None
     try:
@@ -119,9 +136,9 @@ def check_notebook(path: Path, limits: Any) -> CheckReport:
     CheckUsageError
         See :func:`answer_specs`.
     """
-    from grader.grade_one import run_one
+    from grader.run_file import run_one
 
-    specs = answer_specs(path)
+    specs = answer_specs(path, getattr(limits, "submission_bytes", None))
     run = run_one(Path(path), [s["variable"] for s in specs], limits)
     if run.execution is None:  # too large, not a regular file, or no kernel could run it
         raise CheckUsageError(f"{path}: {run.problem}")
@@ -136,8 +153,7 @@ def check_notebook(path: Path, limits: Any) -> CheckReport:
 def check_value(spec: Mapping[str, Any], value: Any) -> Any:
     """The form :class:`~problems.answers.Verdict` of one extracted value (markers included)."""
     from grader.extract import invalid_reason
-    from problems.answers import Verdict, check_spec
-    from problems.notebook import kind_hint
+    from problems.answers import Verdict, check_spec, kind_hint
 
     try:
         reason = invalid_reason(value)
@@ -153,13 +169,14 @@ def check_value(spec: Mapping[str, Any], value: Any) -> Any:
 _WORDS = {"correct": "ok", "missing": "MISSING", "invalid": "MALFORMED"}
 
 
-def format_report(report: CheckReport, path: Path) -> str:
-    """The report printed by ``eulertop check``."""
+def format_report(report: CheckReport, path: Path, prog: str = "eulertop check") -> str:
+    """The report printed by ``eulertop check`` (``prog``: the command to run again)."""
     execution = report.execution
     lines = [f"Ran {Path(path).name} as the grader will, in a fresh kernel."]
+    lines += [f"Note: {note}." for note in getattr(execution, "notes", ())]
     if execution.status != "ok":
         lines += [execution.message + ".", "No answer could be read, so none could be checked. "
-                  "Fix the problem above and run eulertop check again."]
+                  f"Fix the problem above and run {prog} again."]
         return "\n".join(lines)
     if execution.cell_errors:
         lines.append(f"{len(execution.cell_errors)} cell(s) did not finish normally (answers "

@@ -18,6 +18,9 @@ import sys
 import threading
 from pathlib import Path
 
+# the one --max-size of grade and check (and eulertop-check), in the module both read with
+from grader.submission_file import MAX_SIZE_HELP, size_argument
+
 
 def add_check_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``eulertop check`` (implemented in :mod:`grader.check`)."""
@@ -53,24 +56,6 @@ def seconds_argument(text: str) -> float:
     return value
 
 
-_SIZE_UNITS = {"": 1024**2, "k": 1024, "kb": 1024, "kib": 1024, "m": 1024**2, "mb": 1024**2,
-               "mib": 1024**2, "g": 1024**3, "gb": 1024**3, "gib": 1024**3}
-
-
-def size_argument(text: str) -> int:
-    """``20`` (MiB), ``500K``, ``20M``, ``1G``, ``20MiB`` → bytes."""
-    number = text.strip().rstrip("BbIiKkMmGg")
-    unit = text.strip()[len(number):].lower()
-    try:
-        value = float(number) * _SIZE_UNITS[unit]
-    except (ValueError, KeyError):
-        raise argparse.ArgumentTypeError(f"expected a size such as 20M or 500K, got {text!r}") \
-            from None
-    if not 0 < value < float("inf"):
-        raise argparse.ArgumentTypeError(f"must be a positive size, got {text!r}")
-    return int(value)
-
-
 def add_grade_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``eulertop grade``."""
     parser.add_argument("hw", type=Path, metavar="HW",
@@ -88,9 +73,7 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> None:
                              "(default 120 s)")
     parser.add_argument("--cell-timeout", type=seconds_argument, metavar="S",
                         help="time limit for one cell (default 30 s; never more than --timeout)")
-    parser.add_argument("--max-size", type=size_argument, metavar="SIZE",
-                        help="largest submission read, e.g. 20M (default 20 MiB); a larger "
-                             "one is recorded as invalid without being read")
+    parser.add_argument("--max-size", type=size_argument, metavar="SIZE", help=MAX_SIZE_HELP)
     parser.add_argument("--force", action="store_true",
                         help="regrade every submission, even those unchanged since last run")
     parser.add_argument("--times", type=Path, metavar="FILE",

@@ -122,7 +122,51 @@ _HINTS = {
     "SystemExit": "sys.exit() and exit() stop a script, not a notebook cell: remove it",
     "KeyboardInterrupt": "interrupted",
     "ModuleNotFoundError": "only the grader's installed packages are available",
+    "StdinNotImplementedError": "input() waits for someone to type, and no one types while the "
+                                "grader runs the notebook: write the value into the code instead",
 }
+"""What a student can do about an error, by its name (issue 33: words for a student, not the
+kernel's own ``raw_input was called, but this frontend does not support input requests``)."""
+
+NO_NETWORK = ("the grader runs notebooks without a network: put the data you need into the "
+              "notebook itself (a list, or values in a cell) instead of downloading it")
+"""The hint for an error that says a connection could not be made (:data:`_NETWORK_ERRORS`)."""
+
+MISSING_MAGIC = ("the grader's kernel has IPython's own magics and %store, as Jupyter does; this "
+                 "one comes from an extension it does not load: do the same in plain Python")
+"""The hint for a magic the kernel does not know (``UsageError: Line magic function … not
+found``)."""
+
+_NETWORK_ERRORS = frozenset({
+    "URLError", "HTTPError", "gaierror", "ConnectionError", "ConnectionRefusedError",
+    "ConnectionResetError", "ConnectionAbortedError", "NewConnectionError", "MaxRetryError",
+    "RemoteDisconnected", "timeout", "TimeoutError", "SSLError", "ProxyError",
+})
+"""Names of the exceptions urllib, socket, http.client, requests and urllib3 raise when no
+connection can be made: in the sandbox there is no network at all."""
+
+_NETWORK_TEXT = re.compile(r"Name or service not known|Temporary failure in name resolution|"
+                           r"Network is unreachable|No address associated|nodename nor servname",
+                           re.IGNORECASE)
+"""What an ``OSError`` says when there is no network (raised under its own name)."""
+
+_INSTALL_PATH = re.compile(r"(?:/[^\s'\"():,]+)?/(?:site|dist)-packages/([^\s'\"():,]+)")
+"""A path inside an installed package (``/usr/lib/python3/dist-packages/IPython/display.py``):
+shown as the package's own path (``IPython/display.py``), never the grader's machine's."""
+
+
+def without_install_paths(text: str) -> str:
+    """``text`` with every path into an installed package cut to the package's own part
+    (``…/site-packages/IPython/display.py`` → ``IPython/display.py``): a student sees nothing
+    of the grader's machine, and the part left is the same on theirs.
+
+    Examples
+    --------
+    >>> without_install_paths("from 'IPython.display' (/opt/v/lib/python3.11/site-packages/"
+    ...                       "IPython/display.py)")
+    "from 'IPython.display' (IPython/display.py)"
+    """
+    return _INSTALL_PATH.sub(r"\1", text)
 
 
 @dataclass(frozen=True)
@@ -155,6 +199,9 @@ class Execution:
         in time): the grader runs it again, and never keeps it as a final result.
     isolation : str
         What confined the kernel, for the record (:meth:`grader.sandbox.Sandbox.describe`).
+    notes : tuple of str
+        Remarks on the reading that begin ``message`` too (converted from nbformat v3; a
+        notebook whose kernel is not Python: :func:`grader.notebook_load.language_note`).
     """
 
     status: str
@@ -166,6 +213,7 @@ class Execution:
     sandboxed: bool = False
     retry: bool = False
     isolation: str = ""
+    notes: tuple[str, ...] = ()
 
 
 # --------------------------------------------------------------------------------------------
@@ -226,7 +274,7 @@ def execute_submission(
     """
     start = time.monotonic()
     try:
-        loaded = read_notebook(path)
+        loaded = read_notebook(path, limits.submission_bytes)
     except SubmissionError as err:
         return Execution("invalid_notebook", f"not a valid notebook: {err}", {}, (),
                          time.monotonic() - start, False)
@@ -421,8 +469,13 @@ async def _run_cell(client: Any, run: _Run, index: int, cell: CodeCell) -> None:
 def _error_line(reply: dict, limits: Limits) -> str:
     ename, evalue = _short(reply.get("ename", "Error"), 60), _short(reply.get("evalue", ""), 160)
     evalue = _CELL_FILE.sub(r"(line \1)", evalue)  # "(1063758517.py, line 2)": IPython's name
+    evalue = without_install_paths(evalue)
     line = f"{ename}: {evalue}" if evalue else ename
     hint = _HINTS.get(ename)
+    if ename in _NETWORK_ERRORS or _NETWORK_TEXT.search(evalue):
+        hint = NO_NETWORK
+    if ename == "UsageError" and "magic function" in evalue:
+        hint = MISSING_MAGIC
     if ename == "MemoryError":
         hint = f"the memory limit is {_gib(limits.memory_bytes)}"
     return f"{line} — {hint}" if hint else line
@@ -552,7 +605,7 @@ def _execution(run: _Run, status: str, notes: Sequence[str], kernel: Any,
     retry = status == "error" and run.phase == "starting"  # no kernel: not the student's doing
     return Execution(status, message, answers, tuple(errors), duration, truncated,
                      bool(getattr(kernel, "sandboxed", False)), retry,
-                     str(getattr(kernel, "isolation", "") or ""))
+                     str(getattr(kernel, "isolation", "") or ""), tuple(notes))
 
 
 def _summary(run: _Run, status: str, kernel: Any, errors: Sequence[str]) -> str:

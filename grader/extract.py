@@ -397,6 +397,17 @@ def parse_answers(
     return {name: _checked(document.get(name)) for name in variables}, None
 
 
+def live_answers(namespace: Mapping[str, Any], variables: Sequence[str]) -> dict[str, Any]:
+    """The answers of ``variables`` read from ``namespace`` in *this* process, exactly as the
+    grader reads them in its kernel (:func:`kernel_extract` under the same limits, then the
+    same checks as :func:`parse_answers`): what ``eulertop_check.check()`` reads in a
+    student's live kernel (issue 33)."""
+    limits = (MAX_ELEMENTS, MAX_STRING, MAX_DEPTH, ANSWER_SECONDS, MAX_REPLY_CHARS)
+    names = tuple(v for v in variables if _identifier(v))
+    document = _loads(kernel_extract(namespace, names, limits))
+    return {name: _checked(document.get(name)) for name in names}
+
+
 def invalid_reason(value: Any) -> str | None:
     """The reason in an ``__invalid__`` marker (``"a dict"``), or None if ``value`` is no marker.
 

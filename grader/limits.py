@@ -12,7 +12,7 @@ import math
 import numbers
 from dataclasses import dataclass
 
-from solver.parameters import ParameterError
+from eulertop_base import ParameterError
 
 
 @dataclass(frozen=True)
@@ -44,7 +44,7 @@ class Limits:
 
     Raises
     ------
-    solver.parameters.ParameterError
+    eulertop_base.ParameterError
         A limit that is not a positive finite number (``ValueError`` naming the field).
 
     Examples

@@ -15,12 +15,17 @@ Decisions
       graded; most likely the wrong file was submitted).
     * Other departures from the nbformat schema (extra metadata written by some editors) are
       tolerated, since nothing but the code cells' sources is kept.
-    * Files over :data:`MAX_NOTEBOOK_BYTES` are refused before being read, and JSON with more
-      values, objects and arrays or nesting than a notebook needs (:data:`MAX_JSON_VALUES`,
-      :data:`MAX_JSON_CONTAINERS`, :data:`MAX_JSON_DEPTH`) before it is parsed
-      (:func:`notebook_json`): parsing builds a Python object per value, and a 19 MiB file of
-      ``{}`` once made the grader 3.2 GB larger (issue 23). Every reader of a submitted
-      notebook in the grader's process goes through :func:`notebook_json`.
+    * Files over the size limit (``--max-size``: ``Limits.submission_bytes``, which
+      :func:`grader.execute.execute_submission` passes; :data:`MAX_NOTEBOOK_BYTES` for other
+      readers) are refused before being read, and JSON with more values, objects and arrays or
+      nesting than a notebook needs (:data:`MAX_JSON_VALUES`, :data:`MAX_JSON_CONTAINERS`,
+      :data:`MAX_JSON_DEPTH`) before it is parsed (:func:`notebook_json`): parsing builds a
+      Python object per value, and a 19 MiB file of ``{}`` once made the grader 3.2 GB larger
+      (issue 23). Every reader of a submitted notebook in the grader's process goes through
+      :func:`notebook_json`. The text itself has no limit of its own beyond the file's size
+      (issue 33): a file of N bytes is at most 4N bytes as Python characters (one emoji makes
+      every character of the text 4 bytes wide), and a limit on that once refused an 11 MiB
+      notebook with one emoji in an output, whatever ``--max-size`` said.
     * A notebook whose code cells hold more than :data:`MAX_CODE_CHARS` characters is refused:
       the grader holds and sends the code several times over while it runs (a 16 MiB cell of
       comments cost it 146 MiB), and no answer needs that much.
@@ -34,12 +39,13 @@ Floor 0 of grader/ (records and pure helpers; grader/API.md).
 from __future__ import annotations
 
 import json
-import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import nbformat
+
+from grader.submission_file import InvalidSubmission, read_submission
 
 MAX_NOTEBOOK_BYTES = 50 * 1024**2
 """Largest submission read (bytes); generated notebooks are a few tens of kB."""
@@ -53,11 +59,6 @@ MAX_JSON_CONTAINERS = 50_000
 
 MAX_JSON_DEPTH = 100
 """Deepest nesting of objects and arrays (a notebook's own is under 10)."""
-
-MAX_TEXT_BYTES = 40 * 1024**2
-"""Most memory a notebook's text may take as Python characters: Python keeps 1, 2 or 4 bytes a
-character, by the widest character of a text, so one emoji makes a 19 MiB file 76 MiB of text
-(and its parsed strings as much again)."""
 
 MAX_CODE_CHARS = 1_000_000
 """Most characters of code (all code cells together) a notebook may have run; a generated
@@ -114,8 +115,10 @@ class LoadedNotebook:
     notes: tuple[str, ...] = ()
 
 
-def read_notebook(path: Path) -> LoadedNotebook:
+def read_notebook(path: Path, max_bytes: int | None = None) -> LoadedNotebook:
     """Read a submission: its v4 notebook, its code cells, and notes about the reading.
+
+    ``max_bytes``: the largest file read (``--max-size``; default :data:`MAX_NOTEBOOK_BYTES`).
 
     Raises
     ------
@@ -124,7 +127,8 @@ def read_notebook(path: Path) -> LoadedNotebook:
         unsupported nbformat version, malformed cells, no code at all or too much of it.
     """
     path = Path(path)
-    document = notebook_json(_read_bytes(path))
+    limit = MAX_NOTEBOOK_BYTES if max_bytes is None else max_bytes
+    document = notebook_json(_read_bytes(path, limit))
     version = document.get("nbformat") if isinstance(document, dict) else None
     if isinstance(version, bool) or not isinstance(version, int):
         raise SubmissionError("this is JSON, but not a Jupyter notebook (it has no 'nbformat' "
@@ -146,7 +150,30 @@ def read_notebook(path: Path) -> LoadedNotebook:
         raise SubmissionError(f"the notebook's code cells hold {size:,} characters, more than "
                               f"the {MAX_CODE_CHARS:,} the grader runs (remove data pasted into "
                               f"code cells); {RESAVE}")
-    return LoadedNotebook(nb, cells, notes)
+    return LoadedNotebook(nb, cells, notes + language_note(nb))
+
+
+def notebook_language(nb: dict) -> str:
+    """The language a notebook's metadata says its code is in (``kernelspec.language``, else
+    ``language_info.name``), lower case; ``"python"`` when it says none."""
+    metadata = nb.get("metadata")
+    for entry, key in (("kernelspec", "language"), ("language_info", "name")):
+        found = metadata.get(entry) if isinstance(metadata, dict) else None
+        value = found.get(key) if isinstance(found, dict) else None
+        if isinstance(value, str) and value.strip():
+            return value.strip().lower()
+    return "python"
+
+
+def language_note(nb: dict) -> tuple[str, ...]:
+    """A note for the run's message when the notebook says its code is not Python: the grader
+    runs every notebook in Python 3, whatever its kernel (module docstring)."""
+    language = notebook_language(nb)
+    if language.startswith("python") or language == "ipython":
+        return ()
+    return (f"this notebook's kernel runs {language[:40]!r}, but the grader runs every notebook "
+            "as Python 3: open the notebook you were given (Python 3 kernel) and write your "
+            "code there, in Python",)
 
 
 def load_submission(path: Path) -> nbformat.NotebookNode:
@@ -230,9 +257,6 @@ def notebook_json(data: bytes) -> object:
 
 
 _NOT_BRACKET = bytes(b for b in range(256) if b not in b"[]{}")
-_CONTINUATION = bytes(range(0x80, 0xC0))  # the second to fourth bytes of a UTF-8 character
-_WIDTHS = ((4, re.compile(rb"[\xf0-\xf4]|\\u[dD][89abAB]")),  # past U+FFFF, raw or escaped
-           (2, re.compile(rb"[\xc4-\xef]|\\u(?!00)")))  # past U+00FF
 _CHUNK = 1 << 18  # bytes looked at at once: the pieces of one chunk are all that is held
 
 
@@ -244,10 +268,7 @@ def json_shape(data: bytes) -> str | None:
     them; UTF-8 puts no ``"`` or ``\\`` inside a character), so that every ``"`` left opens or
     closes a string. Then, a chunk at a time, what lies outside strings is counted: ``{`` and
     ``[`` are the objects and arrays, each comma one more value, and the brackets' running
-    balance is the nesting. Before that, the memory its text takes as Python characters
-    (:data:`MAX_TEXT_BYTES`): its characters (the bytes that do not continue one) times the
-    width of the widest, raw or as a ``\\u`` escape. Malformed JSON is left for the parser to
-    describe.
+    balance is the nesting. Malformed JSON is left for the parser to describe.
 
     Examples
     --------
@@ -256,13 +277,6 @@ def json_shape(data: bytes) -> str | None:
     >>> json_shape(b"[" * 101 + b"]" * 101)
     'objects and arrays nested 101 deep (at most 100)'
     """
-    width = next((w for w, wide in _WIDTHS if wide.search(data)), 1)
-    text_bytes = len(data.translate(None, _CONTINUATION)) * width
-    if text_bytes > MAX_TEXT_BYTES:
-        why = {4: "; a character past U+FFFF, such as an emoji, makes each one 4 bytes",
-               2: "; 2 bytes a character"}.get(width, "")
-        return (f"text of {text_bytes / 1024**2:.0f} MiB once decoded (at most "
-                f"{MAX_TEXT_BYTES // 1024**2} MiB{why})")
     text = data.replace(b"\\\\", b"").replace(b'\\"', b"")
     containers = commas = depth = deepest = 0
     inside = False  # a string runs on from the chunk before
@@ -286,18 +300,17 @@ def json_shape(data: bytes) -> str | None:
     return None
 
 
-def _read_bytes(path: Path) -> bytes:
+def _read_bytes(path: Path, max_bytes: int) -> bytes:
+    """The file's bytes, read as a submission is (:func:`grader.submission_file.read_submission`:
+    a regular file only — never a FIFO, a device or a link, which could block or never end —
+    of at most ``max_bytes``)."""
     try:
-        size = path.stat().st_size
-        if size > MAX_NOTEBOOK_BYTES:
-            raise SubmissionError(f"the file is {size / 1024**2:.0f} MB, more than the "
-                                  f"{MAX_NOTEBOOK_BYTES // 1024**2} MB a notebook may be "
-                                  "(clear large outputs and save it again)")
-        return path.read_bytes()
+        return read_submission(path, max_bytes)
+    except InvalidSubmission as e:
+        raise SubmissionError(f"{e}; clear large outputs and save it again" if "limit" in str(e)
+                              else str(e)) from None
     except FileNotFoundError:
         raise SubmissionError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise SubmissionError(f"{path} is a folder, not a notebook file") from None
     except OSError as e:
         raise SubmissionError(f"{path}: cannot read it ({e.strerror or e})") from None
 

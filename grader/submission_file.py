@@ -10,16 +10,41 @@ Floor 0 of grader/ (records and pure helpers; grader/API.md).
 
 from __future__ import annotations
 
+import argparse
 import os
 import stat
 from pathlib import Path
 
 DEFAULT_MAX_BYTES = 20 * 1024**2
-"""Largest submission read, bytes (``eulertop grade --max-size``)."""
+"""Largest submission read, bytes (``--max-size`` of ``eulertop grade``, ``eulertop check`` and
+``eulertop-check``: one limit, applied by :func:`read_submission` alike)."""
+
+MAX_SIZE_HELP = ("largest notebook read, e.g. 20M or 500K (default 20 MiB); a larger one is "
+                 "refused without being read, as is anything that is not a regular file (a "
+                 "named pipe, a device, a link); the same limit for eulertop grade and check")
+"""The help of ``--max-size``, the same in every command that has it."""
 
 
 class InvalidSubmission(ValueError):
     """The file is not one the grader will read; the message says why (for the record)."""
+
+
+_SIZE_UNITS = {"": 1024**2, "k": 1024, "kb": 1024, "kib": 1024, "m": 1024**2, "mb": 1024**2,
+               "mib": 1024**2, "g": 1024**3, "gb": 1024**3, "gib": 1024**3}
+
+
+def size_argument(text: str) -> int:
+    """``20`` (MiB), ``500K``, ``20M``, ``1G``, ``20MiB`` → bytes."""
+    number = text.strip().rstrip("BbIiKkMmGg")
+    unit = text.strip()[len(number):].lower()
+    try:
+        value = float(number) * _SIZE_UNITS[unit]
+    except (ValueError, KeyError):
+        raise argparse.ArgumentTypeError(f"expected a size such as 20M or 500K, got {text!r}") \
+            from None
+    if not 0 < value < float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a positive size, got {text!r}")
+    return int(value)
 
 
 def _kind(mode: int) -> str:

@@ -58,6 +58,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from eulertop_base import ParameterError
 from problems.expressions import (
     ExpressionError,
     check_symbol_names,
@@ -65,7 +66,6 @@ from problems.expressions import (
     parse_expression,
     sample_points,
 )
-from solver.parameters import ParameterError
 
 if TYPE_CHECKING:
     import sympy
@@ -80,6 +80,7 @@ __all__ = [
     "check_spec",
     "comparison_rule",
     "grade",
+    "kind_hint",
     "numbers_of",
     "read_value",
 ]
@@ -169,7 +170,7 @@ class Answer:
 
     Raises
     ------
-    solver.parameters.ParameterError
+    eulertop_base.ParameterError
         A ``ValueError`` naming the field at fault: unknown kind, negative tolerance, a value not
         of the kind's form, a zero key without ``atol``, options or symbols missing or given to
         the wrong kind, a mistake indistinguishable from the key.
@@ -342,6 +343,25 @@ def check_spec(spec: Mapping[str, Any], submitted: Any) -> Verdict:
     points drawn from the name and symbols alone, so one defined at none of them is invalid.
     """
     return _check(_Form.of_spec(spec), submitted)
+
+
+_KIND_HINTS = {
+    "scalar": "a number",
+    "angle": "an angle (a number)",
+    "boolean": "True or False",
+}
+
+def kind_hint(spec: Mapping[str, Any]) -> str:
+    """How an answer must look, in words, from its public spec (``a list of 3 numbers``): the
+    generated answer lines and ``eulertop check`` say it alike."""
+    kind = spec["kind"]
+    if kind == "vector":
+        return f"a list of {spec['length']} numbers"
+    if kind == "choice":
+        return "one of " + ", ".join(f'"{o}"' for o in spec["options"])
+    if kind == "expression":
+        return "an expression in " + ", ".join(spec["symbols"])
+    return _KIND_HINTS.get(kind, kind)
 
 
 def grade(answer: Answer, submitted: Any) -> Verdict:

@@ -280,7 +280,9 @@ def _generate(args: argparse.Namespace, class_lists: Mapping[str, Any] | None = 
         roster, args.out, families, problems=problems, questions=questions,
         spec_file=None if spec is None else spec.path, seed=seed, title=title,
         follow_through=None if spec is None else spec.follow_through,
-        late=None if spec is None else spec.late, force=args.force, progress=_progress,
+        late=None if spec is None else spec.late,
+        install=None if spec is None else spec.install,
+        force=args.force, progress=_progress,
     )
 
 

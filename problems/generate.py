@@ -69,7 +69,7 @@ import numpy as np
 from problems.answers import Answer
 from problems.deadlines import LatePolicy
 from problems.family import Family, FamilyError
-from problems.notebook import build_notebooks, notebook_text
+from problems.notebook import DEFAULT_INSTALL, build_notebooks, notebook_text
 from problems.roster import Roster
 from problems.settings import QuestionSettings
 from problems.variant import Variant, variable_name
@@ -317,10 +317,13 @@ def student_answers(key: Mapping, student_id: str) -> dict[str, Answer]:
 def _write_student(
     folder: Path, title: str, row: Mapping[str, str], variants: Sequence[Variant],
     validate: bool = True, families: Mapping[str, Family] | None = None,
+    install: str | None = None,
 ) -> None:
     """Write a student's release and solutions notebooks; ``validate`` checks them against the
-    nbformat schema (:func:`problems.notebook.notebook_text`)."""
-    notebooks = build_notebooks(title, row, variants, families)  # sharing their common cells
+    nbformat schema (:func:`problems.notebook.notebook_text`); ``install``: what their first
+    cell says to install for the check (default :data:`problems.notebook.DEFAULT_INSTALL`)."""
+    notebooks = build_notebooks(title, row, variants, families,  # sharing their common cells
+                                install or DEFAULT_INSTALL)
     memo: dict = {}  # so that notebook_text encodes each shared cell once
     for sub, nb in zip((RELEASE, SOLUTIONS), notebooks, strict=True):
         text = notebook_text(nb, validate=validate, memo=memo)
@@ -346,13 +349,14 @@ def _student_files(
     tmp, title, row, reroll, validate = task
     families, questions, seed = _FORKED["families"], _FORKED["questions"], _FORKED["seed"]
     variants = student_variants(families, questions, seed, row["id"], reroll)
-    _write_student(tmp, title, row, variants, validate, families)
+    _write_student(tmp, title, row, variants, validate, families, _FORKED.get("install"))
     return CompactJSON.of(manifest_entry(variants, reroll)), CompactJSON.of(key_entry(variants))
 
 
 def _students_in_parallel(
     tmp: Path, title: str, rows: Sequence[Mapping[str, str]], rerolls: Mapping[str, int],
     families: Mapping[str, Family], questions: Sequence[Question], seed: int, jobs: int,
+    install: str | None = None,
 ) -> Iterator[tuple[CompactJSON, CompactJSON]]:
     """``(manifest entry, key entry)`` of each row, in roster order, computed by ``jobs``
     forked processes that each write their students' notebooks (:func:`_student_files`).
@@ -364,7 +368,7 @@ def _students_in_parallel(
     from concurrent.futures import ProcessPoolExecutor
 
     prepare_families(families, questions)  # once here, inherited by every worker
-    _FORKED.update(families=families, questions=tuple(questions), seed=seed)
+    _FORKED.update(families=families, questions=tuple(questions), seed=seed, install=install)
     tasks = [(tmp, title, row, rerolls.get(row["id"], 0), i == 0) for i, row in enumerate(rows)]
     try:
         with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("fork")) as pool:
@@ -489,6 +493,7 @@ def generate_assignment(
     title: str | None = None,
     follow_through: float | None = None,
     late: LatePolicy | None = None,
+    install: str | None = None,
     force: bool = False,
     progress: Progress | None = None,
     jobs: int | None = None,
@@ -503,6 +508,11 @@ def generate_assignment(
     of points an answer that follows from the student's own wrong earlier answer earns
     (:mod:`grader.follow_through`; absent: 1.0, 0: none). ``late`` (the spec's ``[late]``)
     is recorded as the manifest's ``late`` (:meth:`problems.deadlines.LatePolicy.record`).
+
+    ``install`` (the spec's ``[student] install``) is what each notebook's first cell tells the
+    student to ``%pip install`` for the check (default
+    :data:`problems.notebook.DEFAULT_INSTALL`), recorded in the manifest as
+    ``student_install`` for ``--reroll``.
 
     ``jobs`` processes draw the students' questions and write their notebooks (default: one
     per usable core, from :data:`PARALLEL_MIN` students on); the files are byte-identical to
@@ -530,9 +540,11 @@ def generate_assignment(
                              _outside_families(families, questions, out))
     if late is not None:
         manifest["late"] = late.record()
+    if install is not None:
+        manifest["student_install"] = install
     key = {"format": "eulertop-key", "format_version": FORMAT_VERSION, "title": title,
            "seed": seed, "students": {}}
-    plan = _Plan(title, seed, questions, families, rerolls)
+    plan = _Plan(title, seed, questions, families, rerolls, install)
     with _Staging(out) as tmp:
         _copy_spec(spec_file, tmp, manifest)
         entries = _student_entries(tmp, plan, roster.rows, jobs)
@@ -551,6 +563,7 @@ class _Plan:
     questions: tuple[Question, ...]
     families: Mapping[str, Family]
     rerolls: Mapping[str, int]
+    install: str | None = None  # what the first cell says to install for the check
 
 
 def _asked(problems: Sequence[str] | None, questions: Sequence[Question] | None,
@@ -633,7 +646,7 @@ def _student_entries(tmp: Path, plan: _Plan, rows: Sequence[Mapping[str, str]],
     workers = _parallel_jobs(jobs, len(rows))
     if workers > 1:
         return _students_in_parallel(tmp, plan.title, rows, plan.rerolls, plan.families,
-                                     plan.questions, plan.seed, workers)
+                                     plan.questions, plan.seed, workers, plan.install)
     return _students_here(tmp, plan, rows)
 
 
@@ -641,7 +654,8 @@ def _students_here(tmp: Path, plan: _Plan, rows: Sequence[Mapping[str, str]]
                    ) -> Iterator[tuple[CompactJSON, CompactJSON]]:
     """:func:`_student_files` of each row in this process (the schema checked for the
     first)."""
-    _FORKED.update(families=plan.families, questions=plan.questions, seed=plan.seed)
+    _FORKED.update(families=plan.families, questions=plan.questions, seed=plan.seed,
+                   install=plan.install)
     try:
         for i, row in enumerate(rows):
             yield _student_files((tmp, plan.title, row, plan.rerolls.get(row["id"], 0), i == 0))
@@ -786,7 +800,8 @@ def reroll_students(
         for done, sid in enumerate(ids, start=1):
             reroll = manifest["students"][sid]["reroll"] + 1
             variants = student_variants(families, questions, seed, sid, reroll)
-            _write_student(tmp, title, rows[sid], variants, families=families)
+            _write_student(tmp, title, rows[sid], variants, families=families,
+                           install=manifest.get("student_install"))
             manifest["students"][sid] = manifest_entry(variants, reroll)
             key["students"][sid] = key_entry(variants)
             if progress:

@@ -5,7 +5,7 @@ Layout (cell ids are fixed names, so the same inputs give byte-identical files):
 ==================  ========  ==========================================================
 id                  type      content
 ==================  ========  ==========================================================
-``title``           markdown  the assignment title, and how to run ``eulertop check``
+``title``           markdown  the assignment title, and how to install and run the check
 ``rules``           markdown  the student's id, the rules, the conventions shared by every
                               question (:mod:`problems.conventions`)
 ``parameters``      code      the student's parameters, ``q{k}_{name} = value  # unit``
@@ -40,7 +40,7 @@ from typing import Any
 import nbformat
 from nbformat import v4
 
-from problems.answers import comparison_rule
+from problems.answers import comparison_rule, kind_hint
 from problems.conventions import conventions_text
 from problems.variant import Variant, answer_spec, variable_name
 
@@ -48,19 +48,18 @@ FORMAT_VERSION = 1
 KERNELSPEC = {"name": "python3", "display_name": "Python 3 (ipykernel)", "language": "python"}
 _READ_ONLY = {"editable": False, "deletable": False}
 
-_KIND_HINTS = {
-    "scalar": "a number",
-    "angle": "an angle (a number)",
-    "boolean": "True or False",
-}
+DEFAULT_INSTALL = "eulertop-check"
+"""What ``%pip install`` is given for the checker (the student package, ``student/``), unless
+the spec names another address (``[student] install``: a wheel's URL, an index's name)."""
 
 TITLE_CELL = """\
 # {title}
 
-**Before you submit**, save and check the notebook: on JupyterHub or Colab run \
-`%pip install eulertop` (or the address your instructor gives) once, then \
-`!eulertop check {file}`; in a terminal, `eulertop check {file}`. It says which answers are \
-missing or malformed, never whether they are right.\
+**Before you submit**, check your answers from inside this notebook: run `%pip install \
+{install}` once, then, in a cell, `import eulertop_check; eulertop_check.check()`. It says \
+which answers are missing or malformed, never whether they are right; \
+`eulertop_check.check(run=True)` also runs your saved notebook as the grader will (save it \
+first). In a terminal: `eulertop-check {file}`.\
 """
 
 RULES = """\
@@ -99,18 +98,6 @@ def python_literal(value: Any) -> str:
 
 def _one_line(text: str) -> str:
     return " ".join(text.split())
-
-
-def kind_hint(spec: Mapping[str, Any]) -> str:
-    """How an answer must look, in words, from its public spec."""
-    kind = spec["kind"]
-    if kind == "vector":
-        return f"a list of {spec['length']} numbers"
-    if kind == "choice":
-        return "one of " + ", ".join(f'"{o}"' for o in spec["options"])
-    if kind == "expression":
-        return "an expression in " + ", ".join(spec["symbols"])
-    return _KIND_HINTS.get(kind, kind)
 
 
 def answer_line(spec: Mapping[str, Any], value: Any = None) -> str:
@@ -179,6 +166,7 @@ def build_notebook(
     *,
     solutions: bool = False,
     families: Mapping[str, Any] | None = None,
+    install: str = DEFAULT_INSTALL,
 ) -> dict:
     """The release notebook of one student, or (``solutions=True``) its solutions version.
 
@@ -197,25 +185,28 @@ def build_notebook(
         Fill the answer variables with the key's values instead of ``None``.
     families : mapping, optional
         The families by name, for their convention topics (default: the built-in ones).
+    install : str
+        What the first cell tells the student to ``%pip install`` for the checker.
     """
-    (notebook,) = _notebooks(title, student, variants, (solutions,), families)
+    (notebook,) = _notebooks(title, student, variants, (solutions,), families, install)
     return notebook
 
 
 def build_notebooks(
     title: str, student: Mapping[str, str], variants: Sequence[Variant],
-    families: Mapping[str, Any] | None = None,
+    families: Mapping[str, Any] | None = None, install: str = DEFAULT_INSTALL,
 ) -> tuple[dict, dict]:
     """The release and the solutions notebook of one student (:func:`build_notebook`), built
     together: every cell and metadata entry the two have in common is one shared object, so
     :func:`notebook_text` with one ``memo`` for both encodes it once."""
-    release, solutions = _notebooks(title, student, variants, (False, True), families)
+    release, solutions = _notebooks(title, student, variants, (False, True), families, install)
     return release, solutions
 
 
 def _notebooks(
     title: str, student: Mapping[str, str], variants: Sequence[Variant],
     kinds: Sequence[bool], families: Mapping[str, Any] | None = None,
+    install: str = DEFAULT_INSTALL,
 ) -> list[dict]:
     """One notebook per entry of ``kinds`` (True: solutions), sharing what they have in common."""
     questions = [
@@ -223,7 +214,8 @@ def _notebooks(
          "answers": [answer_spec(a, k) for a in v.answers]}
         for k, v in enumerate(variants, start=1)
     ]
-    heading = TITLE_CELL.format(title=_one_line(title), file=f"{student['id']}.ipynb")
+    heading = TITLE_CELL.format(title=_one_line(title), file=f"{student['id']}.ipynb",
+                                install=_one_line(install))
     rules = _rules_cell(student, notebook_conventions(variants, families))
     shared = [
         _cell("markdown", "title", heading, _READ_ONLY),

@@ -24,6 +24,11 @@
     pool = ["sleeping_top", "steady_precession"]   # each student gets one, from the seed
     points = 4
 
+    [student]
+    install = "https://example.edu/phy711/eulertop_check-0.1.0-py3-none-any.whl"
+                                       # what the notebooks say to %pip install for the check
+                                       # (default: eulertop-check)
+
 Every key is optional but ``questions``. A parameter is set to a number (fixed), a range
 ``[low, high]`` or ``{low = …, high = …}`` (drawn uniformly, rounded to its figures), a label or
 a list of labels (a choice parameter: the draws are repeated until one has an allowed label).
@@ -60,7 +65,9 @@ PROBE_ATTEMPTS = 400
 """Draws :func:`check_spec` tries per family of a question before it calls the settings
 ill-posed (and the most it keeps to learn the answers' names from)."""
 
-_TOP_KEYS = ("title", "seed", "roster", "families", "follow_through", "late", "questions")
+_TOP_KEYS = ("title", "seed", "roster", "families", "follow_through", "late", "student",
+             "questions")
+_STUDENT_KEYS = ("install",)
 _QUESTION_KEYS = ("family", "pool", "points", "answers", "parameters")
 _ANSWER_KEYS = ("points", "rtol", "atol")
 
@@ -95,6 +102,7 @@ class Spec:
     questions: tuple[QuestionSpec, ...]
     follow_through: float | None = None  # fraction of points follow-through earns (issue 26)
     late: LatePolicy | None = None  # the deadline and late policy, [late] (issue 32)
+    install: str | None = None  # [student] install: what the notebooks say to %pip install
 
     def error(self, key: Sequence[str | int], problem: str) -> SpecError:
         """A :class:`SpecError` for ``key`` (a path into the TOML document)."""
@@ -212,6 +220,7 @@ def read_spec(path: Path) -> Spec:
     follow = _positive(draft, document, ("follow_through",), zero=True)
     if follow is not None and follow > 1:
         raise draft.error(("follow_through",), f"must be a fraction from 0 to 1, got {follow!r}")
+    install = _install(draft, document)
     entries = document.get("questions")
     if not isinstance(entries, list) or not entries:
         raise draft.error(("questions",), "give at least one [[questions]] table")
@@ -219,7 +228,7 @@ def read_spec(path: Path) -> Spec:
     base = path.parent
     return Spec(path, text, title, seed, None if roster is None else base / roster,
                 tuple(base / f for f in folders or ()), questions, follow,
-                _late(draft, document))
+                _late(draft, document), install)
 
 
 def _late(spec: Spec, document: Mapping) -> LatePolicy | None:
@@ -232,6 +241,19 @@ def _late(spec: Spec, document: Mapping) -> LatePolicy | None:
         key, _, problem = str(e).partition(": ")
         parts = ("late", *key.split(".")) if problem and " " not in key else ("late",)
         raise spec.error(parts, problem if len(parts) > 1 else str(e)) from None
+
+
+def _install(spec: Spec, document: Mapping) -> str | None:
+    """``[student] install``: what each notebook's first cell tells the student to
+    ``%pip install`` for the check (a wheel's address, a package name); one line."""
+    if "student" not in document:
+        return None
+    _known(spec, document["student"], ("student",), _STUDENT_KEYS)
+    install = _typed(spec, document["student"], ("student", "install"), str, "a string")
+    if install is not None and (not install.strip() or len(install.splitlines()) > 1):
+        raise spec.error(("student", "install"), f"must be one line naming what to install, "
+                         f"got {install!r}")
+    return None if install is None else install.strip()
 
 
 def _known(spec: Spec, table: Any, key: tuple, allowed: Sequence[str]) -> None:

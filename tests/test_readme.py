@@ -7,7 +7,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from problems.notebook import TITLE_CELL
+from problems.notebook import DEFAULT_INSTALL, TITLE_CELL
 
 ROOT = Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text(encoding="utf-8")
@@ -73,10 +73,12 @@ def test_every_measured_row_names_its_command():
 def test_for_students_gives_one_install_command_the_notebook_repeats():
     students = _page("students.md")
     commands = re.findall(r"^%pip install \S+$", students, re.M)
-    assert commands == ["%pip install eulertop"]
-    assert commands[0] in TITLE_CELL and "!eulertop check" in TITLE_CELL
-    assert "eulertop check" in students and "JupyterHub" in students and "Colab" in students
-    assert "%pip install eulertop" in README and "eulertop check" in README
+    assert commands == [f"%pip install {DEFAULT_INSTALL}"]  # the student package (issue 33)
+    title = TITLE_CELL.format(title="T", file="ada.ipynb", install=DEFAULT_INSTALL)
+    assert commands[0] in title and "eulertop_check.check()" in title
+    assert "eulertop_check.check()" in students and "JupyterHub" in students
+    assert "Colab" in students and "VS Code" in students
+    assert commands[0] in README and "eulertop_check.check()" in README
 
 
 def test_no_wording_about_how_the_project_was_built():

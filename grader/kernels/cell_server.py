@@ -118,6 +118,8 @@ def make_shell() -> Any:
     shell.display_pub = CountingDisplay(shell=shell, parent=shell)
     shell.ask_exit = lambda: None  # what exit() and quit() call
     shell.enable_gui = lambda gui=None: None  # %matplotlib: no event loop to run, no screen
+    with contextlib.suppress(Exception):  # %store, as ipykernel loads it; without it, no %store
+        shell.extension_manager.load_extension("storemagic")
     # once here, not in every kernel: what IPython sets up on its first cell (it leaves
     # nothing in the namespace: no history, no output)
     shell.run_cell("pass", store_history=False, silent=True)
@@ -187,6 +189,17 @@ def _no_input(*args: Any, **kwargs: Any) -> str:
         "raw_input was called, but this frontend does not support input requests.")
 
 
+def _own_store(shell: Any) -> None:
+    """``%store``'s database in this kernel's own working folder (where it runs), not the
+    zygote's profile (read-only, and shared by every kernel of the slot): what one kernel
+    stores, no later one can read."""
+    import os
+
+    folder = os.path.join(os.getcwd(), ".ipython", "profile_default", "db")
+    with contextlib.suppress(Exception):
+        shell.db = type(shell.db)(folder)
+
+
 def serve(shell: Any, sock: socket.socket) -> None:
     """In the forked kernel: say ready, then run the grader's requests until it hangs up."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # until a request runs
@@ -194,6 +207,7 @@ def serve(shell: Any, sock: socket.socket) -> None:
     sys.stdout, sys.stderr = out, err
     sys.stdin = io.StringIO()
     builtins.input = getpass.getpass = _no_input
+    _own_store(shell)
     requests = sock.makefile("rb")
     _send(sock, {"ready": True})
     while True:

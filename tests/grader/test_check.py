@@ -5,6 +5,8 @@ the answer specs in the generated notebook's metadata and the values the golden 
 from __future__ import annotations
 
 import json
+import sys
+from pathlib import Path
 
 import pytest
 
@@ -105,3 +107,57 @@ def test_plain_values_are_checked_by_the_problems_own_rules(generated_assignment
 def test_damaged_spec_entries_do_not_raise():
     verdict = check_value({"variable": "q1_a", "kind": "scalar", "points": "lots"}, 1.0)
     assert verdict.status == "invalid" and "damaged" in verdict.message
+
+
+def _with_cells(nb: dict, *sources: str) -> dict:
+    nb["cells"] += [{"cell_type": "code", "metadata": {}, "source": s, "outputs": [],
+                     "execution_count": None} for s in sources]
+    return nb
+
+
+def test_messages_a_student_can_act_on(generated_assignment, tmp_path, capsys):
+    """issue 33: input(), no network, and an import from IPython's own files, as
+    ``eulertop check`` tells them (references: the cells written here)."""
+    nb = _with_cells(generated_assignment.notebook("release"),
+                     "name = input('your name? ')",
+                     "import urllib.request\nurllib.request.urlopen('http://example.invalid/"
+                     "d.csv', timeout=5)",
+                     "from IPython.display import no_such_name")
+    path = tmp_path / "alice.ipynb"
+    path.write_text(json.dumps(nb))
+    status, out, _ = _check(path, capsys)
+    errors = [line for line in out.splitlines() if line.startswith("  - cell ")]
+    assert status == 1 and len(errors) == 3, out
+    assert errors[0].endswith("StdinNotImplementedError: raw_input was called, but this "
+                              "frontend does not support input requests. — input() waits for "
+                              "someone to type, and no one types while the grader runs the "
+                              "notebook: write the value into the code instead")
+    assert "the grader runs notebooks without a network: put the data you need into the " \
+           "notebook itself" in errors[1]
+    assert errors[2].endswith("ImportError: cannot import name 'no_such_name' from "
+                              "'IPython.display' (IPython/display.py)")
+    assert "-packages" not in out and str(Path(sys.prefix)) not in out
+
+
+def test_a_notebook_of_another_language_is_named_so(generated_assignment, tmp_path, capsys):
+    nb = _with_cells(generated_assignment.notebook("release"), "x <- c(1, 2)")
+    nb["metadata"]["kernelspec"] = {"name": "ir", "display_name": "R", "language": "R"}
+    path = tmp_path / "alice.ipynb"
+    path.write_text(json.dumps(nb))
+    _, out, _ = _check(path, capsys)
+    assert out.splitlines()[1] == ("Note: this notebook's kernel runs 'r', but the grader runs "
+                                   "every notebook as Python 3: open the notebook you were given "
+                                   "(Python 3 kernel) and write your code there, in Python.")
+
+
+def test_an_11_mib_notebook_with_one_emoji_is_read(generated_assignment, tmp_path):
+    """issue 33: a limit of 40 MiB on the decoded text once refused it (44 MiB at 4 bytes a
+    character), whatever --max-size said."""
+    nb = generated_assignment.notebook("release")
+    nb["cells"][0]["outputs"] = []
+    nb["cells"].append({"cell_type": "markdown", "metadata": {},
+                        "source": "a" * (11 * 1024**2) + "\U0001F600"})
+    path = tmp_path / "alice.ipynb"
+    path.write_text(json.dumps(nb, ensure_ascii=False), encoding="utf-8")
+    assert 11 * 1024**2 < path.stat().st_size < 12 * 1024**2
+    assert answer_specs(path) == generated_assignment.specs()
