@@ -97,6 +97,7 @@ class Amendment:
     unchanged: str = ""
     manifest: dict | None = None  # a new assignment.json (rekey: edited families' hashes)
     students: frozenset[str] | None = None  # whom it reaches beyond a changed key (None: all)
+    report: bool = True  # rebuild the class report now (False: left for a later command)
 
 
 Amend = Callable[[Assignment, tuple[Override, ...]], Amendment]
@@ -281,7 +282,8 @@ def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult 
         stage_record(tx, a, out, new[sid], reveal)
     stage_views(tx, a, out, new, reveal, published=changed,
                 pages=None if scope is None else frozenset())
-    stage_report(tx, a, out, new, report_notebooks(out), command)
+    if amendment.report:
+        stage_report(tx, a, out, new, report_notebooks(out), command)
     tx.trail(amendment.event, (c.as_dict() for c in report.changes), why=amendment.why,
              students=len(report.rescored), unchanged=report.unchanged,
              **({"unread": dict(report.unread)} if report.unread else {}),
