@@ -70,7 +70,7 @@ import shutil
 import signal
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -84,6 +84,7 @@ from grader.kernels.base import STOP_TIMEOUT, KernelFactory, KernelProcess
 from grader.kernels.local import LocalKernel
 from grader.limits import Limits
 from grader.notebook_load import CodeCell, SubmissionError, executable_notebook, read_notebook
+from grader.notebook_metadata import identity_of
 
 __all__ = [
     "STATUSES",
@@ -202,6 +203,9 @@ class Execution:
     notes : tuple of str
         Remarks on the reading that begin ``message`` too (converted from nbformat v3; a
         notebook whose kernel is not Python: :func:`grader.notebook_load.language_note`).
+    identity : grader.notebook_metadata.Identity or None
+        What the notebook's metadata says it is (whose, of which assignment), read from the
+        notebook this stage parsed; None where it was not parsed.
     """
 
     status: str
@@ -214,6 +218,7 @@ class Execution:
     retry: bool = False
     isolation: str = ""
     notes: tuple[str, ...] = ()
+    identity: Any = None  # what its metadata says it is (grader.notebook_metadata)
 
 
 # --------------------------------------------------------------------------------------------
@@ -279,6 +284,8 @@ def execute_submission(
         return Execution("invalid_notebook", f"not a valid notebook: {err}", {}, (),
                          time.monotonic() - start, False)
     run = _Run(loaded.cells, limits)
+    whose, notes = identity_of(loaded.notebook.get("metadata")), loaded.notes
+    del loaded  # its outputs may be large: not kept while the kernel runs
     kernel = None
     from grader.sandbox import fresh_folder, run_folder
 
@@ -297,7 +304,8 @@ def execute_submission(
                 kernel.reap()
             shutil.rmtree(workdir, ignore_errors=True)
             shutil.rmtree(control, ignore_errors=True)
-    return _execution(run, status, loaded.notes, kernel, time.monotonic() - start)
+    return replace(_execution(run, status, notes, kernel, time.monotonic() - start),
+                   identity=whose)
 
 
 def _default_factory(sandbox: bool | None, stack: contextlib.ExitStack) -> KernelFactory:

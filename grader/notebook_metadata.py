@@ -83,6 +83,13 @@ def identity(data: bytes) -> Identity | None:
         metadata = notebook_json(data).get("metadata")
     except Exception:
         return None
+    return identity_of(metadata)
+
+
+def identity_of(metadata: Any) -> Identity:
+    """The :class:`Identity` a notebook's (parsed) ``metadata`` gives: what the execution
+    stage reads from the notebook it has parsed already (a large notebook is not parsed a
+    second time to tell whose it is)."""
     try:
         answer_list(metadata)
         why = ""

@@ -119,6 +119,7 @@ def run_one(path: Path, variables: Sequence[str], limits: Any,
             execution, problem, fault = _execute(copy, variables, execute, limits)
             if not (fault or getattr(execution, "retry", False)):
                 break
-        return Run(execution, problem, fault, sha, identity(data))
+        whose = getattr(execution, "identity", None)  # parsed once, by the execution stage
+        return Run(execution, problem, fault, sha, whose if whose is not None else identity(data))
     finally:
         shutil.rmtree(folder, ignore_errors=True)

@@ -134,7 +134,8 @@ def _rel(path: Path, out: Path) -> str:
 
 
 def _write_journal(out: Path, journal: dict) -> None:
-    tmp = _staged(out / JOURNAL, json.dumps(journal, ensure_ascii=False).encode("utf-8"),
+    # ASCII: a file name that is not UTF-8 (a surrogate escape) round-trips as \\udcxx
+    tmp = _staged(out / JOURNAL, json.dumps(journal).encode("ascii"),
                   durable=True)
     os.replace(tmp, out / JOURNAL)  # the commit point
     _fsync_folder(out)
