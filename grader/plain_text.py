@@ -23,7 +23,8 @@ from typing import Any
 
 _CONTROL = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u061c\u200e\u200f\u202a-\u202e\u2066-\u2069"
                       "\ud800-\udfff]")
-_SURROGATE = re.compile("[\ud800-\udfff]")
+SURROGATE = re.compile("[\ud800-\udfff]")
+"""A lone surrogate: what no UTF-8 file can hold."""
 
 
 def _escape(match: re.Match) -> str:
@@ -57,7 +58,7 @@ def storable(text: str) -> str:
     >>> storable("x\\ud800 \\n é")
     'x\\\\ud800 \\n é'
     """
-    return _SURROGATE.sub(_escape, text)
+    return SURROGATE.sub(_escape, text)
 
 
 def value_text(value: Any) -> str:

@@ -35,11 +35,11 @@ import math
 import os
 import tempfile
 from collections.abc import Mapping
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any
 
-from grader.plain_text import storable
+from grader.plain_text import SURROGATE, storable
 from problems.answers import Verdict
 
 STATUSES = ("graded", "missing", "failed")
@@ -199,6 +199,8 @@ class StudentResult:
         object.__setattr__(self, "execution", plain_json(self.execution))
         for name in OPTIONAL:
             object.__setattr__(self, name, plain_json(getattr(self, name)))
+        if not _unstorable(self):
+            return
         record = self.to_dict()
         kept = _storable(record)
         if kept != record:  # rebuilt from the storable text, saying so (module docstring)
@@ -233,6 +235,27 @@ class StudentResult:
         kw = {name: d[name] for name in names if name in d or name not in OPTIONAL}
         kw["answers"] = tuple(AnswerResult.from_dict(a) for a in d["answers"])
         return cls(**kw)
+
+
+def _unstorable(value: Any) -> bool:
+    """Whether a string anywhere in ``value`` (plain JSON, a record, its answers and verdicts)
+    holds a lone surrogate: the check every record makes, without building its dict (a
+    record is made several times over as a grade is settled)."""
+    kind = type(value)
+    if kind in _SCALARS:
+        return False
+    if kind is str:
+        return not value.isascii() and SURROGATE.search(value) is not None
+    if kind is list or kind is tuple:
+        return any(type(v) not in _SCALARS and _unstorable(v) for v in value)
+    if kind is dict:
+        return any(_unstorable(k) or _unstorable(v) for k, v in value.items())
+    if is_dataclass(value):
+        return any(_unstorable(getattr(value, f.name)) for f in fields(value))
+    return False
+
+
+_SCALARS = frozenset({float, int, bool, type(None)})
 
 
 def _storable(value: Any) -> Any:
