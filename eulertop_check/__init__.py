@@ -51,15 +51,18 @@ def _share() -> str | None:
     name) where one of their names is not found; what hides one the check needs, or None."""
     if SHARED_FOLDER.is_dir() and any(_found(name) is None for name in SHARED):
         sys.path.append(str(SHARED_FOLDER))
-    for name in NEEDED:
-        if _found(name) is None:
-            top = name.partition(".")[0]
-            spec = _found(top)
-            where = getattr(spec, "origin", None) or next(
-                iter(getattr(spec, "submodule_search_locations", None) or ()), "?")
-            return (f"another module named {top!r} ({where}) hides eulertop's own: rename it, "
-                    "or install eulertop-check in a virtual environment of its own")
-    return None
+    missing = [name for name in NEEDED if _found(name) is None]
+    return _why_missing(missing[0].partition(".")[0]) if missing else None
+
+
+def _why_missing(top: str) -> str:
+    """Why the shared package ``top`` cannot be imported, for the student."""
+    spec = _found(top)
+    if spec is None:  # its folder is gone
+        return f"eulertop's own {top!r} is missing: install eulertop-check again"
+    where = spec.origin or next(iter(spec.submodule_search_locations or ()), "?")
+    return (f"another module named {top!r} ({where}) hides eulertop's own: rename it, "
+            "or install eulertop-check in a virtual environment of its own")
 
 
 HIDDEN = _share()
