@@ -10,15 +10,63 @@ it differs from this kernel. The terminal command is ``eulertop-check NOTEBOOK``
 
 This module imports nothing heavy: :mod:`eulertop_check.live` is imported when ``check`` runs.
 
+The student package installs no other top-level package: the modules it shares with the full
+``eulertop`` (of ``grader``, ``problems``, ``eulertop_base``) are in ``_shared/`` beside this file
+(``student/setup.py``), put on ``sys.path`` here — at its end, and only where one of those names
+is not found — so that an installed ``eulertop`` (or an editable one) keeps its own, and the
+student's kernels see none of them. :data:`HIDDEN` says when another module of one of those
+names hides what the check needs.
+
 Floor 8 of the grader's front ends (grader/API.md), in a room of its own: the student package.
 """
 
 from __future__ import annotations
 
+import sys
+from importlib.util import find_spec
 from pathlib import Path
 from typing import Any
 
 __all__ = ["check"]
+
+SHARED_FOLDER = Path(__file__).with_name("_shared")
+"""The shared modules' folder in the student package (absent where the full package runs)."""
+
+SHARED = ("eulertop_base", "grader", "problems")
+"""The top-level names of the shared modules."""
+
+NEEDED = ("eulertop_base", "grader.check", "problems.answers")
+"""What the check imports of them, first."""
+
+
+def _found(name: str) -> Any:
+    try:
+        return find_spec(name)
+    except ImportError:  # a parent that is a module, not a package
+        return None
+
+
+def _share() -> str | None:
+    """Put the shared modules on ``sys.path`` (appended: whatever is found first keeps its
+    name) where one of their names is not found; what hides one the check needs, or None."""
+    if SHARED_FOLDER.is_dir() and any(_found(name) is None for name in SHARED):
+        sys.path.append(str(SHARED_FOLDER))
+    missing = [name for name in NEEDED if _found(name) is None]
+    return _why_missing(missing[0].partition(".")[0]) if missing else None
+
+
+def _why_missing(top: str) -> str:
+    """Why the shared package ``top`` cannot be imported, for the student."""
+    spec = _found(top)
+    if spec is None:  # its folder is gone
+        return f"eulertop's own {top!r} is missing: install eulertop-check again"
+    where = spec.origin or next(iter(spec.submodule_search_locations or ()), "?")
+    return (f"another module named {top!r} ({where}) hides eulertop's own: rename it, "
+            "or install eulertop-check in a virtual environment of its own")
+
+
+HIDDEN = _share()
+"""Why the check cannot run here (another module of a shared name found first), or None."""
 
 
 def check(notebook: str | Path | None = None, *, run: bool = False,
@@ -43,6 +91,8 @@ def check(notebook: str | Path | None = None, *, run: bool = False,
     eulertop_check.live.LiveCheck
         Shown as a table; ``.all_well_formed`` and ``.rows`` for code.
     """
-    from eulertop_check.live import live_check
+    from eulertop_check.live import CheckError, live_check
 
+    if HIDDEN is not None:
+        raise CheckError(HIDDEN)
     return live_check(notebook, run=run, max_size=max_size)

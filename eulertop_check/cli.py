@@ -7,10 +7,16 @@ Floor 8 of the grader's front ends (grader/API.md).
 from __future__ import annotations
 
 import argparse
+import sys
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run ``eulertop-check``; the exit status (0 all well formed, 1 not, 2 usage error)."""
+    from eulertop_check import HIDDEN
+
+    if HIDDEN is not None:
+        print(f"eulertop-check: {HIDDEN}", file=sys.stderr)
+        return 2
     from grader.check import add_check_arguments, run_check
 
     parser = argparse.ArgumentParser(

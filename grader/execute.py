@@ -170,6 +170,24 @@ def without_install_paths(text: str) -> str:
     return _INSTALL_PATH.sub(r"\1", text)
 
 
+_RUN_PATH = re.compile(r"(?:/[^\s'\"():,/]+)*/eulertop-\d+-[0-9a-f]{8}((?:/[^\s'\"():,/]+)*)")
+"""A path into the grader's run folder (:func:`grader.sandbox.run_folder`: ``eulertop-<pid>-
+<hex>``), where a kernel outside a sandbox has its working folder."""
+
+
+def without_run_folder(text: str) -> str:
+    """``text`` with every path into the grader's run folder cut to its last part, the name of
+    the file (``/tmp/eulertop-81-3fa2c01b/w3/data.csv`` → ``data.csv``): what the student's own
+    notebook calls it, nothing of the grader's machine.
+
+    Examples
+    --------
+    >>> without_run_folder("No such file or directory: '/tmp/eulertop-81-3fa2c01b/w3/data.csv'")
+    "No such file or directory: 'data.csv'"
+    """
+    return _RUN_PATH.sub(lambda m: m.group(1).rsplit("/", 1)[-1] or "…", text)
+
+
 @dataclass(frozen=True)
 class Execution:
     """The outcome of running one submission.
@@ -475,7 +493,8 @@ async def _run_cell(client: Any, run: _Run, index: int, cell: CodeCell) -> None:
 
 
 def _error_line(reply: dict, limits: Limits) -> str:
-    ename, evalue = _short(reply.get("ename", "Error"), 60), _short(reply.get("evalue", ""), 160)
+    ename = _short(reply.get("ename", "Error"), 60)
+    evalue = _short(without_run_folder(str(reply.get("evalue", ""))[:2000]), 160)  # whole paths
     evalue = _CELL_FILE.sub(r"(line \1)", evalue)  # "(1063758517.py, line 2)": IPython's name
     evalue = without_install_paths(evalue)
     line = f"{ename}: {evalue}" if evalue else ename

@@ -11,6 +11,7 @@ against a freshly generated key, and must get full marks.
 from __future__ import annotations
 
 import os
+import re
 import shutil
 from pathlib import Path
 
@@ -59,6 +60,20 @@ def test_runs_cleanly(path, tmp_path, kernel_env):
     errors = [o for c in nb.cells if c.cell_type == "code" for o in c.outputs
               if o.output_type == "error"]
     assert errors == []
+
+
+FORMULA_TEXT = re.compile(r"[αβγδθλμπωΩΣ²³½′̇√≤≥×∫⟨⟩ê]|\b[ITLpu][0-9αβγ]\b")
+"""What a formula written in plain text or Unicode looks like (ω3, β̇², ½, I1, √, ≥ …)."""
+
+
+def test_the_lecture_writes_its_formulas_in_latex():
+    """lecture24's markdown, outside its ``$ … $`` formulas and ``code``, has no formula in
+    Unicode or plain text left: students read it as the physics pages are typeset (issue 33)."""
+    nb = nbformat.read(ROOT / "notebooks" / "lecture24.ipynb", as_version=4)
+    for i, cell in enumerate(nb.cells):
+        if cell.cell_type == "markdown":
+            prose = re.sub(r"\$\$.+?\$\$|\$[^$]+\$|`[^`]*`", " ", cell.source, flags=re.S)
+            assert FORMULA_TEXT.findall(prose) == [], f"cell {i}"
 
 
 def test_example_submission_gets_full_marks(tmp_path):

@@ -249,6 +249,17 @@ def test_the_physics_page_shows_every_display_formula_of_its_source(visits):
     assert found["typeset"] == found["formulas"] > display  # inline formulas too
 
 
+def test_the_lecture_notebook_shows_every_display_formula_of_its_markdown(visits):
+    """lecture24's formulas are LaTeX, as the physics page's are (issue 33): each ``$$ … $$`` of
+    its markdown cells is on its page, typeset, with its inline formulas."""
+    cells = json.loads((ROOT / "notebooks" / "lecture24.ipynb").read_text())["cells"]
+    source = "".join("".join(c["source"]) for c in cells if c["cell_type"] == "markdown")
+    display = len(re.findall(r"\$\$.+?\$\$", source, re.S))
+    found, _ = visits("notebooks/lecture24")
+    assert display >= 10 and found["display"] == display
+    assert found["typeset"] == found["formulas"] > display
+
+
 @pytest.mark.parametrize("notebook", sorted((ROOT / "notebooks").glob("*.ipynb")),
                          ids=lambda p: p.name)
 def test_each_notebook_is_a_page_with_its_outputs_and_figures(visits, notebook):

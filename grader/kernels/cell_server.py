@@ -26,6 +26,10 @@ Everything the kernel says is untrusted (it is the student's process): the grade
 each line (:data:`grader.kernels.base.MAX_MESSAGE`, read by :mod:`grader.kernels.channel`) and
 matches replies by ``n``.
 
+Each forked kernel has its own IPython profile, where its environment's ``IPYTHONDIR`` says
+(as a cold ipykernel has): ``%store`` (IPython's ``storemagic``, loaded as ipykernel loads it)
+keeps its database there, in a folder of that kernel's own.
+
 Interrupts: SIGINT raises ``KeyboardInterrupt`` while a request runs and is ignored between
 requests, and ``input()`` and ``getpass()`` raise ``StdinNotImplementedError``, as in ipykernel
 run by a front end that allows no input (nbclient, nbgrader).
@@ -40,6 +44,7 @@ import contextlib
 import getpass
 import io
 import json
+import os
 import signal
 import socket
 import sys
@@ -189,15 +194,21 @@ def _no_input(*args: Any, **kwargs: Any) -> str:
         "raw_input was called, but this frontend does not support input requests.")
 
 
-def _own_store(shell: Any) -> None:
-    """``%store``'s database in this kernel's own working folder (where it runs), not the
-    zygote's profile (read-only, and shared by every kernel of the slot): what one kernel
-    stores, no later one can read."""
-    import os
+def _own_profile(shell: Any) -> None:
+    """This kernel's own IPython profile, ``$IPYTHONDIR/profile_default`` of the environment the
+    grader gives it, where a cold ipykernel has its profile — not the zygote's (read-only in the
+    sandbox, shared by every kernel of the slot outside it, and a path of the grader's run
+    folder). ``%store`` keeps its database there, as in Jupyter: in a folder of this kernel's
+    own (its sandbox's tmpfs, or its control folder), which no later kernel sees."""
+    from IPython.core.profiledir import ProfileDir
 
-    folder = os.path.join(os.getcwd(), ".ipython", "profile_default", "db")
-    with contextlib.suppress(Exception):
-        shell.db = type(shell.db)(folder)
+    shell.ipython_dir = os.environ.get("IPYTHONDIR") or os.path.expanduser("~/.ipython")
+    shell.profile_dir = ProfileDir.create_profile_dir(
+        os.path.join(shell.ipython_dir, "profile_default"))
+    if isinstance(getattr(type(shell), "db", None), property):
+        shell.db = None  # IPython 9: made again on first use, in the profile now set
+    else:  # IPython 7 and 8 made it with the shell
+        shell.db = type(shell.db)(os.path.join(shell.profile_dir.location, "db"))
 
 
 def serve(shell: Any, sock: socket.socket) -> None:
@@ -207,7 +218,7 @@ def serve(shell: Any, sock: socket.socket) -> None:
     sys.stdout, sys.stderr = out, err
     sys.stdin = io.StringIO()
     builtins.input = getpass.getpass = _no_input
-    _own_store(shell)
+    _own_profile(shell)
     requests = sock.makefile("rb")
     _send(sock, {"ready": True})
     while True:

@@ -94,7 +94,9 @@ def test_input_fails_at_once(pool, tmp_path):
     assert forked.answers == jupyter.answers == {"name": None, "y": 2}
     assert forked.cell_errors == ("cell 1 (`name = input('who? ')`): StdinNotImplementedError: "
                                   "raw_input was called, but this frontend does not support "
-                                  "input requests.",)
+                                  "input requests. — input() waits for someone to type, and "
+                                  "no one types while the grader runs the notebook: write the "
+                                  "value into the code instead",)
     assert jupyter.cell_errors == ("cell 1 (`name = input('who? ')`): timed out after 2 s and "
                                    "was interrupted",)
     assert forked.duration < LIMITS.cell_timeout <= jupyter.duration
