@@ -24,7 +24,6 @@ COPY problems ./problems
 COPY grader ./grader
 COPY eulertop ./eulertop
 COPY eulertop_base ./eulertop_base
-COPY eulertop_check ./eulertop_check
 RUN pip install --no-cache-dir . && rm -rf /opt/eulertop/build
 
 # the instructor's folder is mounted here; every path on the command line is relative to it
