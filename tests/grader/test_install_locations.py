@@ -42,7 +42,8 @@ from tests.grader.tiers_support import (
     private_venv,
 )
 
-SOURCES = ("pyproject.toml", "README.md", "solver", "problems", "grader", "eulertop")
+SOURCES = ("pyproject.toml", "README.md", "solver", "problems", "grader", "eulertop",
+           "eulertop_base")
 """What a copy of the project needs to be installed."""
 
 
