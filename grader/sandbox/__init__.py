@@ -60,6 +60,7 @@ Floor 1 of grader/ (one student, one disposable world; grader/API.md).
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import functools
 import itertools
 import os
@@ -538,7 +539,7 @@ def remove_stale_run_folders(parent: Path | None = None) -> list[Path]:
             if match is None or not entry.is_dir(follow_symlinks=False):
                 continue
             pid = int(match.group(1))
-            if pid == os.getpid() or _pid_alive(pid):
+            if pid == os.getpid() or _pid_alive(pid) or _owner_alive(Path(entry.path)):
                 continue
             with contextlib.suppress(OSError):
                 if entry.stat(follow_symlinks=False).st_uid != os.geteuid():
@@ -546,6 +547,35 @@ def remove_stale_run_folders(parent: Path | None = None) -> list[Path]:
                 shutil.rmtree(entry.path)
                 removed.append(Path(entry.path))
     return removed
+
+
+OWNER = ".owner"
+"""A file of each run folder its grader holds locked (``flock``) while it lives."""
+
+
+def _owner_alive(folder: Path) -> bool:
+    """Whether the grader of run folder ``folder`` still holds its :data:`OWNER` lock: a pid
+    alone cannot say (a grader in another PID namespace sharing this ``/tmp``, a reused pid),
+    a lock held by a live process can."""
+    try:
+        fd = os.open(folder / OWNER, os.O_RDONLY | os.O_NOFOLLOW)
+    except OSError:
+        return False  # none (a folder of an older version): the pid decides
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return True
+    finally:
+        os.close(fd)
+    return False
+
+
+def _hold_owner(folder: Path) -> int:
+    """Make and lock ``folder``'s :data:`OWNER` file for this process's life of the folder;
+    the descriptor (closed, which releases it, when the folder is removed)."""
+    fd = os.open(folder / OWNER, os.O_RDWR | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
+    fcntl.flock(fd, fcntl.LOCK_EX)
+    return fd
 
 
 @contextlib.contextmanager
@@ -559,7 +589,7 @@ def run_folder() -> Iterator[Path]:
             path = parent / f"eulertop-{os.getpid()}-{secrets.token_hex(4)}"
             path.mkdir(mode=0o711)
             os.chmod(path, 0o711)  # kernels with uids of their own traverse it to their folder
-            _run["path"] = path
+            _run["path"], _run["owner"] = path, _hold_owner(path)
         _run["users"] += 1
         path = _run["path"]
     try:
@@ -569,4 +599,5 @@ def run_folder() -> Iterator[Path]:
             _run["users"] -= 1
             if _run["users"] == 0:
                 shutil.rmtree(path, ignore_errors=True)
+                os.close(_run.pop("owner"))
                 _run["path"] = None

@@ -198,6 +198,31 @@ def test_only_stale_run_folders_of_dead_graders_are_removed(tmp_path):
     assert (target / "keep.txt").read_text() == "keep" and link.is_symlink()
 
 
+def test_a_live_run_folder_is_kept_whatever_its_pid_says(tmp_path):
+    """A grader in another PID namespace sharing /tmp names its folder by a pid this one cannot
+    see: its folder must survive this one's sweep while that grader holds its owner lock (it
+    once did not: a live run's folder was removed under it, and the run failed), and go once
+    that grader has gone."""
+    from grader.sandbox import OWNER
+
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    elsewhere = tmp_path / f"eulertop-{dead.pid}-0123abcd"  # its pid means nothing here
+    elsewhere.mkdir()
+    holder = subprocess.Popen(
+        [sys.executable, "-c", "import fcntl, os, sys, time\n"
+         f"fd = os.open({str(elsewhere / OWNER)!r}, os.O_RDWR | os.O_CREAT, 0o600)\n"
+         "fcntl.flock(fd, fcntl.LOCK_EX); print('held', flush=True); time.sleep(60)"],
+        stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        assert remove_stale_run_folders(tmp_path) == [] and elsewhere.is_dir()
+    finally:
+        holder.kill()
+        holder.wait()
+    assert remove_stale_run_folders(tmp_path) == [elsewhere]  # its grader gone: stale
+
+
 def test_a_crowd_with_attackers_is_graded_and_leaves_nothing(tmp_path):
     """The small version of ``benchmarks/bench_load.py``: 20 submissions, 2 adversarial."""
     r = bench_load.run_load(tmp_path, students=20, jobs=2, timeout=20,
