@@ -56,6 +56,14 @@ class Assignment:
         for student_id in self.ids:
             self.expected(student_id)
 
+    def written(self) -> tuple[str, ...]:
+        """The variables of the written answers any student was asked (issue 31), in question
+        order, from ``assignment.json``'s public answer specs."""
+        found = {spec["variable"]: (q["question"], n)
+                 for s in self.students.values() for q in s["questions"]
+                 for n, spec in enumerate(q["answers"]) if spec.get("kind") == "written"}
+        return tuple(sorted(found, key=found.__getitem__))
+
     def key_hash(self, student_id: str) -> str:
         return self.key["students"][student_id]["hash"]
 

@@ -2,8 +2,8 @@
 record with its feedback page (:func:`stage_record`), then the gradebook, the answers table,
 every other page and the class report from the records (:func:`stage_views`,
 :func:`stage_report`) — what a grading run and a rescore both end with; and what every record
-goes through before it is written, in that order: follow-through credit, then the
-instructor's overrides (:func:`settled`).
+goes through before it is written, in that order: follow-through credit, the reviews of its
+written answers, then the instructor's overrides (:func:`settled`).
 
 Floor 6 of grader/ (where grade_one runs; where submissions come from; grader/API.md).
 """
@@ -23,17 +23,22 @@ from grader.graded_folder import ANSWERS, FEEDBACK, GRADES, REPORT, RESULTS
 from grader.late import policy_of
 from grader.overrides import Override, apply_overrides
 from grader.results import StudentResult, result_json
+from grader.reviews import Reviews, apply_reviews
 from grader.transaction import Transaction
+
+NO_REVIEWS = Reviews()
 
 
 def settled(a: Assignment, result: StudentResult, follow: FollowThrough | None,
-            overrides: Sequence[Override]) -> StudentResult:
-    """``result`` (compared with the key) as it is recorded: follow-through credit, then the
-    overrides of answers, the late penalty and an override of the total
+            overrides: Sequence[Override], reviews: Reviews = NO_REVIEWS) -> StudentResult:
+    """``result`` (compared with the key) as it is recorded: follow-through credit, the
+    reviews of its written answers (:func:`grader.reviews.apply_reviews`), then the overrides
+    of answers, the late penalty and an override of the total
     (:func:`grader.overrides.apply_overrides`) — the one way every record of a grading run and
     of a rescore is finished."""
     if follow is not None:
         result = follow.apply(result, a.expected(result.student_id))
+    result = apply_reviews(result, reviews, a.expected(result.student_id))
     return apply_overrides(result, overrides, policy_of(a.manifest))
 
 
@@ -92,7 +97,8 @@ def stage_views(tx: Transaction, a: Assignment, out: Path,
     present = {sid: r for sid, r in results.items() if r is not None}
     unsandboxed = any(ran_code(r) and not r.sandboxed for r in present.values())
     table = gradebook_rows(a.columns, a.rows, a.questions, present, sandbox_column=unsandboxed,
-                           late_columns="late" in a.manifest or None)
+                           late_columns="late" in a.manifest or None,
+                           pending_column=bool(a.written()) or None)
     tx.write(out / GRADES, gradebook_csv(table), durable=False)
     tx.write(out / ANSWERS, gradebook_csv(answers_rows(a.rows, present)), durable=False)
     for sid, r in present.items():

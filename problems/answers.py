@@ -906,6 +906,11 @@ def _read_expression(x: Any, form: _Form) -> str:
     return x.strip()
 
 
+PLACEHOLDER = ("*Write your answer here, in Markdown: formulas between `$…$` (or `$$…$$` on a "
+               "line of their own). Double-click the cell to edit it.*")
+"""The text of a written answer cell in the release notebook (:mod:`problems.notebook`); a cell
+still holding it is unanswered (:mod:`grader.written`)."""
+
 MAX_WRITTEN_CHARS = 20_000
 """Characters of a written answer's text kept (the grader cuts it there and says so)."""
 
@@ -917,7 +922,8 @@ def _read_written(x: Any, form: _Form) -> str:
     text = x.get("text") if isinstance(x, Mapping) else x
     if not isinstance(text, str):
         raise _Invalid(f"{_describe(text)}; Markdown text is expected")
-    if not text.strip():
+    pictures = isinstance(x, Mapping) and bool(x.get("attachments") or x.get("dropped"))
+    if not text.strip() and not pictures:  # a photo of handwritten work alone is an answer
         raise _Missing
     return text
 

@@ -18,6 +18,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from problems.answers import PLACEHOLDER as PLACEHOLDER  # the empty answer cell's text
 from problems.answers import WRITTEN, Answer, RubricItem, rubric_items
 from problems.variant import Variant
 
@@ -25,10 +26,6 @@ WRITTEN_QUESTION = "written"
 """The family name a spec's question of only a written part is recorded under (no family of
 the catalogue has it)."""
 
-PLACEHOLDER = ("*Write your answer here, in Markdown: formulas between `$…$` (or `$$…$$` on a "
-               "line of their own). Double-click the cell to edit it.*")
-"""The text of a written answer cell in the release notebook; a cell still holding it is
-unanswered."""
 
 
 @dataclass(frozen=True)
