@@ -296,28 +296,15 @@ def _edited_families_recorded(command: str, a: Assignment,
 
 def override_change(args: argparse.Namespace):
     """``eulertop override``'s change: the overrides with one added, replaced or removed, from
-    the overrides as they are under the lock (so that none is lost)."""
-    from grader.assignment import UsageError
+    the overrides as they are under the lock (so that none is lost):
+    :func:`grader.rescore.override_amendment`."""
     from grader.audit import who
     from grader.grade_one import now
-    from grader.overrides import Override
-    from grader.rescore import Amendment
+    from grader.rescore import override_amendment
 
-    def change(a, existing) -> Amendment:
-        if args.student not in a.ids:
-            raise UsageError(f"no student {args.student!r} in the assignment's roster")
-        kept = tuple(o for o in existing if (o.student, o.answer) != (args.student, args.answer))
-        what = args.answer or "total"
-        if args.remove:
-            if len(kept) == len(existing):
-                raise UsageError(f"no override of {args.student}'s {what} to remove")
-            return Amendment("override removed", f"override of {args.student}'s {what} removed",
-                             overrides=kept, students=frozenset({args.student}))
-        if args.points is None or not args.reason:
-            raise UsageError("give --points P and --reason TEXT (or --remove)")
-        new = Override(args.student, args.answer, args.points, args.reason, who(), now())
-        return Amendment("override", args.reason, overrides=(*kept, new),
-                         students=frozenset({args.student}))
+    def change(a, existing):
+        return override_amendment(a, existing, args.student, args.answer, args.points,
+                                  args.reason, who(), now(), remove=args.remove)
 
     return change
 

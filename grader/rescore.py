@@ -48,6 +48,7 @@ from grader.overrides import (
 )
 from grader.publish import (
     NO_REVIEWS,
+    RowCache,
     records,
     report_notebooks,
     settled,
@@ -221,20 +222,21 @@ class Loaded:
 
 def amended_class(state: Loaded, amendment: Amendment, *, dry_run: bool = False,
                   reveal: bool = False, command: str = "eulertop rescore",
-                  follow: FollowThrough | None = None,
+                  follow: FollowThrough | None = None, rows: RowCache | None = None,
                   ) -> tuple[Rescore, dict[str, StudentResult | None]]:
     """``amendment`` of the class ``state`` holds (under its lock), worked out and — unless
     ``dry_run`` — committed as one transaction (:func:`rescore`'s, from state already loaded:
     what a review desk that keeps the class in memory calls, :mod:`grader.review`). The report
     and every record as it now is. ``follow``: the class's follow-through, kept open by the
-    caller (default: one for this change, closed after it)."""
+    caller (default: one for this change, closed after it); ``rows``: the gradebook's rows of
+    the records met before (:class:`grader.publish.RowCache`)."""
     scope = _reached(state.a, amendment)
     a, overrides, reviews = _amended(state.a, state.overrides, state.reviews, amendment, scope)
     old = records(a, state.out) if state.records is None else state.records
     report, new = _rescored_class(a, old, overrides, amendment, scope, reviews, follow)
     report = replace(report, dry_run=dry_run)
     if not dry_run:
-        _commit(a, state.hw, state.out, old, new, report, reveal, command, scope)
+        _commit(a, state.hw, state.out, old, new, report, reveal, command, scope, rows)
     return report, new
 
 
@@ -266,8 +268,19 @@ def _amended(a: Assignment, overrides: tuple[Override, ...], reviews: Reviews,
     for sid in a.ids if scope is None else sorted(scope):
         a.expected(sid)  # UsageError naming a student whose key entry cannot be read
     check_overrides(a, overrides, None if amendment.overrides is not None else OVERRIDES)
-    check_reviews(a, reviews, "the reviews" if amendment.reviews is not None else REVIEWS)
+    check_reviews(a, _to_check(reviews, amendment, scope),
+                  "the reviews" if amendment.reviews is not None else REVIEWS)
     return a, overrides, reviews
+
+
+def _to_check(reviews: Reviews, amendment: Amendment,
+              scope: frozenset[str] | None) -> Reviews:
+    """The reviews to check against the key: all of them, but where only the reviews of the
+    students ``scope`` names change (the key and the manifest as they were), theirs."""
+    if amendment.reviews is None or amendment.key is not None or \
+            amendment.manifest is not None or scope is None:
+        return reviews
+    return replace(reviews, reviews=tuple(r for r in reviews.reviews if r.student in scope))
 
 
 def _rescored_class(a: Assignment, old: Mapping[str, StudentResult | None],
@@ -303,7 +316,8 @@ def _rescored_class(a: Assignment, old: Mapping[str, StudentResult | None],
 
 def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult | None],
             new: Mapping[str, StudentResult | None], report: Rescore, reveal: bool,
-            command: str, scope: frozenset[str] | None = None) -> None:
+            command: str, scope: frozenset[str] | None = None,
+            rows: RowCache | None = None) -> None:
     """The change, its records and their views, and its line of the trail, as one
     transaction."""
     amendment, details = report.amendment, dict(report.amendment.details)
@@ -322,7 +336,7 @@ def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult 
     for sid in changed:
         stage_record(tx, a, out, new[sid], reveal)
     stage_views(tx, a, out, new, reveal, published=changed,
-                pages=None if scope is None else frozenset())
+                pages=None if scope is None else frozenset(), cache=rows)
     if amendment.report:
         stage_report(tx, a, out, new, report_notebooks(out), command)
     tx.trail(amendment.event, (c.as_dict() for c in report.changes), why=amendment.why,
@@ -330,6 +344,30 @@ def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult 
              **({"unread": dict(report.unread)} if report.unread else {}),
              **details)
     tx.commit()
+
+
+def override_amendment(a: Assignment, existing: Sequence[Override], student: str,
+                       answer: str | None, points: float | None, reason: str, by: str,
+                       at: str, remove: bool = False) -> Amendment:
+    """The overrides with ``student``'s ``answer`` (None: total) given ``points`` for
+    ``reason``, replacing one of the same target — or that one taken back (``remove``) — from
+    the overrides as they are under the lock, so that none is lost: what ``eulertop override``
+    and the review desk's override (:mod:`grader.review`) both commit. UsageError: refused."""
+    if student not in a.ids:
+        raise UsageError(f"no student {student!r} in the assignment's roster")
+    kept = tuple(o for o in existing if (o.student, o.answer) != (student, answer))
+    what = answer or TOTAL
+    details = {"student": student, "answer": what}
+    if remove:
+        if len(kept) == len(existing):
+            raise UsageError(f"no override of {student}'s {what} to remove")
+        return Amendment("override removed", f"override of {student}'s {what} removed",
+                         overrides=kept, students=frozenset({student}), details=details)
+    if points is None or not reason:
+        raise UsageError("give --points P and --reason TEXT (or --remove)")
+    new = Override(student, answer, points, reason, by, at)
+    return Amendment("override", reason, overrides=(*kept, new),
+                     students=frozenset({student}), details=details)
 
 
 def change_lines(changes: Sequence[Change], limit: int | None = None) -> list[str]:

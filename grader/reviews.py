@@ -36,6 +36,7 @@ import json
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from pathlib import Path
 from typing import Any
 
@@ -100,10 +101,13 @@ class Reviews:
     reviews: tuple[Review, ...] = ()
     comments: Mapping[str, Mapping[str, str]] = field(default_factory=dict)
 
+    @cached_property
+    def _by_answer(self) -> dict[tuple[str, str], Review]:
+        return {(r.student, r.answer): r for r in self.reviews}
+
     def of(self, student: str, answer: str) -> Review | None:
         """The review of ``student``'s ``answer``, if there is one."""
-        return next((r for r in self.reviews if (r.student, r.answer) == (student, answer)),
-                    None)
+        return self._by_answer.get((student, answer))
 
     def with_review(self, review: Review) -> Reviews:
         """These reviews with ``review`` in place of any earlier one of the same answer."""

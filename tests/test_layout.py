@@ -50,7 +50,7 @@ FLOORS = {
     # 6: where grade_one runs; where submissions come from
     "grader.executors": 26, "grader.discover": 26, "grader.publish": 26,
     # 7: the class run
-    "grader.pipeline": 27, "grader.rescore": 27,
+    "grader.pipeline": 27, "grader.rescore": 27, "grader.review": 27,
     # 8: front ends
     "grader": 28, "grader.cli": 28, "grader.amend": 28, "grader.check": 28,
     "grader.doctor": 28, "grader.selftest_run": 28, "grader.report.cli": 28,
