@@ -7,11 +7,13 @@ and every record — and serves it from memory: the written answers of one quest
 (:meth:`~ReviewSession.written`), each under an opaque id that is the same in every session
 (the student's id is there too, for the page's "show names" toggle, off by default); the
 answers the grader flagged for a look (:meth:`~ReviewSession.flagged`); progress per question;
-reusable comments. Every change — a review (:meth:`~ReviewSession.submit`), an override, a
-rubric item's points, a reusable comment — is a change of the class like any command's: under
-the class's lock (:func:`grader.transaction.class_lock`, waiting :data:`WAIT` seconds at most),
-from the class as it is on disk then, committed as one transaction with its line of the audit
-trail (:func:`grader.rescore.amended_class`). A review rescores its one student (their record
+reusable comments. Each reading first reads what another command changed, when the class is
+free (:meth:`~ReviewSession.refresh`; it never waits). Every change — a review
+(:meth:`~ReviewSession.submit`), an override, a rubric item's points, a reusable comment — is
+a change of the class like any command's: under the class's lock
+(:func:`grader.transaction.class_lock`, waiting :data:`WAIT` seconds at most), from the class
+as it is on disk then, committed as one transaction with its line of the audit trail
+(:func:`grader.rescore.amended_class`). A review rescores its one student (their record
 and page, ``grades.csv``, ``answers.csv``, ``reviews.json``, the trail; not the class report,
 rebuilt once by :meth:`~ReviewSession.close`).
 
@@ -47,7 +49,7 @@ from grader.assignment import Assignment, UsageError, load_assignment
 from grader.audit import AUDIT, who
 from grader.follow_through import FollowThrough
 from grader.grade_one import now
-from grader.graded_folder import RESULTS, graded_folder
+from grader.graded_folder import RESULTS, RunInProgress, graded_folder
 from grader.overrides import OVERRIDES, read_overrides
 from grader.publish import RowCache, records, report_notebooks, stage_report
 from grader.rescore import Amendment, Loaded, amended_class, override_amendment
@@ -210,6 +212,17 @@ class ReviewSession:
                 students.add(entry["student"])
         return students
 
+    def refresh(self) -> None:
+        """Read what another command changed since (module docstring), if the class is free
+        now; else keep what the session holds (a reading never waits for a grading run)."""
+        with self._mutex:
+            try:
+                with class_lock(self.out, self.hw, command=f"eulertop review ({self.grader})",
+                                wait=0.0):
+                    self._refresh()
+            except RunInProgress:
+                pass
+
     def _commit(self, amendment: Amendment, command: str) -> None:
         """``amendment`` committed from the class as the session holds it (under the lock),
         and the session's state moved on with it."""
@@ -232,9 +245,12 @@ class ReviewSession:
         "rubric": [{"item", "points"}], "answers": how many students have it}``, in question
         order (the first student's key that has it gives its prompt and rubric)."""
         with self._mutex:
+            self.refresh()
             found = []
             for variable in self.a.written():
                 sids = [s for (s, v) in self._by_answer if v == variable]
+                if not sids:
+                    continue
                 key = written_key(self.a, sids[0], variable)
                 found.append({"question": variable, "number": key.question,
                               "prompt": key.answer.value, "points": key.answer.points,
@@ -249,6 +265,7 @@ class ReviewSession:
         else ``{"rubric", "adjust", "comment", "by", "at", "stale"}`` (stale: of other text
         than the student's now). ReviewError for a question the class has not."""
         with self._mutex:
+            self.refresh()
             if question not in self.a.written():
                 raise ReviewError(f"no written question {question!r}; the class has "
                                   f"{', '.join(self.a.written()) or 'none'}")
@@ -283,6 +300,7 @@ class ReviewSession:
     def answer(self, answer: str) -> dict:
         """One answer as :meth:`written` lists it; ReviewError for an unknown id."""
         with self._mutex:
+            self.refresh()
             self._known(answer)
             return self._answer(answer)
 
@@ -308,6 +326,7 @@ class ReviewSession:
         """Per written question: ``{"answers", "written", "reviewed", "pending", "stale"}``
         (stale: pending though reviewed, the text having changed since)."""
         with self._mutex:
+            self.refresh()
             found = {}
             for variable in self.a.written():
                 rows = [self._answer(i) for i, (_, v) in self._ids.items() if v == variable]
@@ -393,6 +412,7 @@ class ReviewSession:
         "submitted", "key", "status", "points", "max", "message", "overridden"}``, by answer
         then id."""
         with self._mutex:
+            self.refresh()
             seed = self.a.manifest.get("seed")
             found = []
             for sid, record in self.records.items():
@@ -417,6 +437,7 @@ class ReviewSession:
     def comments(self, question: str) -> dict[str, str]:
         """The reusable comments of ``question``: name → text."""
         with self._mutex:
+            self.refresh()
             return dict(self.reviews.comments.get(question, {}))
 
     def add_comment(self, question: str, name: str, text: str | None) -> dict[str, str]:

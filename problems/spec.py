@@ -68,7 +68,7 @@ import numbers
 import re
 import tomllib
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -429,9 +429,12 @@ def check_spec(spec: Spec, families: Mapping[str, Family]) -> None:
         names: set[str] = set()
         kinds: dict[str, str] = {}
         for family in (families[n] for n in question.pool):
+            probed = replace(settings, written=True) if settings.written else settings
             seen = _probe(spec, (*key, "parameters") if settings.parameters else where,
-                          family, settings)
+                          family, probed)  # every written part it offers, to name them
             _check_written(spec, (*key, "written"), family, settings.written, seen)
+            seen = [a for a in seen if a.kind != "written" or settings.written is True
+                    or a.name in settings.written]
             names |= {a.name for a in seen}
             kinds |= {a.name: a.kind for a in seen}
         _check_answers(spec, key, settings, names, kinds)
@@ -440,7 +443,7 @@ def check_spec(spec: Spec, families: Mapping[str, Family]) -> None:
 def _check_written(spec: Spec, key: tuple, family: Family, chosen: bool | tuple[str, ...],
                    seen: Sequence[Any]) -> None:
     """The written parts a question asks of ``family`` are ones it offers (``seen``: the
-    answers of its probe draws, the written parts asked among them)."""
+    answers of its probe draws, every written part it offers among them)."""
     if not chosen:
         return
     offered = {a.name for a in seen if a.kind == "written"}
