@@ -156,5 +156,5 @@ rubric = [
     assert question.written.points == 3 and len(question.written.rubric) == 3
     assert question.label == "written:veff_minimum" and question.pool == ()
     (course / "b.toml").write_text('[[questions]]\nwritten = "x"\nname = "y"\nrubric = 3\n')
-    with pytest.raises(SpecError, match="b.toml:4: questions\\[1\\].rubric: give the rubric"):
+    with pytest.raises(SpecError, match=r"b.toml:4: questions\[1\].rubric: give the rubric"):
         read_spec(course / "b.toml")
