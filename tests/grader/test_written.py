@@ -563,3 +563,23 @@ def test_a_real_grading_run_reads_written_answers_beside_the_kernels(tmp_path):
     statuses = {a.variable: a.verdict.status for a in ada.answers}
     assert statuses[OWN] == "pending" and statuses[FAMILY_WRITTEN] == "missing"
     assert statuses["q1_rate"] == "correct"
+
+
+def test_the_text_is_cut_at_the_limit_and_the_record_says_so():
+    from grader.written import MAX_TEXT_CHARS, written_answers
+
+    cell = {"cell_type": "markdown", "metadata": {"eulertop": {"written": "q1_w"}},
+            "source": ["x" * MAX_TEXT_CHARS, "tail"]}
+    (value,) = written_answers(json.dumps({"nbformat": 4, "cells": [cell]}).encode(),
+                               ["q1_w"]).values()
+    assert len(value["text"]) == MAX_TEXT_CHARS
+    assert value["notes"] == [f"cut at {MAX_TEXT_CHARS:,} characters (it had "
+                              f"{MAX_TEXT_CHARS + 4:,})"]
+
+
+@pytest.mark.parametrize("data", [b"", b"not json", b"[" * 200 + b"]" * 200,
+                                  b'{"nbformat": 4, "cells": "none"}'])
+def test_bytes_that_are_no_notebook_give_no_written_answer(data):
+    from grader.written import written_answers
+
+    assert written_answers(data, ["q1_w"]) == {"q1_w": None}
