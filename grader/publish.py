@@ -117,6 +117,10 @@ class RowCache:
         self._rows[(table, sid)] = (record, columns, text)
         return text
 
+    def fill(self, a: Assignment, results: Mapping[str, StudentResult | None]) -> None:
+        """Every row of ``results`` encoded now (a session's load), not at its first change."""
+        _tables(a, {sid: r for sid, r in results.items() if r is not None}, self)
+
 
 def _gradebook_columns(a: Assignment, present: Mapping[str, StudentResult]) -> dict:
     """The optional columns of ``grades.csv`` (:func:`grader.gradebook.gradebook_rows`), as

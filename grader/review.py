@@ -147,6 +147,7 @@ class ReviewSession:
         self.reviews: Reviews = read_reviews(self.out)
         self.records: dict[str, StudentResult | None] = records(self.a, self.out)
         self._follow = FollowThrough.of(self.a)
+        self._rows.fill(self.a, self.records)
         self._index()
         self._seen = self._disk()
 
