@@ -583,3 +583,10 @@ def test_bytes_that_are_no_notebook_give_no_written_answer(data):
     from grader.written import written_answers
 
     assert written_answers(data, ["q1_w"]) == {"q1_w": None}
+
+
+def test_a_hosted_package_says_which_parts_the_platform_grades_by_hand(pristine):
+    from grader.hosted.package import _written_note
+
+    note = _written_note(pristine.hw)
+    assert f"the written parts ({FAMILY_WRITTEN}, {OWN}) are not autograded" in note
