@@ -414,24 +414,28 @@ class ReviewSession:
         then id."""
         with self._mutex:
             self.refresh()
-            seed = self.a.manifest.get("seed")
-            found = []
-            for sid, record in self.records.items():
-                if record is None or record.status != "graded":
-                    continue
-                keys = {k.variable: k for k in self.a.expected(sid)}
-                for a in record.answers:
-                    key = keys.get(a.variable)
-                    why = _flag(a, key.answer) if key is not None else None
-                    if why:
-                        found.append({
-                            "id": answer_id(seed, a.variable, sid), "student": sid,
-                            "question": a.question, "variable": a.variable, "why": why,
-                            "submitted": a.submitted, "key": key.answer.value,
-                            "status": a.verdict.status, "points": a.verdict.points,
-                            "max": a.verdict.max_points, "message": a.verdict.message,
-                            "overridden": record.overridden.get(a.variable)})
+            found = [f for sid, record in self.records.items()
+                     if record is not None and record.status == "graded"
+                     for f in self._flags(sid, record)]
             return sorted(found, key=lambda f: (f["question"], f["variable"], f["id"]))
+
+    def _flags(self, sid: str, record: StudentResult) -> list[dict]:
+        """``sid``'s answers flagged for a look (:meth:`flagged`)."""
+        keys = {k.variable: k.answer for k in self.a.expected(sid)}
+        seed = self.a.manifest.get("seed")
+        found = []
+        for a in record.answers:
+            key = keys.get(a.variable)
+            why = _flag(a, key) if key is not None else None
+            if why:
+                found.append({
+                    "id": answer_id(seed, a.variable, sid), "student": sid,
+                    "question": a.question, "variable": a.variable, "why": why,
+                    "submitted": a.submitted, "key": key.value, "status": a.verdict.status,
+                    "points": a.verdict.points, "max": a.verdict.max_points,
+                    "message": a.verdict.message,
+                    "overridden": record.overridden.get(a.variable)})
+        return found
 
     # -- reusable comments
 

@@ -15,6 +15,7 @@ import csv
 import html.parser
 import io
 import json
+import re
 import shutil
 import threading
 from dataclasses import dataclass
@@ -590,3 +591,14 @@ def test_a_hosted_package_says_which_parts_the_platform_grades_by_hand(pristine)
 
     note = _written_note(pristine.hw)
     assert f"the written parts ({FAMILY_WRITTEN}, {OWN}) are not autograded" in note
+
+
+def test_eulertop_check_lists_written_parts_from_the_saved_file(pristine):
+    from grader.check import check_notebook, format_report
+
+    report = check_notebook(pristine.subs / "cyd.ipynb", Limits(total_timeout=60))
+    words = {a.variable: a.verdict.status for a in report.answers}
+    assert words[OWN] == "correct" and words[FAMILY_WRITTEN] == "missing"
+    text = format_report(report, pristine.subs / "cyd.ipynb")
+    assert re.search(rf"MISSING +{FAMILY_WRITTEN} +no answer: the answer cell is empty", text)
+    assert re.search(rf"ok +{OWN} +well formed: {len(TEXT.strip())} characters", text)
