@@ -8,7 +8,10 @@ is declared with :func:`follows_from`, and ``follow(name, params, earlier)`` rec
 a student's own earlier values (follow-through credit); ``degenerate(name, params, earlier)``
 may say why such values leave nothing to work out (one line, or None), beside the defaults
 every family gets (:mod:`problems.genuine`; :func:`statement_number` names a parameter a value
-copies). ``eulertop new-family NAME --out DIR`` writes a working, commented example;
+copies). A family may offer written parts — a derivation or an explanation the student writes
+in Markdown, scored by a person against a rubric — with ``written(params)`` returning
+:class:`Written` records; an assignment spec asks for them (``written = true``).
+``eulertop new-family NAME --out DIR`` writes a working, commented example;
 ``eulertop problems test FILE`` checks one.
 
 Examples
@@ -20,9 +23,10 @@ True
 
 from __future__ import annotations
 
-from problems.answers import Answer, Mistake
+from problems.answers import Answer, Mistake, RubricItem
 from problems.family import IllPosed, Parameter, draw_parameters, follows_from
 from problems.genuine import statement_number
+from problems.written import Written
 
-__all__ = ["Answer", "IllPosed", "Mistake", "Parameter", "draw_parameters", "follows_from",
-           "statement_number"]
+__all__ = ["Answer", "IllPosed", "Mistake", "Parameter", "RubricItem", "Written",
+           "draw_parameters", "follows_from", "statement_number"]

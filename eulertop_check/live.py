@@ -89,7 +89,10 @@ def live_check(notebook: str | Path | None = None, *, run: bool = False,
     from grader.check import check_value
     from grader.extract import live_answers
 
-    live = live_answers(namespace, [s["variable"] for s in specs])
+    written = [s["variable"] for s in specs if s.get("kind") == "written"]
+    live = live_answers(namespace, [s["variable"] for s in specs
+                                    if s["variable"] not in written])
+    live.update(_saved_written(found, written, max_size))
     rows = [Row(s["variable"], *_form(check_value(s, live.get(s["variable"])))) for s in specs]
     notes: tuple[str, ...] = ()
     if run:
@@ -169,8 +172,28 @@ def _with_saved_run(found: Found, specs: Sequence[dict], live: Mapping[str, Any]
         return rows, (*notes, f"Your saved notebook, run as the grader runs it: "
                               f"{execution.message}; {SAVE_AND_RERUN}.")
     notes += tuple(f"Your saved notebook: {e}." for e in execution.cell_errors)
-    return [_compared(row, live.get(row.variable), execution.answers.get(row.variable))
-            for row in rows], notes
+    answers = execution.answers
+    return [_compared(row, live.get(row.variable), answers.get(row.variable))
+            if row.variable in answers else row for row in rows], notes
+
+
+def _saved_written(found: Found, variables: Sequence[str],
+                   max_size: int | None) -> dict[str, Any]:
+    """The written answers (Markdown cells, issue 31) as the notebook was last saved: no kernel
+    holds them (:func:`grader.written.written_answers`)."""
+    if not variables:
+        return {}
+    from grader.submission_file import DEFAULT_MAX_BYTES, InvalidSubmission, read_submission
+    from grader.written import written_answers
+
+    if found.path is None:
+        data = json.dumps(found.document).encode("utf-8")
+    else:
+        try:
+            data = read_submission(found.path, max_size or DEFAULT_MAX_BYTES)
+        except (OSError, InvalidSubmission) as err:
+            raise CheckError(f"{found.path}: {err}") from None
+    return written_answers(data, variables)
 
 
 def _in_a_thread(function: Any, *args: Any) -> Any:

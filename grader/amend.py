@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -64,6 +65,9 @@ def add_key_arguments(parser: argparse.ArgumentParser) -> None:
     change.add_argument("--accept", action="append", default=[], metavar="VALUE",
                         help="also accept VALUE (JSON: 2.5, [1, 0, 0], true, \"loops\"; "
                              "repeatable), e.g. another sign convention")
+    change.add_argument("--rubric", action="append", default=[], metavar="N=POINTS",
+                        help="a written answer's rubric item N (from 1) worth POINTS "
+                             "(repeatable); the answer's points become the items' sum")
 
 
 def add_rekey_arguments(parser: argparse.ArgumentParser) -> None:
@@ -187,6 +191,22 @@ def _accepted(texts: list[str]) -> list:
     return values
 
 
+def _rubric_points(texts: list[str]) -> dict[int, float]:
+    """``--rubric N=POINTS`` options as ``{N: points}``; UsageError naming one that is not."""
+    from grader.assignment import UsageError
+
+    found = {}
+    for text in texts:
+        n, _, points = text.partition("=")
+        try:
+            found[int(n)] = float(points)
+        except ValueError:
+            raise UsageError(f"--rubric {text}: expected N=POINTS, such as 2=1.5") from None
+        if not math.isfinite(found[int(n)]) or found[int(n)] < 0:
+            raise UsageError(f"--rubric {text}: points must be a number ≥ 0")
+    return found
+
+
 def _lines(changes) -> tuple[str, ...]:
     width = max((len(c.student) for c in changes), default=0)
     return tuple(c.line(width) for c in changes)
@@ -199,7 +219,8 @@ def key_change(args: argparse.Namespace):
 
     def change(a, overrides) -> Amendment:
         key, changes = set_answer(a, args.answer, rtol=args.rtol, atol=args.atol,
-                                  points=args.points, accept=_accepted(args.accept))
+                                  points=args.points, accept=_accepted(args.accept),
+                                  rubric=_rubric_points(getattr(args, "rubric", [])))
         if not changes:
             return Amendment(unchanged=f"{args.answer} is already so")
         fields = sorted({f"{c.field} {c.after!r}" for c in changes})
@@ -275,28 +296,15 @@ def _edited_families_recorded(command: str, a: Assignment,
 
 def override_change(args: argparse.Namespace):
     """``eulertop override``'s change: the overrides with one added, replaced or removed, from
-    the overrides as they are under the lock (so that none is lost)."""
-    from grader.assignment import UsageError
+    the overrides as they are under the lock (so that none is lost):
+    :func:`grader.rescore.override_amendment`."""
     from grader.audit import who
     from grader.grade_one import now
-    from grader.overrides import Override
-    from grader.rescore import Amendment
+    from grader.rescore import override_amendment
 
-    def change(a, existing) -> Amendment:
-        if args.student not in a.ids:
-            raise UsageError(f"no student {args.student!r} in the assignment's roster")
-        kept = tuple(o for o in existing if (o.student, o.answer) != (args.student, args.answer))
-        what = args.answer or "total"
-        if args.remove:
-            if len(kept) == len(existing):
-                raise UsageError(f"no override of {args.student}'s {what} to remove")
-            return Amendment("override removed", f"override of {args.student}'s {what} removed",
-                             overrides=kept, students=frozenset({args.student}))
-        if args.points is None or not args.reason:
-            raise UsageError("give --points P and --reason TEXT (or --remove)")
-        new = Override(args.student, args.answer, args.points, args.reason, who(), now())
-        return Amendment("override", args.reason, overrides=(*kept, new),
-                         students=frozenset({args.student}))
+    def change(a, existing):
+        return override_amendment(a, existing, args.student, args.answer, args.points,
+                                  args.reason, who(), now(), remove=args.remove)
 
     return change
 

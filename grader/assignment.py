@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 from grader.compare import KeyAnswer, key_answers
@@ -29,8 +30,9 @@ class Assignment:
     manifest: dict  # assignment.json
     key: dict       # key.json
     _expected: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    _written: list = field(default_factory=list, init=False, repr=False, compare=False)
 
-    @property
+    @cached_property
     def ids(self) -> tuple[str, ...]:
         return tuple(r["id"] for r in self.rows)
 
@@ -55,6 +57,17 @@ class Assignment:
         checked before a run writes anything."""
         for student_id in self.ids:
             self.expected(student_id)
+
+    def written(self) -> tuple[str, ...]:
+        """The variables of the written answers any student was asked (issue 31), in question
+        order, from ``assignment.json``'s public answer specs; found once per loaded
+        assignment."""
+        if not self._written:
+            found = {spec["variable"]: (q["question"], n)
+                     for s in self.students.values() for q in s["questions"]
+                     for n, spec in enumerate(q["answers"]) if spec.get("kind") == "written"}
+            self._written.append(tuple(sorted(found, key=found.__getitem__)))
+        return self._written[0]
 
     def key_hash(self, student_id: str) -> str:
         return self.key["students"][student_id]["hash"]

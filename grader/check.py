@@ -139,13 +139,15 @@ def check_notebook(path: Path, limits: Any) -> CheckReport:
     from grader.run_file import run_one
 
     specs = answer_specs(path, getattr(limits, "submission_bytes", None))
-    run = run_one(Path(path), [s["variable"] for s in specs], limits)
+    written = [s["variable"] for s in specs if s.get("kind") == "written"]
+    run = run_one(Path(path), [s["variable"] for s in specs if s["variable"] not in written],
+                  limits, written=written)
     if run.execution is None:  # too large, not a regular file, or no kernel could run it
         raise CheckUsageError(f"{path}: {run.problem}")
     execution = run.execution
+    read = {**execution.answers, **(run.written or {})}  # written ones from the file itself
     answers = tuple(
-        AnswerCheck(s["variable"], s, check_value(s, execution.answers.get(s["variable"])))
-        for s in specs
+        AnswerCheck(s["variable"], s, check_value(s, read.get(s["variable"]))) for s in specs
     )
     return CheckReport(execution, answers)
 

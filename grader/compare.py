@@ -21,7 +21,7 @@ from typing import Any, NamedTuple
 
 from grader.extract import UNREADABLE, invalid_reason
 from grader.results import AnswerResult
-from problems.answers import Answer, Verdict, grade
+from problems.answers import WRITTEN, Answer, Verdict, grade
 from problems.generate import key_records
 
 NOT_EXTRACTED = "not graded: the notebook did not run to the end, so no answer could be read"
@@ -43,8 +43,15 @@ def key_answers(key: Mapping, student_id: str) -> tuple[KeyAnswer, ...]:
 
 
 def variable_names(expected: Sequence[KeyAnswer]) -> tuple[str, ...]:
-    """What the execution stage is told: the answer variables' names, nothing else."""
-    return tuple(k.variable for k in expected)
+    """What the execution stage is told: the answer variables' names, nothing else — but
+    those of written answers, which are read from the notebook's file, not its kernel
+    (:func:`written_names`)."""
+    return tuple(k.variable for k in expected if k.answer.kind != WRITTEN)
+
+
+def written_names(expected: Sequence[KeyAnswer]) -> tuple[str, ...]:
+    """The written answers' variables (:mod:`grader.written`)."""
+    return tuple(k.variable for k in expected if k.answer.kind == WRITTEN)
 
 
 def _grade_one(variable: str, answer: Answer, submitted: Any) -> Verdict:

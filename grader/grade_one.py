@@ -13,7 +13,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from grader.compare import KeyAnswer, compare, variable_names
+from grader.compare import KeyAnswer, compare, variable_names, written_names
 from grader.notebook_metadata import identity
 from grader.results import StudentResult
 
@@ -85,6 +85,18 @@ def scored(student_id: str, expected: Sequence[KeyAnswer], key_sha256: str, *, s
         sandboxed=sandboxed, graded_at=now())
 
 
+def _answers_read(expected: Sequence[KeyAnswer], run: Run) -> dict[str, Any]:
+    """The answers read from a run: its kernel's, and its written answers read from the file
+    (:mod:`grader.written`) — those only where the notebook ran to the end and its kernel's
+    answers were read (or none were asked): fail closed alike."""
+    execution = run.execution
+    extracted = dict(execution.answers) if execution is not None else {}
+    ran = execution is not None and execution.status == "ok"
+    if run.written and (extracted or (ran and not variable_names(expected))):
+        extracted.update(run.written)
+    return extracted
+
+
 def record(student_id: str, expected: Sequence[KeyAnswer], key_sha256: str,
            run: Run) -> StudentResult:
     """The record of a submission that ran (or could not): its answers compared with
@@ -93,12 +105,12 @@ def record(student_id: str, expected: Sequence[KeyAnswer], key_sha256: str,
     execution = run.execution
     foreign = run.identity.not_for(student_id) if run.identity and execution else ""
     notes = [run.problem] if run.problem else []
-    if execution is not None and (execution.status != "ok" or not execution.answers):
+    extracted = _answers_read(expected, run)
+    if execution is not None and (execution.status != "ok" or not extracted):
         notes.insert(0, execution.message or f"execution status {execution.status}")
     if foreign:
         notes.append(f"{foreign}; it was graded as {student_id!r}, from its file name, all the "
                      "same")
-    extracted = execution.answers if execution is not None else {}
     return scored(
         student_id, expected, key_sha256,
         status="graded" if extracted else "failed",  # fail closed: nothing read, nothing given
@@ -124,7 +136,8 @@ def grade_one(submission: Submission, expected: Sequence[KeyAnswer], key_hash: s
     ``expected`` in this process (:func:`record`); never an exception. A submission that could
     not be read is recorded failed, saying why; one whose run still failed for a reason not
     the student's is recorded with ``"retry": true``, and the next run grades it again."""
-    run = run_one(submission.path, variable_names(expected), limits, execute, sha, copies)
+    run = run_one(submission.path, variable_names(expected), limits, execute, sha, copies,
+                  written_names(expected))
     if run.sha256 is None:
         return ungraded_result(submission.student_id, "failed", run.problem, expected, key_hash)
     return record(submission.student_id, expected, key_hash, run)

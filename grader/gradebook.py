@@ -28,8 +28,10 @@ from typing import Any
 from grader.extract import UNREADABLE, invalid_reason
 from grader.plain_text import printable
 from grader.results import StudentResult
-from grader.statement_html import statement_html
+from grader.statement_html import IMAGE_POLICY, statement_html, written_html
 from grader.submissions import Problem
+from grader.written import is_written, written_text
+from problems.answers import WRITTEN
 
 MAX_SHOWN = 400
 """Characters of a submitted value or message shown before it is cut (the record keeps all)."""
@@ -84,6 +86,7 @@ def gradebook_rows(
     sandbox_column: bool = False,
     override_column: bool | None = None,
     late_columns: bool | None = None,
+    pending_column: bool | None = None,
 ) -> list[list[str]]:
     """The gradebook as rows of strings, header first.
 
@@ -96,7 +99,10 @@ def gradebook_rows(
     the assignment has a late policy (``late_columns``, default: whether a record holds a
     late entry), ``raw`` (the points before the penalty), ``late_by`` (how late, ``""`` when
     on time or the time is unknown) and ``penalty`` (the points it took) follow ``maximum``:
-    ``total`` stays what the student gets.
+    ``total`` stays what the student gets. Where the assignment has written answers
+    (``pending_column``, default: whether a record holds one pending or reviewed), ``pending``
+    comes before ``status``: how many of the student's written answers no one has reviewed
+    yet (each counted 0 in ``total`` until then).
 
     ``status`` keeps three kinds of student apart: ``graded`` (the notebook ran and its answers
     were compared; ``reason`` is empty, or a note such as a cell that raised), ``missing`` (no
@@ -110,19 +116,25 @@ def gradebook_rows(
         override_column = any(r.overridden for r in results.values())
     if late_columns is None:
         late_columns = any(r.late for r in results.values())
+    if pending_column is None:
+        pending_column = any(a.verdict.status in WRITTEN_STATUSES for r in results.values()
+                             for a in r.answers)
     late_head = ["raw", "late_by", "penalty"] if late_columns else []
+    pending_head = ["pending"] if pending_column else []
     table = [["id", *others, *(f"q{k}" for k in questions), "total", "maximum", *late_head,
-              "status", "reason", *(["sandboxed"] if sandbox_column else []),
+              *pending_head, "status", "reason", *(["sandboxed"] if sandbox_column else []),
               *(["overridden"] if override_column else [])]]
     for row in rows:
         r = results.get(row["id"])
         if r is None:
-            cells = [""] * (len(questions) + 2 + len(late_head)) + ["not graded yet", ""]
+            cells = [""] * (len(questions) + 2 + len(late_head) + len(pending_head))
+            cells += ["not graded yet", ""]
         else:
             per_question = r.question_points()
             cells = [number(per_question.get(k, 0.0)) for k in questions]
             cells += [number(r.points), number(r.max_points)]
             cells += late_cells(r) if late_columns else []
+            cells += [str(pending_count(r))] if pending_column else []
             cells += [r.status, reason(r)]
         if sandbox_column:
             cells.append("" if r is None else "yes" if r.sandboxed else "no" if ran_code(r)
@@ -132,6 +144,15 @@ def gradebook_rows(
         table.append([csv_cell(c) for c in [row["id"], *(row.get(c, "") for c in others),
                                             *cells]])
     return table
+
+
+WRITTEN_STATUSES = ("pending", "reviewed")
+"""The verdicts only a written answer has (:mod:`grader.reviews`)."""
+
+
+def pending_count(result: StudentResult) -> int:
+    """How many of ``result``'s written answers wait for a review."""
+    return sum(a.verdict.status == "pending" for a in result.answers)
 
 
 def raw_points(result: StudentResult) -> float:
@@ -164,7 +185,8 @@ def answers_rows(rows: Sequence[Mapping[str, str]],
     notebook variable, the submitted value as JSON (empty when not set), points awarded and
     possible, the verdict's status, the recognised mistake (empty when none), and for an
     answer the instructor overrode (:mod:`grader.overrides`) what it had and why,
-    ``was 0: <reason>`` (``points`` is then the override's; empty for the others). Students
+    ``was 0: <reason>`` (``points`` is then the override's; empty for the others). A written
+    answer's ``submitted`` is its text (its attachments stay in the record). Students
     without a record are left out.
     """
     table = [list(ANSWER_COLUMNS)]
@@ -172,7 +194,8 @@ def answers_rows(rows: Sequence[Mapping[str, str]],
         r = results.get(row["id"])
         for a in r.answers if r is not None else ():
             v = a.verdict
-            submitted = "" if a.submitted is None else json.dumps(a.submitted, ensure_ascii=False)
+            shown = written_text(a.submitted) if is_written(a.submitted) else a.submitted
+            submitted = "" if shown is None else json.dumps(shown, ensure_ascii=False)
             table.append([r.student_id, str(a.question), a.name, a.variable, submitted,
                           number(v.points), number(v.max_points), v.status, v.mistake or "",
                           csv_cell(_overridden(r.overridden.get(a.variable)))])
@@ -278,6 +301,9 @@ td, th { border: 1px solid #bbb; padding: 0.25em 0.6em; text-align: left; vertic
 math[display="block"] { margin: 0.6em 0; }
 .correct, .follows { color: #165c16; } .wrong, .invalid, .missing { color: #9c1c1c; }
 .override { background: #fff6d6; padding: 0.3em 0.8em; }
+.pending { color: #7a5200; } .reviewed { color: #165c16; }
+.written .answer, .written .comment { border-left: 3px solid #bbb; padding: 0 0.8em; }
+.written img { max-width: 100%; }
 code { white-space: pre-wrap; word-break: break-all; }
 """
 
@@ -306,7 +332,10 @@ def _parameters(question: Mapping[str, Any]) -> str:
 def _answers_table(question: Mapping[str, Any], result: StudentResult,
                    key: Mapping[str, Any] | None) -> str:
     specs = {s["variable"]: s for s in question.get("answers", [])}
-    mine = [a for a in result.answers if a.question == question["question"]]
+    mine = [a for a in result.answers if a.question == question["question"]
+            and specs.get(a.variable, {}).get("kind") != WRITTEN]
+    if not mine:
+        return ""
     head = "<th>variable</th><th>unit</th><th>your answer</th><th>verdict</th><th>points</th>"
     head += "<th>message</th>" + ("<th>key</th>" if key is not None else "")
     rows = []
@@ -325,6 +354,47 @@ def _answers_table(question: Mapping[str, Any], result: StudentResult,
             cells.append(_shown(key.get(a.variable)))
         rows.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
     return f"<table><tr>{head}</tr>{''.join(rows)}</table>"
+
+
+def _written_part(spec: Mapping[str, Any], result: StudentResult) -> str:
+    """One written answer on its student's page: the prompt, what they wrote (rendered, safe:
+    :func:`grader.statement_html.written_html`), and its review — the rubric's items given
+    and not, the adjustment and the reviewer's comment — or that it waits for one."""
+    variable = spec.get("variable", "")
+    a = next((x for x in result.answers if x.variable == variable), None)
+    if a is None:
+        return ""
+    v = a.verdict
+    parts = [f'<div class="written"><h3>Written answer <code>{_e(variable)}</code>: '
+             f'<span class="{_e(v.status)}">{_e(v.status)}</span>, {number(v.points)} / '
+             f"{number(v.max_points)} points</h3>",
+             f"<div class=\"statement\">{statement_html(spec.get('prompt', ''))}</div>",
+             "<p>Your answer:</p>",
+             f'<div class="answer">{written_html(a.submitted)}</div>' if a.submitted
+             else "<p><em>nothing written</em></p>"]
+    review = result.reviewed.get(variable)
+    if review is not None:
+        parts.append(_review_html(review))
+    else:
+        parts.append(f"<p>{_e(v.message)}</p>")
+    return "\n".join(parts) + "</div>"
+
+
+def _review_html(review: Mapping[str, Any]) -> str:
+    """A review as the student reads it: each rubric item, given or not, then the adjustment
+    and the comment (Markdown and formulas, rendered as statements are)."""
+    rows = "".join(
+        f"<tr><td>{'✓ given' if r['given'] else '✗ not given'}</td>"
+        f"<td>{statement_html(r['item'])}</td><td>{number(r['points'])}</td></tr>"
+        for r in review.get("rubric", ()))
+    parts = ["<table><tr><th>rubric</th><th>item</th><th>points</th></tr>" + rows + "</table>"]
+    if review.get("adjust"):
+        parts.append(f"<p>Adjustment: {review['adjust']:+g} points.</p>")
+    if review.get("comment"):
+        who = _e(review.get("by") or "your reviewer")
+        parts.append(f'<div class="comment"><p>Comment from {who}:</p>'
+                     f'{statement_html(review["comment"])}</div>')
+    return "\n".join(parts)
 
 
 def _when(iso: str, like: str | None = None) -> str:
@@ -393,7 +463,7 @@ def feedback_html(
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
         '<meta http-equiv="Content-Security-Policy" content="default-src \'none\'; '
-        'style-src \'unsafe-inline\'">',
+        f'style-src \'unsafe-inline\'; {IMAGE_POLICY}">',
         f"<title>{_e(title)} — {_e(result.student_id)}</title><style>{_STYLE}</style></head>",
         f"<body><h1>{_e(title)}</h1>",
         f"<p>Student <strong>{_e(result.student_id)}</strong> — status "
@@ -417,8 +487,11 @@ def feedback_html(
     for q in questions:
         parts.append(f"<h2>Question {_e(q['question'])}: {_e(q.get('title', ''))}</h2>")
         parts.append(f"<div class=\"statement\">{statement_html(q.get('statement', ''))}</div>")
-        parts.append(_parameters(q))
+        if q.get("params"):
+            parts.append(_parameters(q))
         parts.append(_answers_table(q, result, key))
+        parts += [_written_part(spec, result) for spec in q.get("answers", [])
+                  if spec.get("kind") == WRITTEN]
     parts.append(f"<p><small>graded {_e(result.graded_at)}</small></p></body></html>\n")
     return "\n".join(parts)
 
@@ -444,6 +517,10 @@ def summary_table(results: Sequence[StudentResult], problems: Sequence[Problem] 
         taken = sum(r.late.get("points", 0.0) for r in results)
         out.append(f"late ({len(late)}): {', '.join(late)}; the late policy took "
                    f"{number(taken)} points in all")
+    waiting = [r for r in results if pending_count(r)]
+    if waiting:
+        out.append(f"written answers pending review: {sum(map(pending_count, waiting))}, of "
+                   f"{len(waiting)} student(s); they count 0 until reviewed")
     foreign = [r.student_id for r in results if r.execution.get("foreign")]
     if foreign:
         out.append(f"not this assignment's notebook, or another student's, graded all the same "
@@ -456,11 +533,16 @@ def summary_table(results: Sequence[StudentResult], problems: Sequence[Problem] 
     return "\n".join(out) + "\n"
 
 
-OUTCOMES = ("correct", "follows", "wrong", "known mistake", "invalid", "unanswered")
+OUTCOMES = ("correct", "follows", "wrong", "known mistake", "invalid", "unanswered", "pending",
+            "reviewed")
 """The columns of :func:`answer_counts`: ``follows`` is a wrong answer credited because it
 follows from the student's own earlier answers (:mod:`grader.follow_through`); a wrong answer
 matching a known mistake is counted as ``known mistake`` (not also as ``wrong``);
-``unanswered`` is the verdict ``missing``."""
+``unanswered`` is the verdict ``missing``; ``pending`` and ``reviewed`` are written answers
+waiting for a review and scored by one (:mod:`grader.reviews`)."""
+
+SHOWN_WHEN_SEEN = ("follows", "pending", "reviewed")
+"""Columns of :func:`answer_counts` shown only where some answer has them."""
 
 
 def outcome(verdict: Any) -> str:
@@ -484,8 +566,8 @@ def answer_counts(results: Sequence[StudentResult]) -> list[str]:
             row = counts.setdefault(a.variable, dict.fromkeys(OUTCOMES, 0))
             row[outcome(a.verdict)] += 1
     width = max(len("answer"), *map(len, counts))
-    shown = [c for c in OUTCOMES  # follow-through only where some answer earned it
-             if c != "follows" or any(row[c] for row in counts.values())]
+    shown = [c for c in OUTCOMES  # follow-through, written answers: only where some are
+             if c not in SHOWN_WHEN_SEEN or any(row[c] for row in counts.values())]
     head = "  ".join(f"{c:>{len(c)}}" for c in shown)
     lines = ["", f"per answer, over {len(graded)} graded submission(s):",
              f"{'answer':<{width}}  {head}"]

@@ -30,7 +30,7 @@ from problems.answers import Answer
 from problems.generate import json_text, key_hash
 from solver.parameters import ParameterError
 
-KEPT_BY_HAND = ("rtol", "atol", "points", "accepted")
+KEPT_BY_HAND = ("rtol", "atol", "points", "accepted", "rubric")
 """What :func:`rekeyed` keeps from the current key: the decisions an instructor makes."""
 
 
@@ -81,10 +81,13 @@ def _rebuilt(student: str, variable: str, answer: dict) -> dict:
 
 def set_answer(a: Assignment, target: str, *, rtol: float | None = None,
                atol: float | None = None, points: float | None = None,
-               accept: Sequence[Any] = ()) -> tuple[dict, list[KeyChange]]:
+               accept: Sequence[Any] = (), rubric: Mapping[int, float] | None = None,
+               ) -> tuple[dict, list[KeyChange]]:
     """``a``'s key with answer ``target`` (``q3_T_nut``, or ``ada:q3_T_nut`` for one student)
     changed: its tolerances, points, and ``accept`` added to its accepted values (each read as
-    the answer's kind, as its key is). The new key (a copy) and the changes.
+    the answer's kind, as its key is). A written answer's ``rubric`` items (numbered from 1)
+    given new points, its points their sum; its ``points`` changed, its items scaled with
+    them. The new key (a copy) and the changes.
 
     Raises
     ------
@@ -94,9 +97,9 @@ def set_answer(a: Assignment, target: str, *, rtol: float | None = None,
     """
     student, _, variable = target.rpartition(":")
     asked = {"rtol": rtol, "atol": atol, "points": points}
-    if all(v is None for v in asked.values()) and not accept:
-        raise UsageError(f"key set {target}: nothing to change (give --rtol, --atol, --points "
-                         "or --accept)")
+    if all(v is None for v in asked.values()) and not accept and not rubric:
+        raise UsageError(f"key set {target}: nothing to change (give --rtol, --atol, --points, "
+                         "--accept or --rubric)")
     if student and student not in a.key["students"]:
         raise UsageError(f"key set {target}: no student {student!r} in the key")
     key = copy.deepcopy(a.key)
@@ -106,6 +109,12 @@ def set_answer(a: Assignment, target: str, *, rtol: float | None = None,
         answer = _answers(entry).get(variable)
         if answer is None:
             continue
+        if answer["kind"] == "written":
+            changes += _written_set(sid, variable, answer, points, rubric or {})
+            asked = {**asked, "points": None}
+        elif rubric:
+            raise UsageError(f"key set {target}: {variable} is no written answer: it has no "
+                             "rubric")
         for field, value in asked.items():
             if value is not None and answer[field] != float(value):
                 changes.append(KeyChange(sid, variable, field, answer[field], float(value)))
@@ -129,6 +138,29 @@ def set_answer(a: Assignment, target: str, *, rtol: float | None = None,
         raise UsageError(f"key set {target}: no answer {variable!r} in the key; its answers: "
                          f"{', '.join(known)}")
     return key, changes
+
+
+def _written_set(student: str, variable: str, answer: dict, points: float | None,
+                 rubric: Mapping[int, float]) -> list[KeyChange]:
+    """A written answer's rubric items given new points (numbered from 1) and its points their
+    sum, or its points changed and its items scaled with them, in place; the changes."""
+    items = answer["rubric"]
+    changes = []
+    if points is not None and not rubric and float(points) != answer["points"]:
+        scale = float(points) / answer["points"] if answer["points"] else 0.0
+        rubric = {n: item["points"] * scale for n, item in enumerate(items, start=1)}
+    for n, value in sorted(rubric.items()):
+        if not 1 <= n <= len(items):
+            raise UsageError(f"{student}'s {variable}: no rubric item {n} (it has 1…{len(items)})")
+        if items[n - 1]["points"] != float(value):
+            changes.append(KeyChange(student, variable, f"rubric item {n}",
+                                     items[n - 1]["points"], float(value)))
+            items[n - 1]["points"] = float(value)
+    total = sum(item["points"] for item in items)
+    if total != answer["points"]:
+        changes.append(KeyChange(student, variable, "points", answer["points"], total))
+        answer["points"] = total
+    return changes
 
 
 def rekeyed(a: Assignment, families: Mapping[str, Any]) -> tuple[dict, list[KeyChange]]:

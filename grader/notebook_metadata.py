@@ -99,8 +99,8 @@ def identity_of(metadata: Any) -> Identity:
 
 
 def _valid_spec(spec: Mapping[str, Any]) -> bool:
-    from problems.answers import KINDS
+    from problems.answers import ANSWER_KINDS
 
     variable = spec.get("variable")
     return (isinstance(variable, str) and variable.isidentifier()
-            and spec.get("kind") in KINDS and isinstance(spec.get("name"), str))
+            and spec.get("kind") in ANSWER_KINDS and isinstance(spec.get("name"), str))

@@ -10,7 +10,8 @@ them together and owns the run's bookkeeping:
 4. The others run through ``execute(path, variable_names, limits)`` — by default
    :func:`grader.execute.execute_submission`, injected so that tests and benchmarks can swap
    it — and :func:`grader.compare.compare` grades what came back, in this process.
-5. Each finished student's record is settled (follow-through credit, then the overrides) and
+5. Each finished student's record is settled (follow-through credit, the reviews of its
+   written answers, then the overrides) and
    committed at once with its feedback page and its line of the audit trail (a transaction:
    :mod:`grader.transaction`); the gradebook, every other page, the class report and the run's
    own line are committed together at the end.
@@ -72,10 +73,10 @@ from grader.follow_through import FollowThrough
 from grader.grade_one import Execute, submission_bytes, ungraded_result, unreadable
 from grader.gradebook import gradebook_csv, ran_code
 from grader.graded_folder import DOWNLOAD, FEEDBACK, LMS_SUBMISSIONS, RESULTS, graded_folder
-from grader.late import policy_of
 from grader.lms.classlist import merge_rows
-from grader.overrides import apply_overrides, check_overrides, read_overrides
+from grader.overrides import check_overrides, read_overrides, without_overrides
 from grader.publish import (
+    NO_REVIEWS,
     prepare_report,
     records,
     settled,
@@ -84,6 +85,7 @@ from grader.publish import (
     stage_views,
 )
 from grader.results import StudentResult, atomic_write_text, read_result
+from grader.reviews import Reviews, check_reviews, read_reviews
 from grader.submission_file import DEFAULT_MAX_BYTES, InvalidSubmission, read_submission
 from grader.submissions import Problem
 from grader.transaction import LOCK_WAIT, Transaction, class_lock
@@ -302,7 +304,7 @@ def grade_assignment(
     with _unmade_on(UsageError, made), \
             class_lock(out, Path(hw), command="eulertop grade", wait=wait), \
             ExitStack() as stack:
-        a, overrides = _checked_state(Path(hw), out)
+        a, overrides, reviews = _checked_state(Path(hw), out)
         rows = merge_rows(a.rows, class_list)
         found = None if archive else _discovered(submissions, a, rows)
         if not archive:
@@ -318,7 +320,7 @@ def grade_assignment(
         to_run, to_write, kept, packages = _plan(a, found, out, force, sandboxed,
                                                  submission_bytes(limits))
         writer = _Writer(a, out, overrides, reveal, progress,
-                         _submission_times(a, found, times))
+                         _submission_times(a, found, times), reviews)
         stack.callback(writer.close)
         from grader.kernels.preload import preload_for
 
@@ -355,14 +357,16 @@ def _submissions_input(submissions: Path) -> tuple[Path, bool]:
     return submissions, archive
 
 
-def _checked_state(hw: Path, out: Path) -> tuple[Assignment, tuple]:
-    """The assignment and the overrides as they are now (under the lock), each checked: a bad
-    key or override stops the run before anything is written."""
+def _checked_state(hw: Path, out: Path) -> tuple[Assignment, tuple, Reviews]:
+    """The assignment, the overrides and the reviews as they are now (under the lock), each
+    checked: a bad key, override or review stops the run before anything is written."""
     a = load_assignment(hw)
     a.check_key()
     overrides = read_overrides(out)
     check_overrides(a, overrides)
-    return a, overrides
+    reviews = read_reviews(out)
+    check_reviews(a, reviews)
+    return a, overrides, reviews
 
 
 def _discovered(submissions: Path, a: Assignment, rows: Sequence[Mapping[str, str]],
@@ -409,8 +413,9 @@ class _Writer:
 
     def __init__(self, a: Assignment, out: Path, overrides: Sequence[Any], reveal: bool,
                  progress: Callable[[StudentResult], None] | None,
-                 times: Mapping[str, dict]) -> None:
+                 times: Mapping[str, dict], reviews: Reviews = NO_REVIEWS) -> None:
         self.a, self.out, self.overrides, self.reveal = a, out, tuple(overrides), reveal
+        self.reviews = reviews
         self.progress, self.times = progress, times
         self.follow = FollowThrough.of(a)
         self.before = records(a, out)
@@ -420,7 +425,7 @@ class _Writer:
 
     def __call__(self, result: StudentResult) -> None:
         result = replace(result, submitted=self.times.get(result.student_id, {}))
-        result = settled(self.a, result, self.follow, self.overrides)
+        result = settled(self.a, result, self.follow, self.overrides, self.reviews)
         with self._lock:
             tx = Transaction(self.out)
             stage_record(tx, self.a, self.out, result, self.reveal)
@@ -442,8 +447,8 @@ class _Writer:
         transaction; every record as it now is."""
         tx = Transaction(self.out)
         results = records(self.a, self.out)
-        rewritten = _resettled(tx, self.a, self.out, results, kept, self.overrides,
-                               self.times, self.reveal)
+        rewritten = _resettled(tx, self.a, self.out, results, kept,
+                               (self.overrides, self.reviews), self.times, self.reveal)
         stage_views(tx, self.a, self.out, results, self.reveal,
                     published=set(self.graded) | set(rewritten))
         notebooks = {s.student_id: s.path for s in found.submissions}
@@ -459,20 +464,20 @@ class _Writer:
 
 def _resettled(tx: Transaction, a: Assignment, out: Path,
                results: dict[str, StudentResult | None], kept: Sequence[str],
-               overrides: Sequence[Any], times: Mapping[str, dict],
+               amended: tuple[Sequence[Any], Reviews], times: Mapping[str, dict],
                reveal: bool) -> tuple[str, ...]:
-    """The records kept unchanged by this run with the overrides, the late policy and the
-    submission times as they are now (an override added or taken back since they were
-    written, a deadline moved, a time now known), staged into ``tx`` and put into
-    ``results``; their ids."""
-    policy = policy_of(a.manifest)
+    """The records kept unchanged by this run with the reviews, the overrides (``amended``),
+    the late policy and the submission times as they are now (an override added or taken back
+    since they were written, a deadline moved, a time now known), staged into ``tx`` and put
+    into ``results``; their ids."""
+    overrides, reviews = amended
     rewritten = []
     for sid in kept:
         record = results.get(sid)
         if record is None:
             continue
-        now = apply_overrides(replace(record, submitted=times.get(sid, record.submitted)),
-                              overrides, policy)
+        was = without_overrides(replace(record, submitted=times.get(sid, record.submitted)))
+        now = settled(a, was, None, overrides, reviews)
         if now != record:
             stage_record(tx, a, out, now, reveal)
             results[sid] = now

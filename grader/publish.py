@@ -2,8 +2,8 @@
 record with its feedback page (:func:`stage_record`), then the gradebook, the answers table,
 every other page and the class report from the records (:func:`stage_views`,
 :func:`stage_report`) — what a grading run and a rescore both end with; and what every record
-goes through before it is written, in that order: follow-through credit, then the
-instructor's overrides (:func:`settled`).
+goes through before it is written, in that order: follow-through credit, the reviews of its
+written answers, then the instructor's overrides (:func:`settled`).
 
 Floor 6 of grader/ (where grade_one runs; where submissions come from; grader/API.md).
 """
@@ -12,28 +12,42 @@ from __future__ import annotations
 
 import sys
 import threading
-from collections.abc import Mapping, Sequence, Set
+from collections.abc import Callable, Mapping, Sequence, Set
 from contextlib import suppress
 from pathlib import Path
+from typing import Any
 
 from grader.assignment import Assignment
 from grader.follow_through import FollowThrough
-from grader.gradebook import answers_rows, feedback_html, gradebook_csv, gradebook_rows, ran_code
+from grader.gradebook import (
+    ANSWER_COLUMNS,
+    WRITTEN_STATUSES,
+    answers_rows,
+    feedback_html,
+    gradebook_csv,
+    gradebook_rows,
+    ran_code,
+)
 from grader.graded_folder import ANSWERS, FEEDBACK, GRADES, REPORT, RESULTS
 from grader.late import policy_of
 from grader.overrides import Override, apply_overrides
 from grader.results import StudentResult, result_json
+from grader.reviews import Reviews, apply_reviews
 from grader.transaction import Transaction
+
+NO_REVIEWS = Reviews()
 
 
 def settled(a: Assignment, result: StudentResult, follow: FollowThrough | None,
-            overrides: Sequence[Override]) -> StudentResult:
-    """``result`` (compared with the key) as it is recorded: follow-through credit, then the
-    overrides of answers, the late penalty and an override of the total
+            overrides: Sequence[Override], reviews: Reviews = NO_REVIEWS) -> StudentResult:
+    """``result`` (compared with the key) as it is recorded: follow-through credit, the
+    reviews of its written answers (:func:`grader.reviews.apply_reviews`), then the overrides
+    of answers, the late penalty and an override of the total
     (:func:`grader.overrides.apply_overrides`) — the one way every record of a grading run and
     of a rescore is finished."""
     if follow is not None:
         result = follow.apply(result, a.expected(result.student_id))
+    result = apply_reviews(result, reviews, a.expected(result.student_id))
     return apply_overrides(result, overrides, policy_of(a.manifest))
 
 
@@ -83,18 +97,72 @@ def stage_report(tx: Transaction, a: Assignment, out: Path,
         tx.write(path, text, durable=False)
 
 
+class RowCache:
+    """Each student's encoded rows of ``grades.csv`` and ``answers.csv``, kept with the record
+    (the very object) and the table's columns they were made from: a change that rewrites a
+    few records of a class held in memory re-encodes only their rows (the review desk's
+    reviews, :mod:`grader.review`). A CSV is encoded row by row, so the rows joined are the
+    table's text, byte for byte."""
+
+    def __init__(self) -> None:
+        self._rows: dict[tuple[str, str], tuple[Any, Any, str]] = {}
+
+    def text(self, table: str, sid: str, record: StudentResult | None, columns: Any,
+             make: Callable[[], str]) -> str:
+        """``make()``, or what it gave for the same record and columns before."""
+        hit = self._rows.get((table, sid))
+        if hit is not None and hit[0] is record and hit[1] == columns:
+            return hit[2]
+        text = make()
+        self._rows[(table, sid)] = (record, columns, text)
+        return text
+
+    def fill(self, a: Assignment, results: Mapping[str, StudentResult | None]) -> None:
+        """Every row of ``results`` encoded now (a session's load), not at its first change."""
+        _tables(a, {sid: r for sid, r in results.items() if r is not None}, self)
+
+
+def _gradebook_columns(a: Assignment, present: Mapping[str, StudentResult]) -> dict:
+    """The optional columns of ``grades.csv`` (:func:`grader.gradebook.gradebook_rows`), as
+    the whole class decides them."""
+    return {"sandbox_column": any(ran_code(r) and not r.sandboxed for r in present.values()),
+            "override_column": any(r.overridden for r in present.values()),
+            "late_columns": "late" in a.manifest or any(r.late for r in present.values()),
+            "pending_column": bool(a.written()) or any(
+                x.verdict.status in WRITTEN_STATUSES for r in present.values()
+                for x in r.answers)}
+
+
+def _tables(a: Assignment, present: Mapping[str, StudentResult],
+            cache: RowCache) -> tuple[str, str]:
+    """The text of ``grades.csv`` and ``answers.csv``, row by row through ``cache``."""
+    columns = _gradebook_columns(a, present)
+    key = tuple(sorted(columns.items()))
+    grades = [gradebook_csv(gradebook_rows(a.columns, [], a.questions, {}, **columns))]
+    answers = [gradebook_csv([list(ANSWER_COLUMNS)])]
+    for row in a.rows:
+        sid, r = row["id"], present.get(row["id"])
+        mine = {sid: r} if r is not None else {}
+        grades.append(cache.text("grades", sid, r, (key, a.columns),
+                                 lambda row=row, mine=mine: gradebook_csv(gradebook_rows(
+                                     a.columns, [row], a.questions, mine, **columns)[1:])))
+        answers.append(cache.text("answers", sid, r, None, lambda row=row, mine=mine:
+                                  gradebook_csv(answers_rows([row], mine)[1:])))
+    return "".join(grades), "".join(answers)
+
+
 def stage_views(tx: Transaction, a: Assignment, out: Path,
                 results: Mapping[str, StudentResult | None], reveal: bool,
-                published: Set[str] = frozenset(), pages: Set[str] | None = None) -> None:
+                published: Set[str] = frozenset(), pages: Set[str] | None = None,
+                cache: RowCache | None = None) -> None:
     """Stage the gradebook, the answers table and the feedback pages of ``pages`` (None: every
     student) from ``results``; but the pages of ``published`` (staged with their records). A
-    file whose text is unchanged is left as it is (:meth:`Transaction.write`)."""
+    file whose text is unchanged is left as it is (:meth:`Transaction.write`). ``cache``: the
+    rows of records met before, kept (:class:`RowCache`)."""
     present = {sid: r for sid, r in results.items() if r is not None}
-    unsandboxed = any(ran_code(r) and not r.sandboxed for r in present.values())
-    table = gradebook_rows(a.columns, a.rows, a.questions, present, sandbox_column=unsandboxed,
-                           late_columns="late" in a.manifest or None)
-    tx.write(out / GRADES, gradebook_csv(table), durable=False)
-    tx.write(out / ANSWERS, gradebook_csv(answers_rows(a.rows, present)), durable=False)
+    grades, answers = _tables(a, present, cache if cache is not None else RowCache())
+    tx.write(out / GRADES, grades, durable=False)
+    tx.write(out / ANSWERS, answers, durable=False)
     for sid, r in present.items():
         if sid not in published and (pages is None or sid in pages):
             tx.write(out / FEEDBACK / f"{sid}.html", _page(a, r, reveal), durable=False)

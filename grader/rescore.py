@@ -47,6 +47,8 @@ from grader.overrides import (
     read_overrides,
 )
 from grader.publish import (
+    NO_REVIEWS,
+    RowCache,
     records,
     report_notebooks,
     settled,
@@ -55,6 +57,7 @@ from grader.publish import (
     stage_views,
 )
 from grader.results import StudentResult, non_finite_read
+from grader.reviews import REVIEWS, Reviews, check_reviews, read_reviews, reviews_json
 from grader.transaction import LOCK_WAIT, Transaction, class_lock
 from problems.answers import Verdict
 from problems.generate import json_text
@@ -98,6 +101,7 @@ class Amendment:
     manifest: dict | None = None  # a new assignment.json (rekey: edited families' hashes)
     students: frozenset[str] | None = None  # whom it reaches beyond a changed key (None: all)
     report: bool = True  # rebuild the class report now (False: left for a later command)
+    reviews: Reviews | None = None  # the reviews of written answers, changed (grader.reviews)
 
 
 Amend = Callable[[Assignment, tuple[Override, ...]], Amendment]
@@ -196,14 +200,44 @@ def rescore(hw: Path, out: Path | None = None, *, change: Amend | None = None,
         amendment = change(a, overrides) if change is not None else Amendment()
         if amendment.unchanged:
             return Rescore((), (), 0, dry_run, amendment)
-        scope = _reached(a, amendment)
-        a, overrides = _amended(a, overrides, amendment, scope)
-        old = records(a, out)
-        report, new = _rescored_class(a, old, overrides, amendment, scope)
-        report = replace(report, dry_run=dry_run)
-        if not dry_run:
-            _commit(a, hw, out, old, new, report, reveal, command, scope)
+        state = Loaded(hw, out, a, overrides, read_reviews(out), None)
+        report, _ = amended_class(state, amendment, dry_run=dry_run, reveal=reveal,
+                                  command=command)
     return report
+
+
+@dataclass
+class Loaded:
+    """A graded class as a command read it under the lock: the assignment folder and output
+    folder, the assignment, the overrides, the reviews and the records (None: read them when
+    needed) — what :func:`amended_class` works a change out from."""
+
+    hw: Path
+    out: Path
+    a: Assignment
+    overrides: tuple[Override, ...]
+    reviews: Reviews
+    records: dict[str, StudentResult | None] | None
+
+
+def amended_class(state: Loaded, amendment: Amendment, *, dry_run: bool = False,
+                  reveal: bool = False, command: str = "eulertop rescore",
+                  follow: FollowThrough | None = None, rows: RowCache | None = None,
+                  ) -> tuple[Rescore, dict[str, StudentResult | None]]:
+    """``amendment`` of the class ``state`` holds (under its lock), worked out and — unless
+    ``dry_run`` — committed as one transaction (:func:`rescore`'s, from state already loaded:
+    what a review desk that keeps the class in memory calls, :mod:`grader.review`). The report
+    and every record as it now is. ``follow``: the class's follow-through, kept open by the
+    caller (default: one for this change, closed after it); ``rows``: the gradebook's rows of
+    the records met before (:class:`grader.publish.RowCache`)."""
+    scope = _reached(state.a, amendment)
+    a, overrides, reviews = _amended(state.a, state.overrides, state.reviews, amendment, scope)
+    old = records(a, state.out) if state.records is None else state.records
+    report, new = _rescored_class(a, old, overrides, amendment, scope, reviews, follow)
+    report = replace(report, dry_run=dry_run)
+    if not dry_run:
+        _commit(a, state.hw, state.out, old, new, report, reveal, command, scope, rows)
+    return report, new
 
 
 def _reached(a: Assignment, amendment: Amendment) -> frozenset[str] | None:
@@ -218,40 +252,58 @@ def _reached(a: Assignment, amendment: Amendment) -> frozenset[str] | None:
     return frozenset(reached)
 
 
-def _amended(a: Assignment, overrides: tuple[Override, ...], amendment: Amendment,
-             scope: frozenset[str] | None) -> tuple[Assignment, tuple[Override, ...]]:
-    """The assignment and overrides as ``amendment`` makes them, checked together (the key of
-    every student in ``scope``: None, all)."""
+def _amended(a: Assignment, overrides: tuple[Override, ...], reviews: Reviews,
+             amendment: Amendment, scope: frozenset[str] | None,
+             ) -> tuple[Assignment, tuple[Override, ...], Reviews]:
+    """The assignment, overrides and reviews as ``amendment`` makes them, checked together
+    (the key of every student in ``scope``: None, all)."""
     if amendment.key is not None:
         a = replace(a, key=amendment.key)
     if amendment.manifest is not None:
         a = replace(a, manifest=amendment.manifest)
     if amendment.overrides is not None:
         overrides = tuple(amendment.overrides)
+    if amendment.reviews is not None:
+        reviews = amendment.reviews
     for sid in a.ids if scope is None else sorted(scope):
         a.expected(sid)  # UsageError naming a student whose key entry cannot be read
     check_overrides(a, overrides, None if amendment.overrides is not None else OVERRIDES)
-    return a, overrides
+    check_reviews(a, _to_check(reviews, amendment, scope),
+                  "the reviews" if amendment.reviews is not None else REVIEWS)
+    return a, overrides, reviews
+
+
+def _to_check(reviews: Reviews, amendment: Amendment,
+              scope: frozenset[str] | None) -> Reviews:
+    """The reviews to check against the key: all of them, but where only the reviews of the
+    students ``scope`` names change (the key and the manifest as they were), theirs."""
+    if amendment.reviews is None or amendment.key is not None or \
+            amendment.manifest is not None or scope is None:
+        return reviews
+    return replace(reviews, reviews=tuple(r for r in reviews.reviews if r.student in scope))
 
 
 def _rescored_class(a: Assignment, old: Mapping[str, StudentResult | None],
                     overrides: Sequence[Override], amendment: Amendment,
-                    scope: frozenset[str] | None = None,
+                    scope: frozenset[str] | None = None, reviews: Reviews = NO_REVIEWS,
+                    follow: FollowThrough | None = None,
                     ) -> tuple[Rescore, dict[str, StudentResult | None]]:
     """Every record of ``scope`` (None: all) rescored and settled (nothing written): the
-    report, and the new records (an unchanged one is the old one, its bytes kept)."""
-    follow = FollowThrough.of(a)
+    report, and the new records (an unchanged one is the old one, its bytes kept).
+    ``follow``: the caller's (kept open), else one made and closed here."""
+    own = follow is None
+    follow = FollowThrough.of(a) if own else follow
     new: dict[str, StudentResult | None] = dict(old)
     changes: list[Change] = []
     try:
         for sid, record in old.items():
             if record is None or (scope is not None and sid not in scope):
                 continue
-            result = settled(a, rescored(a, record), follow, overrides)
+            result = settled(a, rescored(a, record), follow, overrides, reviews)
             new[sid] = record if same_record(record, result) else result
             changes += changes_between(record, result, amendment.why)
     finally:
-        if follow is not None:
+        if own and follow is not None:
             follow.close()  # its worker, if one was started
     done = tuple(sid for sid, r in old.items()
                  if r is not None and (scope is None or sid in scope))
@@ -264,7 +316,8 @@ def _rescored_class(a: Assignment, old: Mapping[str, StudentResult | None],
 
 def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult | None],
             new: Mapping[str, StudentResult | None], report: Rescore, reveal: bool,
-            command: str, scope: frozenset[str] | None = None) -> None:
+            command: str, scope: frozenset[str] | None = None,
+            rows: RowCache | None = None) -> None:
     """The change, its records and their views, and its line of the trail, as one
     transaction."""
     amendment, details = report.amendment, dict(report.amendment.details)
@@ -275,13 +328,15 @@ def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult 
         details["old_key"] = stage_key(tx, hw, amendment.key).name
     if amendment.overrides is not None:
         tx.write(out / OVERRIDES, overrides_toml(amendment.overrides))
+    if amendment.reviews is not None:
+        tx.write(out / REVIEWS, reviews_json(amendment.reviews))
     if amendment.manifest is not None:
         tx.write(hw / "assignment.json", json_text(amendment.manifest))  # as generate writes it
     changed = {sid for sid, r in new.items() if r is not None and r is not old[sid]}
     for sid in changed:
         stage_record(tx, a, out, new[sid], reveal)
     stage_views(tx, a, out, new, reveal, published=changed,
-                pages=None if scope is None else frozenset())
+                pages=None if scope is None else frozenset(), cache=rows)
     if amendment.report:
         stage_report(tx, a, out, new, report_notebooks(out), command)
     tx.trail(amendment.event, (c.as_dict() for c in report.changes), why=amendment.why,
@@ -289,6 +344,30 @@ def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult 
              **({"unread": dict(report.unread)} if report.unread else {}),
              **details)
     tx.commit()
+
+
+def override_amendment(a: Assignment, existing: Sequence[Override], student: str,
+                       answer: str | None, points: float | None, reason: str, by: str,
+                       at: str, remove: bool = False) -> Amendment:
+    """The overrides with ``student``'s ``answer`` (None: total) given ``points`` for
+    ``reason``, replacing one of the same target — or that one taken back (``remove``) — from
+    the overrides as they are under the lock, so that none is lost: what ``eulertop override``
+    and the review desk's override (:mod:`grader.review`) both commit. UsageError: refused."""
+    if student not in a.ids:
+        raise UsageError(f"no student {student!r} in the assignment's roster")
+    kept = tuple(o for o in existing if (o.student, o.answer) != (student, answer))
+    what = answer or TOTAL
+    details = {"student": student, "answer": what}
+    if remove:
+        if len(kept) == len(existing):
+            raise UsageError(f"no override of {student}'s {what} to remove")
+        return Amendment("override removed", f"override of {student}'s {what} removed",
+                         overrides=kept, students=frozenset({student}), details=details)
+    if points is None or not reason:
+        raise UsageError("give --points P and --reason TEXT (or --remove)")
+    new = Override(student, answer, points, reason, by, at)
+    return Amendment("override", reason, overrides=(*kept, new),
+                     students=frozenset({student}), details=details)
 
 
 def change_lines(changes: Sequence[Change], limit: int | None = None) -> list[str]:

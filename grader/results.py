@@ -47,7 +47,7 @@ STATUSES = ("graded", "missing", "failed")
 that could not be graded (the message says why) — it earns nothing (fail closed)."""
 
 TEMP_SUFFIX = ".tmp"
-OPTIONAL = ("overridden", "submitted", "late")
+OPTIONAL = ("overridden", "submitted", "late", "reviewed")
 """Fields of a record left out of its file when empty (a record without them reads as
 before)."""
 _NON_FINITE = {"NaN": math.nan, "Infinity": math.inf, "-Infinity": -math.inf}
@@ -173,6 +173,10 @@ class StudentResult:
         What the assignment's late policy made of it (:func:`grader.late.late_entry`: the due
         time that applied, how late, the percentage and points taken); ``{}`` when there is
         no policy or no time (absent from the file).
+    reviewed : dict
+        The reviews of its written answers applied (:mod:`grader.reviews`): variable →
+        ``{"rubric": [{"item", "points", "given"}], "adjust", "comment", "by", "at"}``; ``{}``
+        when none (absent from the file).
     """
 
     student_id: str
@@ -189,6 +193,7 @@ class StudentResult:
     overridden: dict = field(default_factory=dict)
     submitted: dict = field(default_factory=dict)
     late: dict = field(default_factory=dict)
+    reviewed: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.status not in STATUSES:

@@ -35,6 +35,7 @@ class Run:
     fault: bool = False  # the grader's own failure, not the student's: graded again next time
     sha256: str | None = None  # of the bytes that ran; None when they could not be read
     identity: Identity | None = None  # what its metadata says it is (student, answer list)
+    written: dict | None = None  # the written answers asked for, read from those bytes
 
 
 def submission_bytes(limits: Any) -> int:
@@ -49,6 +50,15 @@ def unreadable(path: Path, err: OSError | InvalidSubmission) -> str:
     if isinstance(err, InvalidSubmission):
         return f"invalid submission: {err}"
     return f"cannot read {Path(path).name}: {getattr(err, 'strerror', None) or err}"
+
+
+def _written(data: bytes, variables: Sequence[str]) -> dict | None:
+    """The written answers of ``variables`` in the notebook ``data`` (None: none asked)."""
+    if not variables:
+        return None
+    from grader.written import written_answers
+
+    return written_answers(data, variables)
 
 
 RETRIES = 2
@@ -83,7 +93,7 @@ def _execute(path: Path, variables: Sequence[str], execute: Execute,
 
 def run_one(path: Path, variables: Sequence[str], limits: Any,
             execute: Execute | None = None, sha: str | None = None,
-            copies: Path | None = None) -> Run:
+            copies: Path | None = None, written: Sequence[str] = ()) -> Run:
     """Run ONE submission file — what grading and ``eulertop check`` share: a :class:`Run`,
     never an exception.
 
@@ -92,10 +102,13 @@ def run_one(path: Path, variables: Sequence[str], limits: Any,
     folder (``copies``, default a new one in the run folder) and executed there by
     ``execute`` (default :func:`grader.execute.execute_submission`, in the sandbox). A run
     that failed for a reason that is not the student's (``Execution.retry``: no kernel could be
-    started; or a fault of the grader's) is run again, up to :data:`RETRIES` times."""
+    started; or a fault of the grader's) is run again, up to :data:`RETRIES` times.
+
+    ``written``: the written answers (``q5_veff_minimum``) read from the same bytes in this
+    process, never the kernel (:func:`grader.written.written_answers`): ``Run.written``."""
     if copies is None:
         with copies_folder() as own:
-            return run_one(path, variables, limits, execute, sha, own)
+            return run_one(path, variables, limits, execute, sha, own, written)
     if execute is None:
         from grader.execute import execute_submission as execute
     path = Path(path)
@@ -120,6 +133,7 @@ def run_one(path: Path, variables: Sequence[str], limits: Any,
             if not (fault or getattr(execution, "retry", False)):
                 break
         whose = getattr(execution, "identity", None)  # parsed once, by the execution stage
-        return Run(execution, problem, fault, sha, whose if whose is not None else identity(data))
+        return Run(execution, problem, fault, sha,
+                   whose if whose is not None else identity(data), _written(data, written))
     finally:
         shutil.rmtree(folder, ignore_errors=True)

@@ -20,6 +20,7 @@ import functools
 import html
 import re
 from html.parser import HTMLParser
+from typing import Any
 
 _MATH = re.compile(r"\$\$(?P<display>.+?)\$\$|(?<![\\$])\$(?P<inline>[^$\n]+?)\$", re.S)
 _SLOT = "EULERTOPMATH{}X"
@@ -117,9 +118,52 @@ def _markdown():
     return MarkdownIt("commonmark", {"html": False}).enable("table").disable("image")
 
 
-def statement_html(text: str) -> str:
+IMAGE_POLICY = "img-src data:"
+"""What a page's Content-Security-Policy adds to show a written answer's kept attachments."""
+
+
+@functools.cache
+def _student_markdown():
+    from markdown_it import MarkdownIt
+
+    return MarkdownIt("commonmark", {"html": False}).enable("table").disable(
+        ["image", "link", "autolink", "linkify"], ignoreInvalid=True)
+
+
+def written_html(value: Any) -> str:
+    """A student's recorded written answer (:mod:`grader.written`) as HTML: its text rendered
+    as a statement is but with links and images off as well — what a student wrote never
+    becomes a link, a script or a request — then its kept attachments as ``data:`` images of
+    their raster type (a page showing them allows :data:`IMAGE_POLICY`), and the attachments
+    dropped and the notes, as text.
+
+    Examples
+    --------
+    >>> out = written_html({"text": "[x](javascript:alert(1)) <script>1</script> $a$"})
+    >>> "<a " in out or "<script" in out, "<math" in out
+    (False, True)
+    """
+    from grader.written import KEPT_TYPES, written_text
+
+    parts = [statement_html(written_text(value), _student_markdown())]
+    if isinstance(value, dict):
+        for name, a in (value.get("attachments") or {}).items():
+            if a.get("type") in KEPT_TYPES and re.fullmatch(r"[A-Za-z0-9+/=]*", a.get("data", "")):
+                parts.append(f'<p><img alt="{html.escape(str(name))}" '
+                             f'src="data:{a["type"]};base64,{a["data"]}"></p>')
+        notes = [f"{d.get('name')}: {d.get('why')}" for d in value.get("dropped") or ()]
+        notes += [str(n) for n in value.get("notes") or ()]
+        if notes:
+            items = "".join(f"<li>{html.escape(n)}</li>" for n in notes)
+            parts.append(f'<ul class="dropped">{items}</ul>')
+    return "\n".join(parts)
+
+
+def statement_html(text: str, markdown: Any = None) -> str:
     """``text`` (Markdown and LaTeX) as HTML: formulas set aside, Markdown rendered, formulas
-    put back as MathML (module docstring).
+    put back as MathML (module docstring). ``markdown``: the renderer (a ``MarkdownIt``;
+    default the statements', images off) — what a student wrote is rendered with links off
+    too (:func:`grader.written.written_html`).
 
     Examples
     --------
@@ -134,5 +178,5 @@ def statement_html(text: str) -> str:
         formulas.append(formula_html(m.group("display" if display else "inline"), display))
         return _SLOT.format(len(formulas) - 1)
 
-    rendered = _markdown().render(_MATH.sub(set_aside, text))
+    rendered = (markdown or _markdown()).render(_MATH.sub(set_aside, text))
     return _SLOT_RE.sub(lambda m: formulas[int(m.group(1))], rendered)

@@ -32,6 +32,13 @@ Kinds and their comparison (``v`` the key, ``x`` the submission)
 ``choice``
     One of ``options``, compared case-insensitively with surrounding spaces removed.
     Anything else is invalid, and the message lists the options.
+``written``
+    A derivation or an explanation the student writes in a Markdown cell of the notebook
+    (issue 31), graded by a person against the answer's ``rubric``: the key's ``value`` is the
+    prompt (Markdown), the submission the cell's text (``{"text": …}``, as the grader reads it
+    from the notebook file, or the text itself). :func:`grade` never judges it: an answer with
+    text is ``pending`` (0 of its points) until a review gives it points (``reviewed``,
+    :mod:`grader.reviews`); an empty cell is ``missing``.
 ``expression``
     A formula in the answer's ``symbols``: a string, or in-process a sympy expression (graded
     through its ``str``). Read safely by :mod:`problems.expressions` (never executed). Graded by
@@ -71,10 +78,13 @@ if TYPE_CHECKING:
     import sympy
 
 __all__ = [
+    "ANSWER_KINDS",
     "KINDS",
     "STATUSES",
+    "WRITTEN",
     "Answer",
     "Mistake",
+    "RubricItem",
     "Verdict",
     "check_form",
     "check_spec",
@@ -86,10 +96,25 @@ __all__ = [
 ]
 
 KINDS = ("scalar", "vector", "angle", "boolean", "choice", "expression")
-STATUSES = ("correct", "follows", "wrong", "invalid", "missing")
+"""The kinds compared with a key."""
+STATUSES = ("correct", "follows", "wrong", "invalid", "missing", "pending", "reviewed")
 """``follows``: wrong against the key, right against what the student's own earlier answers
 give (follow-through credit, :mod:`grader.follow_through`); the grader sets it, never
-:func:`grade`."""
+:func:`grade`. ``pending``: a written answer not reviewed yet (0 of its points); ``reviewed``:
+one a person scored by its rubric (:mod:`grader.reviews`)."""
+
+WRITTEN = "written"
+"""The kind of an answer written in Markdown and scored by a person against a rubric."""
+
+ANSWER_KINDS = (*KINDS, WRITTEN)
+"""Every kind an :class:`Answer` may have."""
+
+MAX_RUBRIC_ITEMS = 9
+"""Items a rubric holds at most (one per key 1–9 of the review desk)."""
+
+POINTS_SUM_TOLERANCE = 1e-9
+"""Relative difference allowed between a written answer's points and its rubric's sum (what
+scaling the points by a spec's settings leaves)."""
 
 N_SAMPLE_CANDIDATES = 32
 """Sample points drawn for an expression answer (those where the key is undefined are dropped)."""
@@ -123,6 +148,44 @@ class Mistake:
             raise ParameterError("mistakes", f"a mistake needs a non-empty name, got {self.name!r}")
         if not isinstance(self.feedback, str) or not self.feedback.strip():
             raise ParameterError("mistakes", f"mistake {self.name!r} needs a feedback text")
+
+
+@dataclass(frozen=True)
+class RubricItem:
+    """One item of a written answer's rubric: what earns it, and its points (≥ 0)."""
+
+    item: str
+    points: float
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.item, str) or not self.item.strip():
+            raise ParameterError("rubric", f"an item needs its text, got {self.item!r}")
+        points = self.points
+        if isinstance(points, bool) or not isinstance(points, numbers.Real) \
+                or not math.isfinite(points) or points < 0:
+            raise ParameterError("rubric", f"item {self.item!r}: points must be a number ≥ 0, "
+                                 f"got {points!r}")
+        object.__setattr__(self, "points", float(points))
+
+    def to_dict(self) -> dict:
+        return {"item": self.item, "points": self.points}
+
+
+def rubric_items(items: Any) -> tuple[RubricItem, ...]:
+    """``items`` — RubricItems, ``{"item", "points"}`` dicts or ``(item, points)`` pairs — as
+    RubricItems; ParameterError naming the one that is none of these."""
+    read = []
+    for item in items:
+        if isinstance(item, RubricItem):
+            read.append(item)
+        elif isinstance(item, Mapping) and set(item) == {"item", "points"}:
+            read.append(RubricItem(item["item"], item["points"]))
+        elif isinstance(item, tuple | list) and len(item) == 2:
+            read.append(RubricItem(*item))
+        else:
+            raise ParameterError("rubric", f"an item is {{'item': text, 'points': number}}, "
+                                 f"got {item!r}")
+    return tuple(read)
 
 
 @dataclass(frozen=True)
@@ -164,9 +227,12 @@ class Answer:
         Names of earlier answers of the same question this one is computed from (the statement
         asks for it from them): a wrong value that follows from the student's own earlier
         answers earns follow-through credit (:mod:`grader.follow_through`).
+    rubric : tuple of RubricItem
+        ``written`` only (and required there): what a reviewer gives points for, at most
+        :data:`MAX_RUBRIC_ITEMS` items, whose points add up to ``points``.
 
-    ``accepted`` and ``depends_on`` are written to the key file only when set, so a key without
-    them reads, and hashes, as before.
+    ``accepted``, ``depends_on`` and ``rubric`` are written to the key file only when set, so a
+    key without them reads, and hashes, as before.
 
     Raises
     ------
@@ -190,9 +256,13 @@ class Answer:
     description: str = ""
     accepted: tuple[Any, ...] = ()
     depends_on: tuple[str, ...] = ()
+    rubric: tuple[RubricItem, ...] = ()
 
     def __post_init__(self) -> None:
         _validate_fields(self)
+        if self.kind == WRITTEN:
+            _validate_written(self)
+            return
         form = _Form.of(self, reading_key=True)
         key = _read_key(form, self.value, "value")
         object.__setattr__(self, "value", _to_json(key))
@@ -227,7 +297,9 @@ class Answer:
         d["mistakes"] = [{f.name: _json_copy(getattr(m, f.name)) for f in fields(m)}
                          for m in self.mistakes]
         d["options"], d["symbols"] = list(self.options), list(self.symbols)
-        for optional in ("accepted", "depends_on"):  # only when set: older keys hash as before
+        d["rubric"] = [r.to_dict() for r in self.rubric]
+        for optional in ("accepted", "depends_on", "rubric"):  # only when set: older keys
+            # hash as before
             if d[optional]:
                 d[optional] = list(d[optional])
             else:
@@ -241,7 +313,16 @@ class Answer:
         d["mistakes"] = tuple(
             Mistake(**_known_keys(Mistake, m, "mistake")) for m in d.get("mistakes", ())
         )
+        d["rubric"] = rubric_items(d.get("rubric", ()))
         return cls(**d)
+
+    def with_points(self, points: float) -> Answer:
+        """This answer worth ``points``: a written one's rubric scaled to add up to them."""
+        if self.kind != WRITTEN or self.points == points:
+            return replace(self, points=points)
+        scale = points / self.points if self.points else 0.0
+        rubric = tuple(RubricItem(r.item, r.points * scale) for r in self.rubric)
+        return replace(self, points=points, rubric=rubric)
 
 
 def _json_copy(value: Any) -> Any:
@@ -349,6 +430,7 @@ _KIND_HINTS = {
     "scalar": "a number",
     "angle": "an angle (a number)",
     "boolean": "True or False",
+    WRITTEN: "Markdown in its answer cell",
 }
 
 def kind_hint(spec: Mapping[str, Any]) -> str:
@@ -387,6 +469,8 @@ def grade(answer: Answer, submitted: Any) -> Verdict:
     value, unreadable = _reading(form, submitted)
     if unreadable:
         return unreadable
+    if answer.kind == WRITTEN:  # a person scores it (grader.reviews)
+        return _verdict(form, "pending", PENDING)
     for key in (answer.value, *answer.accepted):
         if _matches(answer, value, _read_key(form, key, "value")):
             return Verdict("correct", answer.points, answer.points,
@@ -398,6 +482,10 @@ def grade(answer: Answer, submitted: Any) -> Verdict:
     if rounded is not None:
         return _verdict(form, "wrong", f"{_show(form, value)}: {rounded}", mistake=TOO_FEW_FIGURES)
     return _verdict(form, "wrong", f"{_show(form, value)}: {_not_within(answer)}")
+
+
+PENDING = "not reviewed yet: a person scores it by its rubric"
+"""The message of a written answer's ``pending`` verdict."""
 
 
 def read_value(answer: Answer, value: Any) -> Any:
@@ -421,7 +509,7 @@ def numbers_of(answer: Answer, value: Any) -> NDArray[np.float64] | None:
     >>> numbers_of(Answer("up", "boolean", True), True) is None
     True
     """
-    if answer.kind in ("boolean", "choice"):
+    if answer.kind in ("boolean", "choice", WRITTEN):
         return None
     form = _Form.of(answer)
     read, unreadable = _reading(form, value)
@@ -529,6 +617,8 @@ def comparison_rule(answer: Answer) -> str:
     'in radians, within 0.1 %, modulo 2π'
     """
     kind = answer.kind
+    if kind == WRITTEN:
+        return "by a person, against a rubric"
     if kind == "boolean":
         return "True or False, exactly"
     if kind == "choice":
@@ -585,8 +675,8 @@ class _Form(NamedTuple):
     @classmethod
     def of_spec(cls, spec: Mapping[str, Any]) -> _Form:
         kind, name = spec.get("kind"), spec.get("name", "")
-        if kind not in KINDS:
-            raise ParameterError("kind", f"must be one of {KINDS}, got {kind!r}")
+        if kind not in ANSWER_KINDS:
+            raise ParameterError("kind", f"must be one of {ANSWER_KINDS}, got {kind!r}")
         symbols = tuple(spec.get("symbols") or ())
         sample = _candidates(name, symbols) if kind == "expression" else None
         return cls(name, kind, spec.get("unit", ""), float(spec.get("points", 1.0)),
@@ -609,7 +699,7 @@ def _reading(form: _Form, submitted: Any) -> tuple[Any, Verdict | None]:
     try:
         return _read(form, submitted), None
     except _Missing:
-        return None, _verdict(form, "missing", _MISSING)
+        return None, _verdict(form, "missing", _EMPTY_CELL if form.kind == WRITTEN else _MISSING)
     except _Invalid as err:
         return None, _verdict(form, "invalid", str(err))
 
@@ -816,6 +906,28 @@ def _read_expression(x: Any, form: _Form) -> str:
     return x.strip()
 
 
+PLACEHOLDER = ("*Write your answer here, in Markdown: formulas between `$…$` (or `$$…$$` on a "
+               "line of their own). Double-click the cell to edit it.*")
+"""The text of a written answer cell in the release notebook (:mod:`problems.notebook`); a cell
+still holding it is unanswered (:mod:`grader.written`)."""
+
+MAX_WRITTEN_CHARS = 20_000
+"""Characters of a written answer's text kept (the grader cuts it there and says so)."""
+
+_EMPTY_CELL = "no answer: the answer cell is empty or missing"
+
+
+def _read_written(x: Any, form: _Form) -> str:
+    """The text of a written answer: ``{"text": …}`` as the grader records it, or the text."""
+    text = x.get("text") if isinstance(x, Mapping) else x
+    if not isinstance(text, str):
+        raise _Invalid(f"{_describe(text)}; Markdown text is expected")
+    pictures = isinstance(x, Mapping) and bool(x.get("attachments") or x.get("dropped"))
+    if not text.strip() and not pictures:  # a photo of handwritten work alone is an answer
+        raise _Missing
+    return text
+
+
 _READERS = {
     "scalar": _read_scalar,
     "angle": _read_scalar,
@@ -823,6 +935,7 @@ _READERS = {
     "boolean": _read_boolean,
     "choice": _read_choice,
     "expression": _read_expression,
+    WRITTEN: _read_written,
 }
 
 
@@ -879,6 +992,8 @@ def _show(form: _Form, value: Any) -> str:
         return "[" + ", ".join(f"{c:.6g}" for c in value) + "]" + unit
     if form.kind in ("choice", "expression"):
         return _quote(value, 60)
+    if form.kind == WRITTEN:
+        return _count(len(value.strip()), "character")
     return str(value)
 
 
@@ -932,8 +1047,9 @@ def _validate_fields(answer: Answer) -> None:
     name = answer.name
     if not isinstance(name, str) or not name.isidentifier():
         raise ParameterError("name", f"must be a Python identifier, got {name!r}")
-    if answer.kind not in KINDS:
-        raise ParameterError("kind", f"answer {name!r}: one of {KINDS}, not {answer.kind!r}")
+    if answer.kind not in ANSWER_KINDS:
+        raise ParameterError("kind", f"answer {name!r}: one of {ANSWER_KINDS}, not "
+                             f"{answer.kind!r}")
     for field in ("rtol", "atol", "points"):
         value = getattr(answer, field)
         real = type(value) is float or (
@@ -951,6 +1067,8 @@ def _validate_fields(answer: Answer) -> None:
 
 def _validate_kind_fields(answer: Answer) -> None:
     name, kind = answer.name, answer.kind
+    if bool(answer.rubric) != (kind == WRITTEN):
+        raise ParameterError("rubric", f"answer {name!r}: required for, and only for, written")
     for field, owner in (("options", "choice"), ("symbols", "expression")):
         if bool(getattr(answer, field)) != (kind == owner):
             raise ParameterError(field, f"answer {name!r}: required for, and only for, {owner}")
@@ -973,6 +1091,30 @@ def _validate_kind_fields(answer: Answer) -> None:
             check_symbol_names(answer.symbols)
         except ValueError as err:
             raise ParameterError("symbols", f"answer {name!r}: {err}") from None
+
+
+def _validate_written(answer: Answer) -> None:
+    """A written answer: its prompt (``value``) is Markdown text; a rubric of 1 to
+    :data:`MAX_RUBRIC_ITEMS` items whose points add up to ``points``; nothing of the compared
+    kinds (mistakes, accepted values, dependencies, a period)."""
+    name = answer.name
+    if not isinstance(answer.value, str) or not answer.value.strip():
+        raise ParameterError("value", f"answer {name!r}: a written answer's value is its prompt "
+                             f"(Markdown text), got {answer.value!r}")
+    for field in ("mistakes", "accepted", "depends_on"):
+        if getattr(answer, field):
+            raise ParameterError(field, f"answer {name!r}: a written answer has no {field}")
+    rubric = rubric_items(answer.rubric)
+    if not 1 <= len(rubric) <= MAX_RUBRIC_ITEMS:
+        raise ParameterError("rubric", f"answer {name!r}: a rubric of 1 to {MAX_RUBRIC_ITEMS} "
+                             f"items, got {len(rubric)}")
+    total = sum(r.points for r in rubric)
+    if not math.isclose(total, answer.points, rel_tol=POINTS_SUM_TOLERANCE, abs_tol=1e-12):
+        raise ParameterError("rubric", f"answer {name!r}: its items' points add up to "
+                             f"{total:g}, not to the answer's {answer.points:g}")
+    object.__setattr__(answer, "rubric", rubric)
+    object.__setattr__(answer, "accepted", ())
+    object.__setattr__(answer, "depends_on", ())
 
 
 def _to_json(value: Any) -> Any:

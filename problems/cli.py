@@ -269,7 +269,8 @@ def _generate(args: argparse.Namespace, class_lists: Mapping[str, Any] | None = 
     questions = None
     if spec is not None:
         check_spec(spec, families)
-        questions = tuple(Question(q.label, q.pool, q.settings) for q in spec.questions)
+        questions = tuple(Question(q.label, q.pool, q.settings, q.written, q.title)
+                          for q in spec.questions)
     problems = None if args.problems is None else args.problems.split(",")
     roster = read_roster(roster_path, getattr(args, "roster_format", None), class_lists)
     for note in roster.notes:

@@ -11,7 +11,9 @@ A family is a Python module (one file, or a package) that defines::
 
 and may define ``draw(rng) -> dict | None`` (default :func:`draw_parameters`: each parameter
 drawn in its range and rounded to its figures), ``heading(params) -> str`` (a title for these
-parameters; default ``TITLE``), ``RESULTS`` (R-ids of ``docs/physics/index.md``),
+parameters; default ``TITLE``), ``written(params)`` (the written parts it offers:
+:class:`problems.written.Written` records, which an assignment spec asks for by
+``written = true`` or their names), ``RESULTS`` (R-ids of ``docs/physics/index.md``),
 ``CONVENTIONS`` (topics of :mod:`problems.conventions` its statement relies on), ``prepare()``
 (one-time work, done before the generator forks its workers) and ``MAX_ATTEMPTS`` (draws before
 giving up).
@@ -299,6 +301,29 @@ class Family:
         """The key for ``params`` (:class:`IllPosed` if they make no good question)."""
         return tuple(self.module.answers(dict(params)))
 
+    def written(self, params: Mapping[str, Any]) -> tuple[Answer, ...]:
+        """The written parts the family offers for ``params`` (its ``written``; none without
+        one), as the key's answers of kind ``written`` (:mod:`problems.written`)."""
+        from problems.written import Written
+
+        own = getattr(self.module, "written", None)
+        parts = () if own is None else tuple(own(dict(params)))
+        if not all(isinstance(w, Written) for w in parts):
+            raise TypeError(f"{self.where}: written() must return Written records")
+        return tuple(w.answer() for w in parts)
+
+    def asked(self, params: Mapping[str, Any],
+              settings: QuestionSettings | None = None) -> tuple[Answer, ...]:
+        """The answers a question of this family asks for ``params``: :meth:`answers`, then
+        the written parts ``settings`` ask for (its ``written``: all, some by name, or none),
+        before the settings change points and tolerances."""
+        answers = self.answers(params)
+        chosen = None if settings is None else settings.written
+        if not chosen:
+            return answers
+        parts = self.written(params)
+        return answers + tuple(w for w in parts if chosen is True or w.name in chosen)
+
     def statement(self, params: Mapping[str, Any]) -> str:
         return self.module.statement(dict(params))
 
@@ -399,7 +424,7 @@ class Family:
             if params is None:
                 return None
             params = self.recorded(params)
-            return params, self.answers(params)
+            return params, self.asked(params, settings)
         except IllPosed:
             return None
 
@@ -417,7 +442,8 @@ def check_contract(module: Any, where: str) -> None:
         text = getattr(module, attr)
         if not isinstance(text, str) or not text.strip() or "\n" in text:
             raise FamilyError(f"{where}: {attr} must be one line of text, got {text!r}")
-    for attr in ("answers", "statement", "draw", "heading", "prepare", "follow", "degenerate"):
+    for attr in ("answers", "statement", "draw", "heading", "prepare", "follow", "degenerate",
+                 "written"):
         if hasattr(module, attr) and not callable(getattr(module, attr)):
             raise FamilyError(f"{where}: {attr} must be a function")
     from problems.conventions import TOPICS

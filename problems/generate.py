@@ -73,6 +73,7 @@ from problems.notebook import DEFAULT_INSTALL, build_notebooks, notebook_text
 from problems.roster import Roster
 from problems.settings import QuestionSettings
 from problems.variant import Variant, variable_name
+from problems.written import WRITTEN_QUESTION, Written, written_variant
 
 FORMAT_VERSION = 1
 ASSIGNMENT = "assignment.json"
@@ -95,15 +96,18 @@ class TemplateError(RuntimeError):
 
 class Question(NamedTuple):
     """One question of an assignment: its family, or the pool each student gets one family
-    of, and what a spec changes in it.
+    of, and what a spec changes in it; or (no pool) a spec's question that is only a written
+    part, ``written``, under its ``title`` (:func:`problems.written.written_variant`).
 
-    ``label`` is what the manifest's ``problems`` lists: the family's name, or the pool's
-    names joined by ``|``.
+    ``label`` is what the manifest's ``problems`` lists: the family's name, the pool's
+    names joined by ``|``, or ``written:<name>``.
     """
 
     label: str
     pool: tuple[str, ...]
     settings: QuestionSettings | None = None
+    written: Written | None = None
+    title: str | None = None
 
     @classmethod
     def of(cls, family: str) -> Question:
@@ -113,13 +117,18 @@ class Question(NamedTuple):
     def record(self) -> dict:
         """Plain JSON for the manifest (:meth:`from_record` reads it back)."""
         settings = None if self.settings is None else self.settings.to_dict()
-        return {"label": self.label, "pool": list(self.pool), "settings": settings}
+        d = {"label": self.label, "pool": list(self.pool), "settings": settings}
+        if self.written is not None:
+            d.update(written=self.written.record(), title=self.title)
+        return d
 
     @classmethod
     def from_record(cls, d: Mapping) -> Question:
         settings = d.get("settings")
+        written = d.get("written")
         return cls(d["label"], tuple(d["pool"]),
-                   None if settings is None else QuestionSettings.from_dict(settings))
+                   None if settings is None else QuestionSettings.from_dict(settings),
+                   None if written is None else Written.from_record(written), d.get("title"))
 
 
 @dataclass(frozen=True)
@@ -223,6 +232,9 @@ def student_variants(
     for k, question in enumerate(questions, start=1):
         if isinstance(question, str):
             question = Question.of(question)
+        if question.written is not None:
+            variants.append(written_variant(question.written, question.title))
+            continue
         name = pool_member(question.pool, seed, student_id, k, reroll)
         where = f"template {name!r}, student {student_id!r}, question {k}"
         try:
@@ -757,12 +769,16 @@ def recorded_variants(manifest: Mapping, families: Mapping[str, Family],
     variants = []
     for k, question in enumerate(manifest["students"][student_id]["questions"], start=1):
         name = question["family"]
+        if name == WRITTEN_QUESTION and recorded is not None:  # a spec's written question
+            asked = Question.from_record(recorded[k - 1])
+            variants.append(written_variant(asked.written, asked.title))
+            continue
         if name not in families or "parameters" not in question:
             raise GenerateError(f"{student_id}, question {k}: no family {name!r} or no "
                                 "recorded parameters to recompute it from")
         family, params = families[name], question["parameters"]
         settings = None if recorded is None else Question.from_record(recorded[k - 1]).settings
-        answers = family.answers(params)
+        answers = family.asked(params, settings)
         if settings is not None:
             answers = settings.adjust_answers(answers)
         variants.append(family.variant(params, answers))

@@ -11,7 +11,13 @@ id                  type      content
 ``parameters``      code      the student's parameters, ``q{k}_{name} = value  # unit``
 ``q{k}-statement``  markdown  question k: title, statement, how each answer is compared
 ``q{k}-answer``     code      one line per answer, ``q{k}_{name} = None  # unit — what``
-                              (its form where not a plain number, its points where not 1)
+                              (its form where not a plain number, its points where not 1);
+                              absent where the question has only written parts
+``q{k}-w{j}-prompt``  markdown  written part j of question k (:mod:`problems.written`): its
+                              variable, points and prompt
+``q{k}-w{j}-written`` markdown  the student's answer to it (the release holds
+                              :data:`problems.written.PLACEHOLDER`, the solutions the rubric),
+                              marked ``metadata["eulertop"]["written"] = "q{k}_{name}"``
 ==================  ========  ==========================================================
 
 All cells but the answer cells are marked ``"editable": false`` (and every generated cell
@@ -40,9 +46,10 @@ from typing import Any
 import nbformat
 from nbformat import v4
 
-from problems.answers import comparison_rule, kind_hint
+from problems.answers import WRITTEN, Answer, comparison_rule, kind_hint
 from problems.conventions import conventions_text
 from problems.variant import Variant, answer_spec, variable_name
+from problems.written import PLACEHOLDER
 
 FORMAT_VERSION = 1
 KERNELSPEC = {"name": "python3", "display_name": "Python 3 (ipykernel)", "language": "python"}
@@ -222,21 +229,20 @@ def _notebooks(
         _cell("markdown", "rules", rules, _READ_ONLY),
         _cell("code", "parameters", _parameter_cell(variants), _READ_ONLY),
     ]
-    statements = []
-    for k, variant in enumerate(variants, start=1):
-        statement = (f"## Question {k}: {_one_line(variant.title)}\n\n"
-                     f"{variant.statement.strip()}\n\n{comparison_line(variant.answers, k)}")
-        statements.append(_cell("markdown", f"q{k}-statement", statement, _READ_ONLY, question=k))
+    statements = [_statement_cell(k, v) for k, v in enumerate(variants, start=1)]
     notebooks = []
     for solutions in kinds:
         cells = list(shared)
         for k, (variant, question, statement) in enumerate(
                 zip(variants, questions, statements, strict=True), start=1):
             lines = [answer_line(spec, a.value if solutions else None)
-                     for a, spec in zip(variant.answers, question["answers"], strict=True)]
+                     for a, spec in zip(variant.answers, question["answers"], strict=True)
+                     if a.kind != WRITTEN]
             cells.append(statement)
-            cells.append(_cell("code", f"q{k}-answer", "\n".join(lines), {"deletable": False},
-                               question=k))
+            if lines:
+                cells.append(_cell("code", f"q{k}-answer", "\n".join(lines),
+                                   {"deletable": False}, question=k))
+            cells += _written_cells(k, variant, solutions)
         metadata = {
             "kernelspec": dict(KERNELSPEC),
             "language_info": {"name": "python"},
@@ -251,6 +257,39 @@ def _notebooks(
         notebooks.append({"nbformat": v4.nbformat, "nbformat_minor": v4.nbformat_minor,
                           "metadata": metadata, "cells": cells})
     return notebooks
+
+
+def _statement_cell(k: int, variant: Variant) -> dict:
+    """Question ``k``'s statement: its title, statement, and how its answers are compared
+    (written parts have their own cells)."""
+    compared = [a for a in variant.answers if a.kind != WRITTEN]
+    statement = f"## Question {k}: {_one_line(variant.title)}\n\n{variant.statement.strip()}"
+    if compared:
+        statement += f"\n\n{comparison_line(compared, k)}"
+    return _cell("markdown", f"q{k}-statement", statement, _READ_ONLY, question=k)
+
+
+def _written_cells(k: int, variant: Variant, solutions: bool) -> list[dict]:
+    """The prompt and answer cells of question ``k``'s written parts (module docstring)."""
+    cells = []
+    parts = [a for a in variant.answers if a.kind == WRITTEN]
+    for j, answer in enumerate(parts, start=1):
+        variable = variable_name(k, answer.name)
+        points = f"{answer.points:g} point{'' if answer.points == 1 else 's'}"
+        prompt = (f"**Written answer `{variable}`** ({points}, scored by a person against a "
+                  f"rubric; write it in the cell below)\n\n{answer.value.strip()}")
+        cells.append(_cell("markdown", f"q{k}-w{j}-prompt", prompt, _READ_ONLY, question=k))
+        text = rubric_text(answer) if solutions else PLACEHOLDER
+        cell = _cell("markdown", f"q{k}-w{j}-written", text, {"deletable": False}, question=k)
+        cell["metadata"]["eulertop"]["written"] = variable
+        cells.append(cell)
+    return cells
+
+
+def rubric_text(answer: Answer) -> str:
+    """A written answer's rubric as Markdown (the solutions notebook's answer cell)."""
+    items = "\n".join(f"- {r.item} ({r.points:g})" for r in answer.rubric)
+    return f"*Rubric ({answer.points:g} points):*\n\n{items}"
 
 
 def _cell(kind: str, cell_id: str, source: str, flags: dict, question: int | None = None) -> dict:

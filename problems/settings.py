@@ -56,18 +56,24 @@ class AnswerSetting:
 
 @dataclass(frozen=True)
 class QuestionSettings:
-    """A question's total ``points`` (spread over its answers by their own weights), and
-    settings by answer name and by parameter name."""
+    """A question's total ``points`` (spread over its answers by their own weights), settings
+    by answer name and by parameter name, and the family's written parts it asks for
+    (``written``: True all, a tuple of their names, or none: :mod:`problems.written`)."""
 
     points: float | None = None
     answers: Mapping[str, AnswerSetting] = field(default_factory=dict)
     parameters: Mapping[str, ParameterSetting] = field(default_factory=dict)
+    written: bool | tuple[str, ...] = False
 
     def to_dict(self) -> dict:
-        """Plain JSON, for the manifest (:meth:`from_dict` reads it back)."""
-        return {"points": self.points,
-                "answers": {k: s.to_dict() for k, s in self.answers.items()},
-                "parameters": {k: s.to_dict() for k, s in self.parameters.items()}}
+        """Plain JSON, for the manifest (:meth:`from_dict` reads it back); ``written`` only
+        when set, so that a spec without it records what it did before."""
+        d = {"points": self.points,
+             "answers": {k: s.to_dict() for k, s in self.answers.items()},
+             "parameters": {k: s.to_dict() for k, s in self.parameters.items()}}
+        if self.written:
+            d["written"] = True if self.written is True else list(self.written)
+        return d
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> QuestionSettings:
@@ -78,7 +84,9 @@ class QuestionSettings:
             parameters[name] = ParameterSetting(p.get("value"), low, high,
                                                 tuple(p.get("choices", ())))
         answers = {name: AnswerSetting(**a) for name, a in d.get("answers", {}).items()}
-        return cls(d.get("points"), answers, parameters)
+        written = d.get("written", False)
+        return cls(d.get("points"), answers, parameters,
+                   written if isinstance(written, bool) else tuple(written))
 
     def adjust_parameters(self, params: Mapping[str, Any], family: Family,
                           rng: np.random.Generator) -> dict[str, Any] | None:
@@ -115,7 +123,7 @@ class QuestionSettings:
         rest = self.points - sum(a.points for a in answers if a.name in fixed)
         if weight <= 0:
             return answers
-        return tuple(a if a.name in fixed else replace(a, points=a.points * rest / weight)
+        return tuple(a if a.name in fixed else a.with_points(a.points * rest / weight)
                      for a in answers)
 
     def _setting(self, name: str) -> AnswerSetting:
@@ -125,8 +133,10 @@ class QuestionSettings:
         setting = self._setting(answer.name)
         if setting == AnswerSetting():
             return answer
-        changes = {k: v for k, v in (("points", setting.points), ("rtol", setting.rtol),
-                                     ("atol", setting.atol)) if v is not None}
+        if setting.points is not None:  # a written answer's rubric scaled with them
+            answer = answer.with_points(setting.points)
+        changes = {k: v for k, v in (("rtol", setting.rtol), ("atol", setting.atol))
+                   if v is not None}
         bare = replace(answer, mistakes=(), **changes)
         return replace(bare, mistakes=still_wrong(bare, answer.mistakes))
 

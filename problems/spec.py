@@ -24,6 +24,21 @@
     pool = ["sleeping_top", "steady_precession"]   # each student gets one, from the seed
     points = 4
 
+    [[questions]]
+    family = "turning_points"
+    written = true                     # the family's written parts too (or ["veff_minimum"])
+
+    [[questions]]                      # a question that is only a written part
+    written = "Show that the intermediate axis is unstable."   # the prompt (Markdown)
+    name = "intermediate_axis"         # the notebook variable is q5_intermediate_axis
+    title = "The tennis-racket theorem"                        # optional
+    points = 3                         # optional: the rubric's sum, which it must equal
+    rubric = [
+      { item = "Euler's equations linearised about the axis", points = 1 },
+      { item = "ω₁ satisfies ω̈₁ = −Ω₁Ω₂ ω₁", points = 1 },
+      { item = "Ω₁Ω₂ < 0 for the intermediate axis: exponential growth", points = 1 },
+    ]
+
     [student]
     install = "https://example.edu/phy711/eulertop_check-0.1.0-py3-none-any.whl"
                                        # what the notebooks say to %pip install for the check
@@ -34,7 +49,9 @@ Every key is optional but ``questions``. A parameter is set to a number (fixed),
 a list of labels (a choice parameter: the draws are repeated until one has an allowed label).
 A vector parameter is fixed as a list of its numbers (a list of two numbers is a range). Answer
 settings are ``points``, ``rtol`` and ``atol``; answer points set this way are kept, and the
-question's ``points`` is spread over the other answers in proportion to their own.
+question's ``points`` is spread over the other answers in proportion to their own. A written
+part (:mod:`problems.written`) is an answer too: its points may be set, and its rubric's items
+keep their shares of them; it has no tolerance. A rubric has 1 to 9 items.
 
 :func:`read_spec` reads the file (TOML syntax, known keys, types);
 :func:`check_spec` checks it against the families: known families, parameters each family of
@@ -51,7 +68,7 @@ import numbers
 import re
 import tomllib
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -60,6 +77,7 @@ import numpy as np
 from problems.deadlines import LatePolicy, PolicyError, read_policy
 from problems.family import Family
 from problems.settings import AnswerSetting, ParameterSetting, QuestionSettings
+from problems.written import WRITTEN_QUESTION, Written
 
 PROBE_ATTEMPTS = 400
 """Draws :func:`check_spec` tries per family of a question before it calls the settings
@@ -68,7 +86,9 @@ ill-posed (and the most it keeps to learn the answers' names from)."""
 _TOP_KEYS = ("title", "seed", "roster", "families", "follow_through", "late", "student",
              "questions")
 _STUDENT_KEYS = ("install",)
-_QUESTION_KEYS = ("family", "pool", "points", "answers", "parameters")
+_QUESTION_KEYS = ("family", "pool", "points", "answers", "parameters", "written")
+_WRITTEN_KEYS = ("written", "name", "title", "points", "rubric")
+"""The keys of a question that is only a written part (``written`` its prompt)."""
 _ANSWER_KEYS = ("points", "rtol", "atol")
 
 
@@ -78,14 +98,20 @@ class SpecError(ValueError):
 
 @dataclass(frozen=True)
 class QuestionSpec:
-    """One ``[[questions]]`` entry: the family (a pool of one) or pool, and its settings."""
+    """One ``[[questions]]`` entry: the family (a pool of one) or pool, and its settings; or
+    a question that is only a written part (``written``, no pool) and its ``title``."""
 
     pool: tuple[str, ...]
     settings: QuestionSettings
+    written: Written | None = None
+    title: str | None = None
 
     @property
     def label(self) -> str:
-        """The manifest's name for it: the family, or the pool's families joined by ``|``."""
+        """The manifest's name for it: the family, the pool's families joined by ``|``, or
+        ``written:<name>``."""
+        if self.written is not None:
+            return f"{WRITTEN_QUESTION}:{self.written.name}"
         return "|".join(self.pool)
 
 
@@ -287,6 +313,8 @@ def _positive(spec: Spec, table: Mapping, key: tuple, zero: bool = False) -> flo
 
 def _question(spec: Spec, entry: Any, i: int) -> QuestionSpec:
     key = ("questions", i)
+    if isinstance(entry, Mapping) and isinstance(entry.get("written"), str):
+        return _written_question(spec, entry, key)
     _known(spec, entry, key, _QUESTION_KEYS)
     family, pool = entry.get("family"), entry.get("pool")
     if (family is None) == (pool is None):
@@ -316,7 +344,44 @@ def _question(spec: Spec, entry: Any, i: int) -> QuestionSpec:
            list(parameters) if isinstance(parameters, dict) else ())
     values = {name: _parameter(spec, value, (*key, "parameters", name))
               for name, value in parameters.items()}
-    return QuestionSpec(tuple(pool), QuestionSettings(points, settings, values))
+    return QuestionSpec(tuple(pool), QuestionSettings(points, settings, values,
+                                                      _written_parts(spec, entry, key)))
+
+
+def _written_parts(spec: Spec, entry: Mapping, key: tuple) -> bool | tuple[str, ...]:
+    """A family question's ``written``: true (every written part of its family), a list of
+    their names, or absent (none)."""
+    chosen = entry.get("written", False)
+    if isinstance(chosen, bool):
+        return chosen
+    if isinstance(chosen, list) and chosen and all(isinstance(n, str) for n in chosen):
+        return tuple(chosen)
+    raise spec.error((*key, "written"), "must be true, a list of the family's written parts' "
+                                        f"names, or a prompt (text) of its own; got {chosen!r}")
+
+
+def _written_question(spec: Spec, entry: Mapping, key: tuple) -> QuestionSpec:
+    """A ``[[questions]]`` entry that is only a written part: ``written`` (its prompt),
+    ``name``, ``rubric``, and optionally ``points`` (the rubric's sum) and ``title``."""
+    _known(spec, entry, key, _WRITTEN_KEYS)
+    name = _typed(spec, entry, (*key, "name"), str, "a name (a string)")
+    if name is None or not name.isidentifier():
+        raise spec.error((*key, "name"), f"a written question needs a name that can end a "
+                                         f"Python variable (q5_<name>), got {name!r}")
+    title = _typed(spec, entry, (*key, "title"), str, "a string")
+    rubric = entry.get("rubric")
+    if not isinstance(rubric, list) or not rubric:
+        raise spec.error((*key, "rubric"), "give the rubric: a list of { item = \"…\", "
+                                           "points = N }")
+    for n, item in enumerate(rubric):
+        _known(spec, item, (*key, "rubric", n), ("item", "points"))
+    try:
+        written = Written(name, entry["written"], _positive(spec, entry, (*key, "points")),
+                          [(item.get("item"), item.get("points")) for item in rubric])
+    except ValueError as e:
+        raise spec.error((*key, "rubric" if "rubric" in str(e) else "written"),
+                         str(e).split(": ", 1)[-1]) from None
+    return QuestionSpec((), QuestionSettings(), written, title)
 
 
 def _parameter(spec: Spec, value: Any, key: tuple) -> ParameterSetting:
@@ -350,6 +415,8 @@ def check_spec(spec: Spec, families: Mapping[str, Family]) -> None:
     problem."""
     for i, question in enumerate(spec.questions):
         key = ("questions", i)
+        if question.written is not None:
+            continue  # nothing drawn: read_spec checked it whole
         where = (*key, "family" if len(question.pool) == 1 else "pool")
         unknown = [n for n in question.pool if n not in families]
         if unknown:
@@ -362,11 +429,30 @@ def check_spec(spec: Spec, families: Mapping[str, Family]) -> None:
         names: set[str] = set()
         kinds: dict[str, str] = {}
         for family in (families[n] for n in question.pool):
+            probed = replace(settings, written=True) if settings.written else settings
             seen = _probe(spec, (*key, "parameters") if settings.parameters else where,
-                          family, settings)
+                          family, probed)  # every written part it offers, to name them
+            _check_written(spec, (*key, "written"), family, settings.written, seen)
+            seen = [a for a in seen if a.kind != "written" or settings.written is True
+                    or a.name in settings.written]
             names |= {a.name for a in seen}
             kinds |= {a.name: a.kind for a in seen}
         _check_answers(spec, key, settings, names, kinds)
+
+
+def _check_written(spec: Spec, key: tuple, family: Family, chosen: bool | tuple[str, ...],
+                   seen: Sequence[Any]) -> None:
+    """The written parts a question asks of ``family`` are ones it offers (``seen``: the
+    answers of its probe draws, every written part it offers among them)."""
+    if not chosen:
+        return
+    offered = {a.name for a in seen if a.kind == "written"}
+    wanted = set(offered) if chosen is True else set(chosen)
+    if not offered or wanted - offered:
+        has = ", ".join(sorted(offered)) or "none"
+        missing = ", ".join(sorted(wanted - offered)) or "a written part"
+        raise spec.error(key, f"{family.name} has no written part {missing}; its written "
+                              f"parts: {has}")
 
 
 def _check_parameter(spec: Spec, key: tuple, family: Family, name: str,
@@ -427,7 +513,8 @@ def _check_answers(spec: Spec, key: tuple, settings: QuestionSettings, names: se
         if name not in names:
             raise spec.error(where, f"no such answer; the question asks for "
                                     f"{', '.join(sorted(names))}")
-        if kinds[name] in ("boolean", "choice") and (setting.rtol, setting.atol) != (None, None):
+        if kinds[name] in ("boolean", "choice", "written") \
+                and (setting.rtol, setting.atol) != (None, None):
             raise spec.error(where, f"a {kinds[name]} answer has no tolerance")
     fixed = sum(s.points for s in settings.answers.values() if s.points is not None)
     if settings.points is not None:

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from problems.answers import Answer
+from problems.answers import WRITTEN, Answer
 
 
 def variable_name(question: int, answer_name: str) -> str:
@@ -173,9 +173,10 @@ def answer_spec(answer: Answer, question: int) -> dict:
 
     Keys: ``variable``, ``name``, ``kind``, ``unit``, ``length`` (number of components of a
     vector answer, else None), ``options`` (choice), ``symbols`` (expression), ``period``
-    (angle compared modulo it, else None), ``points``, ``description``.
+    (angle compared modulo it, else None), ``points``, ``description``; and for a written
+    answer its ``prompt`` (its rubric stays in the key).
     """
-    return {
+    spec = {
         "variable": variable_name(question, answer.name),
         "name": answer.name,
         "kind": answer.kind,
@@ -187,3 +188,6 @@ def answer_spec(answer: Answer, question: int) -> dict:
         "points": answer.points,
         "description": answer.description,
     }
+    if answer.kind == WRITTEN:
+        spec["prompt"] = answer.value
+    return spec

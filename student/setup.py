@@ -22,7 +22,7 @@ OWN = {"eulertop_check": ["__init__", "cli", "live", "show", "where"]}
 SHARED = {
     "eulertop_base": ["__init__"],
     "grader": ["__init__", "check", "execute", "extract", "limits", "notebook_load",
-               "notebook_metadata", "run_file", "submission_file"],
+               "notebook_metadata", "run_file", "submission_file", "student_text", "written"],
     "grader.kernels": ["__init__", "base", "cell_server", "channel", "local", "pool", "zygote"],
     "grader.sandbox": ["__init__", "host", "seccomp", "world"],
     "problems": ["__init__", "answers", "expressions"],

@@ -34,6 +34,7 @@ FLOORS = {
     "grader.limits": 20, "grader.plain_text": 20, "grader.statement_html": 20,
     "grader.results": 20, "grader.submissions": 20, "grader.submission_file": 20,
     "grader.notebook_load": 20, "grader.extract": 20, "grader.notebook_metadata": 20,
+    "grader.written": 20,
     # 1–2: one disposable world; one kernel
     "grader.sandbox": 21,
     "grader.kernels": 22,
@@ -42,14 +43,14 @@ FLOORS = {
     # 4: the unit, and what it is graded against, and where its records go
     "grader.assignment": 24, "grader.graded_folder": 24, "grader.grade_one": 24,
     "grader.overrides": 24, "grader.audit": 24, "grader.follow_through": 24,
-    "grader.key_edit": 24, "grader.transaction": 24, "grader.late": 24,
+    "grader.key_edit": 24, "grader.transaction": 24, "grader.late": 24, "grader.reviews": 24,
     "grader.run_file": 24,
     # 5: views of records, and file formats
     "grader.gradebook": 25, "grader.progress": 25, "grader.lms": 25, "grader.report": 25,
     # 6: where grade_one runs; where submissions come from
     "grader.executors": 26, "grader.discover": 26, "grader.publish": 26,
     # 7: the class run
-    "grader.pipeline": 27, "grader.rescore": 27,
+    "grader.pipeline": 27, "grader.rescore": 27, "grader.review": 27,
     # 8: front ends
     "grader": 28, "grader.cli": 28, "grader.amend": 28, "grader.check": 28,
     "grader.doctor": 28, "grader.selftest_run": 28, "grader.report.cli": 28,

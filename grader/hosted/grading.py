@@ -25,6 +25,7 @@ from grader.grade_one import grade_one
 from grader.limits import Limits
 from grader.results import StudentResult
 from grader.submissions import Submission
+from problems.answers import WRITTEN
 
 MODES = ("auto", "bwrap", "container")
 
@@ -144,8 +145,10 @@ def find_notebook(folder: Path, preferred: str | None = None) -> tuple[Path | No
 def grade_notebook(a: Assignment, student_id: str, path: Path, limits: Limits,
                    isolation: Isolation) -> StudentResult:
     """Grade ``path`` as ``student_id``'s submission (their variant's key): its record, with
-    follow-through credit where the assignment gives it (:mod:`grader.follow_through`)."""
-    expected = a.expected(student_id)
+    follow-through credit where the assignment gives it (:mod:`grader.follow_through`). The
+    numbers only: written answers are left to the platform's own manual grading (issue 31,
+    ``docs/instructors/hosted.md``), neither read nor counted in the score."""
+    expected = tuple(k for k in a.expected(student_id) if k.answer.kind != WRITTEN)
     result = grade_one(Submission(student_id, Path(path)), expected, a.key_hash(student_id),
                        limits, isolation.execute)
     follow = FollowThrough.of(a)

@@ -524,7 +524,22 @@ def run_package(args: argparse.Namespace) -> int:
     print(f"wrote {path}")
     for line in _next_steps(args.platform, path):
         print(line)
+    written = _written_note(Path(args.hw))
+    if written:
+        print(written)
     return 0
+
+
+def _written_note(hw: Path) -> str:
+    """What the platform grades by hand: the assignment's written parts (issue 31), if any."""
+    from grader.assignment import load_assignment
+
+    parts = load_assignment(hw).written()
+    if not parts:
+        return ""
+    return (f"note: the written parts ({', '.join(parts)}) are not autograded: grade them with "
+            "the platform's manual grading, their rubrics in key.json "
+            "(docs/instructors/hosted.md, 'Written parts on the platform')")
 
 
 def _next_steps(platform: str, path: Path) -> Iterable[str]:

@@ -6,7 +6,9 @@ of them — one row per roster student, in roster order, in the layout of the LM
 the class list the assignment was generated with, or from ``--roster`` (an LMS class list whose
 student ids are the assignment's). A student with no submission is left blank — the LMS then
 keeps whatever it has — unless ``--missing-as-zero``; a submission that could not be graded
-has its record's 0.
+has its record's 0. Written answers not reviewed yet (``pending``, :mod:`grader.reviews`) count
+0 in a total: the export says how many there are and refuses unless ``--allow-pending``, with
+which it exports the totals as they are and warns.
 
 ``answers.csv`` (one row per student and answer: :func:`grader.gradebook.answers_rows`) is
 written beside the results every time, too.
@@ -50,10 +52,25 @@ def add_export_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-late", action="store_true",
                         help="the points before the late penalty, for an LMS that applies its "
                              "own late policy (an override of a total still stands)")
+    parser.add_argument("--allow-pending", action="store_true",
+                        help="export even though some written answers are not reviewed yet "
+                             "(they count 0 in the totals)")
 
 
 class ExportError(ValueError):
     """The export cannot be written; nothing was."""
+
+
+def pending_line(results) -> str:
+    """How many written answers of how many students wait for a review (``""``: none)."""
+    from grader.gradebook import pending_count
+
+    waiting = {sid: pending_count(r) for sid, r in results.items() if r is not None}
+    waiting = {sid: n for sid, n in waiting.items() if n}
+    if not waiting:
+        return ""
+    return (f"{sum(waiting.values())} written answer(s) of {len(waiting)} student(s) are not "
+            "reviewed yet and count 0 in their totals")
 
 
 def _rows(assignment, roster_path: Path | None, roster_format: str | None) -> tuple[dict, ...]:
@@ -128,8 +145,10 @@ def write_export(hw: Path, lms: str, out: Path | None = None, graded: Path | Non
     """Write the import file of ``lms`` and ``answers.csv``; their paths.
 
     ``options``: ``roster``, ``roster_format``, ``column_id``, ``missing_as_zero``, ``no_late`` of
-    :func:`build_grades`. Raises :class:`ExportError`, ``grader.assignment.UsageError``,
-    ``problems.roster.RosterError`` or ``grader.lms.classlist.ImportError_`` on bad input.
+    :func:`build_grades`, and ``allow_pending`` (written answers not reviewed yet: refused
+    without it, :class:`ExportError`; warned of on stderr with it). Raises
+    :class:`ExportError`, ``grader.assignment.UsageError``, ``problems.roster.RosterError`` or
+    ``grader.lms.classlist.ImportError_`` on bad input.
     """
     from grader.graded_folder import graded_folder
     from grader.transaction import class_lock
@@ -148,7 +167,14 @@ def _export(hw: Path, lms: str, out: Path | None, graded: Path,
     from grader.lms.registry import LMS
     from grader.results import atomic_write_text
 
+    allow_pending = options.pop("allow_pending", False)
     grades, a, results = build_grades(Path(hw), graded, **options)
+    pending = pending_line(results)
+    if pending and not allow_pending:
+        raise ExportError(f"{pending}: review them first, or pass --allow-pending to export "
+                          "the totals as they are")
+    if pending:
+        print(f"eulertop export: warning: {pending}", file=sys.stderr)
     table = LMS[lms].write_import(grades)
     out = Path(out) if out is not None else graded / f"{lms}-import.csv"
     # Blackboard wants every field of a .csv quoted
@@ -169,7 +195,8 @@ def run_export(args: argparse.Namespace) -> int:
         out, answers = write_export(
             args.hw, args.to, args.out, args.graded, roster=args.roster,
             roster_format=args.roster_format, column_id=args.assignment_id,
-            missing_as_zero=args.missing_as_zero, no_late=args.no_late)
+            missing_as_zero=args.missing_as_zero, no_late=args.no_late,
+            allow_pending=args.allow_pending)
     except (ExportError, UsageError, RosterError, ImportError_) as e:
         print(f"eulertop export: {e}", file=sys.stderr)
         return 2

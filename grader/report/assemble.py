@@ -117,14 +117,15 @@ def build_report(data: ClassData, submissions: Mapping[str, Path] | None = None)
 
 def items_csv(report: ClassReport) -> str:
     """The statistics per question and per answer as CSV."""
-    from grader.report.items import CATEGORIES
+    from grader.report.items import shown_categories
 
-    header = ["item", "question", "answer", "family", *CATEGORIES, "facility",
+    categories = shown_categories(report.answers)
+    header = ["item", "question", "answer", "family", *categories, "facility",
               "discrimination", "flags"]
     rows = [header]
     for s in (*report.questions, *report.answers):
         rows.append([s.label, str(s.question), s.name or "", s.family,
-                     *(str(s.counts[c]) for c in CATEGORIES),
+                     *(str(s.counts[c]) for c in categories),
                      "" if s.facility is None else f"{s.facility:.4f}",
                      "" if s.discrimination is None else f"{s.discrimination:.4f}",
                      "; ".join(s.flags)])

@@ -26,6 +26,8 @@ COLOURS = {
     "wrong": "#d62728",
     "invalid": "#9467bd",
     "unanswered": "#c7c7c7",
+    "pending": "#e0c060",
+    "reviewed": "#17becf",
     "scores": "#1f77b4",
 }
 
@@ -60,16 +62,30 @@ def outcomes(labels: Sequence[str], counts: Sequence[Mapping[str, int]]) -> str:
     ax = fig.add_subplot()
     y = np.arange(len(labels))[::-1]
     left = np.zeros(len(labels))
-    for name in ("correct", "follows", "known mistake", "wrong", "invalid", "unanswered"):
+    for name in ("correct", "follows", "known mistake", "wrong", "invalid", "unanswered",
+                 "pending", "reviewed"):
         width = np.array([c.get(name, 0) for c in counts], dtype=float)
-        if name == "follows" and not width.any():
-            continue  # in the legend only where some answer earned follow-through credit
+        if name in ("follows", "pending", "reviewed") and not width.any():
+            continue  # in the legend only where some answer has it
         ax.barh(y, width, left=left, color=COLOURS[name], label=name, height=0.75)
         left += width
     ax.set_yticks(y, labels)
     ax.set_xlabel("students")
     ax.legend(ncols=5, loc="lower center", bbox_to_anchor=(0.5, 1.0), frameon=False,
               fontsize="small")
+    return png_base64(fig)
+
+
+def written_scores(points: Sequence[float], maximum: float) -> str:
+    """Histogram of one written answer's reviewed scores, from 0 to ``maximum`` points."""
+    fig = Figure(figsize=(7, 2.4), layout="constrained")
+    ax = fig.add_subplot()
+    top = maximum if maximum > 0 else 1.0
+    ax.hist(points, bins=np.linspace(0, top, min(20, max(4, int(4 * top))) + 1),
+            color=COLOURS["reviewed"], edgecolor="white")
+    ax.set_xlabel("points given by the reviews")
+    ax.set_ylabel("students")
+    ax.set_xlim(0, top)
     return png_base64(fig)
 
 

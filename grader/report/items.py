@@ -4,7 +4,9 @@ For every answer (and every question, its answers summed) over the students whos
 graded:
 
 * counts of ``correct``, ``wrong`` (no known mistake recognised), ``known mistake``, ``invalid``
-  and ``unanswered`` (the grader's ``missing``);
+  and ``unanswered`` (the grader's ``missing``); for written answers ``pending`` and
+  ``reviewed`` (a pending answer has no score yet: it is left out of facility and
+  discrimination);
 * **facility**: the mean fraction of the item's points earned (classical test theory's
   difficulty index, p);
 * **discrimination**: the point-biserial correlation between the item's score and the *rest*
@@ -25,6 +27,7 @@ Floor 5 of grader/ (views of records, and file formats; grader/API.md).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,6 +36,12 @@ from grader.report.classdata import ClassData, question_families
 
 CATEGORIES = ("correct", "follows", "known mistake", "wrong", "invalid", "unanswered")
 """How one answer is counted (in this order in tables and figures)."""
+
+WRITTEN_CATEGORIES = ("pending", "reviewed")
+"""How a written answer is counted besides (:mod:`grader.reviews`): waiting for a review, or
+scored by one; tables show them where the class has written answers."""
+
+ALL_CATEGORIES = (*CATEGORIES, *WRITTEN_CATEGORIES)
 
 BROKEN_FACILITY = 0.05
 HARD_FACILITY = 0.4
@@ -115,10 +124,12 @@ def item_flags(facility: float | None, discrimination: float | None, n: int) -> 
 
 def _stats(label, question, name, family, verdict_lists, totals) -> ItemStats:
     """``verdict_lists``: per graded student, the verdicts making up the item."""
-    counts = dict.fromkeys(CATEGORIES, 0)
+    counts = dict.fromkeys(ALL_CATEGORIES, 0)
     for verdicts in verdict_lists:
         for v in verdicts:
             counts[category(v)] += 1
+    # a written answer not reviewed yet has no score: left out of facility and discrimination
+    verdict_lists = [[v for v in vs if v.status != "pending"] for vs in verdict_lists]
     earned = np.array([sum(v.points for v in vs) for vs in verdict_lists], dtype=float)
     possible = np.array([sum(v.max_points for v in vs) for vs in verdict_lists], dtype=float)
     if len(earned) == 0 or not np.any(possible > 0):
@@ -128,6 +139,13 @@ def _stats(label, question, name, family, verdict_lists, totals) -> ItemStats:
     discrimination = point_biserial(earned, totals - earned)
     return ItemStats(label, question, name, family, counts, facility, discrimination,
                      item_flags(facility, discrimination, len(earned)))
+
+
+def shown_categories(stats: Sequence[ItemStats]) -> tuple[str, ...]:
+    """The categories a table of ``stats`` shows: :data:`CATEGORIES`, and the written ones
+    where some item has a written answer."""
+    written = any(s.counts.get(c) for s in stats for c in WRITTEN_CATEGORIES)
+    return ALL_CATEGORIES if written else CATEGORIES
 
 
 def item_statistics(data: ClassData) -> tuple[tuple[ItemStats, ...], tuple[ItemStats, ...]]:

@@ -33,7 +33,8 @@ from grader.report.assemble import ClassReport
 from grader.report.classdata import NUMERIC_KINDS, numeric
 from grader.report.code_similarity import MAX_COMPARED_CHARS, MIN_JACCARD
 from grader.report.copying import ALPHA
-from grader.report.items import CATEGORIES, ItemStats
+from grader.report.items import ItemStats, shown_categories
+from problems.answers import WRITTEN
 
 MAX_LISTED = 40
 """Students named in one cell before the list is cut (the CSV has them all)."""
@@ -86,6 +87,7 @@ img { max-width: 100%; display: block; margin: 0.5rem 0; }
 CONTENTS = "<nav>" + " · ".join(
     f'<a href="#{anchor}">{name}</a>' for anchor, name in (
         ("look", "look at first"), ("scores", "scores"), ("items", "questions and answers"),
+        ("written", "written answers"),
         ("mistakes", "known mistakes"), ("slips", "common wrong answers"),
         ("copying", "copied answers"), ("students", "students"))) + "</nav>"
 """Links to the sections (in-page anchors only)."""
@@ -217,33 +219,73 @@ def late_paragraph(data) -> str:
             "student(s) had an extension.</p>")
 
 
-def _stats_rows(stats: Sequence[ItemStats]) -> list[list[str]]:
+def _stats_rows(stats: Sequence[ItemStats], categories: Sequence[str]) -> list[list[str]]:
     rows = []
     for s in stats:
         flag = f'<span class="flag">{e(", ".join(s.flags))}</span>' if s.flags else ""
-        rows.append([e(s.label), e(s.family), *(num(s.counts[c], "d") for c in CATEGORIES),
+        rows.append([e(s.label), e(s.family), *(num(s.counts[c], "d") for c in categories),
                      num(s.facility), num(s.discrimination), flag])
     return rows
 
 
 def items_section(report: ClassReport) -> str:
-    header = ["item", "family", *CATEGORIES, "facility", "discrimination", "flags"]
+    categories = shown_categories(report.answers)
+    header = ["item", "family", *categories, "facility", "discrimination", "flags"]
     answers = report.answers
     parts = [
         '<h2 id="items">Questions and answers</h2>',
         '<p class="note">Facility: mean fraction of the points earned by the graded students. '
         "Discrimination: correlation (point-biserial) of the item's score with the rest of the "
         "score — near zero or negative, strong students miss it as often as weak ones.</p>",
-        table(header, _stats_rows(report.questions), sortable=True),
+        table(header, _stats_rows(report.questions, categories), sortable=True),
         img(figures.outcomes([s.label for s in answers], [s.counts for s in answers]),
             "outcome of every answer"),
         img(figures.facility_discrimination([s.label for s in answers],
                                             [s.facility for s in answers],
                                             [s.discrimination for s in answers]),
             "facility against discrimination"),
-        table(header, _stats_rows(answers), sortable=True),
+        table(header, _stats_rows(answers, categories), sortable=True),
     ]
     return "".join(parts)
+
+
+def written_section(report: ClassReport) -> str:
+    """The written answers (:mod:`grader.reviews`): per answer, how many wait for a review,
+    the distribution of the reviewed scores, and how often each rubric item was given."""
+    data = report.data
+    items = [i for i in data.items if i.kind == WRITTEN]
+    if not items:
+        return ""
+    parts = ['<h2 id="written">Written answers</h2>']
+    for item in items:
+        answers = [a for s in data.graded if (a := data.answer(s, item.variable)) is not None]
+        reviewed = [a.verdict.points for a in answers if a.verdict.status == "reviewed"]
+        pending = sum(a.verdict.status == "pending" for a in answers)
+        missing = sum(a.verdict.status == "missing" for a in answers)
+        most = max((a.verdict.max_points for a in answers), default=0.0)
+        mean = f", mean {np.mean(reviewed):.3g} of {most:g}" if reviewed else ""
+        parts.append(f"<h3>{e(item.variable)} ({e(item.family)})</h3>"
+                     f"<p>{len(reviewed)} reviewed{mean}; {pending} pending review; {missing} "
+                     "unanswered.</p>")
+        if reviewed:
+            parts.append(img(figures.written_scores(reviewed, most),
+                             f"distribution of the reviewed scores of {item.variable}"))
+        parts.append(_rubric_table(data, item.variable))
+    return "".join(parts)
+
+
+def _rubric_table(data, variable: str) -> str:
+    """How many reviewed answers were given each rubric item."""
+    given: dict[str, list[int]] = {}
+    for sid in data.graded:
+        for n, r in enumerate(data.results[sid].reviewed.get(variable, {}).get("rubric", ())):
+            counts = given.setdefault(f"{n + 1}. {r['item']}", [0, 0])
+            counts[0] += bool(r["given"])
+            counts[1] += 1
+    if not given:
+        return ""
+    rows = [[e(item), num(g, "d"), num(n, "d")] for item, (g, n) in given.items()]
+    return table(["rubric item", "given", "reviewed"], rows)
 
 
 def mistakes_section(report: ClassReport) -> str:
@@ -360,7 +402,8 @@ def report_html(report: ClassReport, table_rows: Sequence[Sequence[str]], csv_te
     body = "".join((
         f"<h1>Class report: {e(title)}</h1>", CONTENTS,
         '<h2 id="look">Look at first</h2>', look_first(report),
-        scores_section(report), items_section(report), mistakes_section(report),
+        scores_section(report), items_section(report), written_section(report),
+        mistakes_section(report),
         slips_section(report), copying_section(report),
         students_section(table_rows, csv_text, csv_name),
     ))

@@ -30,6 +30,7 @@ import numpy as np
 from problems.answers import Answer, Mistake
 from problems.family import Parameter, distinguishable, reject_unless
 from problems.rounding import latex_sig, round_sig
+from problems.written import Written
 from solver.asymmetric_top import asymmetric_top_period
 from solver.inertia import parallel_axis, shape_tensor
 from solver.torque_free import near_axis_stability
@@ -349,3 +350,25 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
 
 def statement(params: Mapping[str, Any]) -> str:
     return _statement(Draw.of(params))
+
+
+INTERMEDIATE_AXIS = Written(
+    "intermediate_axis",
+    "Explain, from Euler's equations without torque, why spin about the axis of the "
+    "intermediate moment is unstable while spin about the largest or the smallest is stable.",
+    3,
+    [("Euler's equations linearised for $\\omega_1, \\omega_2$ small ($\\omega_3$ "
+      "constant to first order)", 1),
+     ("$\\ddot\\omega_1 = -\\Omega_1 \\Omega_2\\, \\omega_1$ derived, with "
+      "$\\Omega_1 = \\omega_3 (I_3 - I_2)/I_1$ and $\\Omega_2 = \\omega_3 (I_3 - I_1)/I_2$", 1),
+     ("the sign of $\\Omega_1 \\Omega_2$ argued: positive for the largest or smallest "
+      "moment (oscillation), negative for the intermediate one (exponential growth)", 1)],
+    "why the intermediate axis is unstable (R7, R9)",
+)
+"""R7 (Euler's equations) linearised into R9 (rotation near a principal axis): the derivation
+behind this family's stability answers (``docs/physics/index.md``)."""
+
+
+def written(params: Mapping[str, Any]) -> tuple[Written, ...]:
+    """The written part an assignment may ask for: :data:`INTERMEDIATE_AXIS`."""
+    return (INTERMEDIATE_AXIS,)

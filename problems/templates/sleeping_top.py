@@ -43,6 +43,7 @@ from problems.answers import Answer, Mistake
 from problems.family import Parameter, distinguishable, reject_unless
 from problems.genuine import statement_number
 from problems.rounding import latex_sig, round_sig
+from problems.written import Written
 from solver.heavy_top import critical_spin, sleeping_top_stable
 from solver.inertia import centre_of_mass_offset, parallel_axis, shape_tensor
 
@@ -302,3 +303,25 @@ def degenerate(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any])
         return (f"your {{omega3_c}} is the statement's {{{copied}}}, copied: {{stable}} then "
                 "follows with nothing of R19 worked out")
     return None
+
+
+SLEEPING_CONDITION = Written(
+    "sleeping_condition",
+    "Show that a top spinning upright ($\\beta \\approx 0$) is stable exactly when "
+    "$p_\\gamma^2 \\ge 4 M g l I_1$, by expanding the effective potential about "
+    "$\\beta = 0$.",
+    3,
+    [("$p_\\alpha = p_\\gamma$ argued for a top through the vertical", 1),
+     ("$V_\\text{eff}$ expanded to order $\\beta^2$: "
+      "$\\left(\\frac{p_\\gamma^2}{8 I_1} - \\frac{Mgl}{2}\\right) \\beta^2 + Mgl$", 1),
+     ("stability as a non-negative $\\beta^2$ coefficient, giving "
+      "$p_\\gamma^2 \\ge 4 M g l I_1$", 1)],
+    "why the upright spin is stable above ω3_c (R16, R19)",
+)
+"""R16 (the effective potential) near ``β = 0``, which gives R19: the derivation behind this
+family's critical spin (``docs/physics/index.md``)."""
+
+
+def written(params: Mapping[str, Any]) -> tuple[Written, ...]:
+    """The written part an assignment may ask for: :data:`SLEEPING_CONDITION`."""
+    return (SLEEPING_CONDITION,)

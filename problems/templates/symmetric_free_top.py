@@ -28,6 +28,7 @@ from problems.answers import Answer, Mistake
 from problems.family import Parameter, distinguishable, reject_unless
 from problems.genuine import statement_number
 from problems.rounding import latex_sig, round_sig
+from problems.written import Written
 from solver.inertia import shape_tensor
 from solver.parameters import ParameterError
 from solver.torque_free import (
@@ -278,3 +279,25 @@ def degenerate(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any])
         return (f"your {{Omega}} is a number of the statement's {{{copied}}}, copied, not R8's "
                 "rate worked out: {T_body} from it shows nothing")
     return None
+
+
+BODY_PRECESSION = Written(
+    "body_precession",
+    "Show, from Euler's equations without torque, that $\\omega_3$ is constant for a "
+    "symmetric top ($I_1 = I_2$) and that $(\\omega_1, \\omega_2)$ turns about $\\hat e_3$ "
+    "in the body frame at the rate $\\Omega = \\omega_3 (I_3 - I_1)/I_1$.",
+    3,
+    [("the third equation with $I_1 = I_2$ gives $\\dot\\omega_3 = 0$", 1),
+     ("$\\dot\\omega_1 = -\\Omega\\,\\omega_2$ and $\\dot\\omega_2 = \\Omega\\,\\omega_1$ "
+      "derived, with $\\Omega$ as stated", 1),
+     ("solved: $\\omega_1 = A\\cos(\\Omega t + \\varphi)$, "
+      "$\\omega_2 = A\\sin(\\Omega t + \\varphi)$, a turn at rate $\\Omega$", 1)],
+    "why ω precesses about the symmetry axis (R7, R8)",
+)
+"""R7 (Euler's equations) for ``I1 = I2``, which give R8: the derivation behind this family's
+precession rate (``docs/physics/index.md``)."""
+
+
+def written(params: Mapping[str, Any]) -> tuple[Written, ...]:
+    """The written part an assignment may ask for: :data:`BODY_PRECESSION`."""
+    return (BODY_PRECESSION,)

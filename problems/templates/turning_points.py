@@ -64,6 +64,7 @@ from problems.templates.heavy_top_constants import (
     variant_params,
     well_conditioned,
 )
+from problems.written import Written
 from solver.heavy_top import constants_of_motion, effective_potential, turning_points
 
 NAME = "turning_points"
@@ -220,3 +221,25 @@ def heading(params: Mapping[str, Any]) -> str:
 
 def statement(params: Mapping[str, Any]) -> str:
     return _statement(top_from_params(params), state_from_params(params), params["beta"])
+
+
+VEFF_MINIMUM = Written(
+    "veff_minimum",
+    "Show that $V_\\text{eff}(\\beta)$ has exactly one minimum between $\\beta = 0$ and "
+    "$\\beta = \\pi$ when $|p_\\alpha| \\ne |p_\\gamma|$, so that the axis nods between "
+    "two turning points.",
+    3,
+    [("$V_\\text{eff}$ written in terms of $p_\\alpha$, $p_\\gamma$, $I_1$ and $Mgl$", 1),
+     ("$V_\\text{eff} \\to +\\infty$ at both ends argued (the numerator does not vanish "
+      "there when $|p_\\alpha| \\ne |p_\\gamma|$)", 1),
+     ("only one stationary point shown (with $u = \\cos\\beta$: $V_\\text{eff}'$ has one "
+      "zero in $(-1, 1)$)", 1)],
+    "why V_eff(β) has one minimum (R16, R17)",
+)
+"""R16 (the effective potential) and R17 (its two turning points): the derivation behind the
+numbers this family asks for (``docs/physics/index.md``)."""
+
+
+def written(params: Mapping[str, Any]) -> tuple[Written, ...]:
+    """The written part an assignment may ask for: :data:`VEFF_MINIMUM`."""
+    return (VEFF_MINIMUM,)
