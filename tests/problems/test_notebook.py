@@ -56,8 +56,10 @@ def test_cell_layout_and_read_only_marks(hw):
         assert cell.metadata.deletable is False
     first = nb.cells[0].source
     assert first.startswith("# Tops, week 3\n")
-    # the first cell says how to check the notebook, on JupyterHub/Colab and in a terminal
-    assert "%pip install eulertop" in first and "!eulertop check alice.ipynb" in first
+    # the first cell says how to check the notebook: from inside it (the student package,
+    # which holds no solver) and in a terminal
+    assert "%pip install eulertop-check" in first and "eulertop_check.check()" in first
+    assert "eulertop-check alice.ipynb" in first
     rules = nb.cells[1].source
     assert "`alice` (Alice Ng)" in rules
     assert "**Conventions for every question**" in rules
