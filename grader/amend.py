@@ -228,6 +228,7 @@ def key_change(args: argparse.Namespace):
         return Amendment("key set", f"key set {args.answer}: {', '.join(fields)}", key=key,
                          details={"key_changes": [c.as_dict() for c in changes]},
                          students=frozenset(),  # those whose key entry changed
+                         report=":" not in args.answer,  # one student's: a later command's
                          lines=(f"{args.answer} of {students} student(s):",
                                 *_lines(changes)))
 
@@ -335,6 +336,7 @@ def late_change(args: argparse.Namespace):
         who = None if args.action == "set" else frozenset({args.student})
         return Amendment(f"late {args.action}", "; ".join(lines),
                          manifest={**a.manifest, "late": after.record()}, students=who,
+                         report=who is None,  # an extension: one student's, a later command's
                          details={"late": {"before": None if before is None else before.record(),
                                            "after": after.record()}}, lines=lines)
 

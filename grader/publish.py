@@ -151,6 +151,21 @@ def _tables(a: Assignment, present: Mapping[str, StudentResult],
     return "".join(grades), "".join(answers)
 
 
+def stage_stale_report(tx: Transaction, out: Path) -> None:
+    """Stage ``OUT/report.html`` with its out-of-date notice (:func:`grader.report.write.
+    stale_page`), for a change that leaves the report to a later command; nothing when there
+    is no report or it has the notice already."""
+    from grader.report.write import stale_page
+
+    try:
+        text = (out / REPORT).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return
+    marked = stale_page(text)
+    if marked is not None:
+        tx.write(out / REPORT, marked, durable=False)
+
+
 def stage_views(tx: Transaction, a: Assignment, out: Path,
                 results: Mapping[str, StudentResult | None], reveal: bool,
                 published: Set[str] = frozenset(), pages: Set[str] | None = None,

@@ -54,6 +54,7 @@ from grader.publish import (
     settled,
     stage_record,
     stage_report,
+    stage_stale_report,
     stage_views,
 )
 from grader.results import StudentResult, non_finite_read
@@ -339,6 +340,8 @@ def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult 
                 pages=None if scope is None else frozenset(), cache=rows)
     if amendment.report:
         stage_report(tx, a, out, new, report_notebooks(out), command)
+    elif report.changes:
+        stage_stale_report(tx, out)
     tx.trail(amendment.event, (c.as_dict() for c in report.changes), why=amendment.why,
              students=len(report.rescored), unchanged=report.unchanged,
              **({"unread": dict(report.unread)} if report.unread else {}),
@@ -362,12 +365,13 @@ def override_amendment(a: Assignment, existing: Sequence[Override], student: str
         if len(kept) == len(existing):
             raise UsageError(f"no override of {student}'s {what} to remove")
         return Amendment("override removed", f"override of {student}'s {what} removed",
-                         overrides=kept, students=frozenset({student}), details=details)
+                         overrides=kept, students=frozenset({student}), details=details,
+                         report=False)
     if points is None or not reason:
         raise UsageError("give --points P and --reason TEXT (or --remove)")
     new = Override(student, answer, points, reason, by, at)
     return Amendment("override", reason, overrides=(*kept, new),
-                     students=frozenset({student}), details=details)
+                     students=frozenset({student}), details=details, report=False)
 
 
 def change_lines(changes: Sequence[Change], limit: int | None = None) -> list[str]:

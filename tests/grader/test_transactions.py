@@ -434,3 +434,27 @@ def test_a_change_rewrites_only_the_records_and_pages_it_reaches(graded, capsys,
             assert (after[path] != before[path]) == (sid in reached), (command, path)
     said = capsys.readouterr().out
     assert f"{len(reached) if reached else len(STUDENTS)} student(s) rescored" in said
+
+
+def test_a_one_student_change_leaves_the_report_marked_out_of_date(graded, capsys):
+    """An override rescores one student and leaves the class report to a later command (it
+    reads every record and key: seconds, for one student's change): the page says so until
+    ``eulertop report`` (or a rescore) rebuilds it."""
+    hw, _ = graded
+    page = hw / "graded" / "report.html"
+    before = page.read_text()
+    assert "Out of date" not in before
+    ben = read_result(hw / "graded" / RESULTS / "ben.json")
+    wrong = next(a for a in ben.answers if a.verdict.points < a.verdict.max_points)
+    assert main(["override", str(hw), "ben", wrong.variable, "--points",
+                 str(wrong.verdict.max_points), "--reason", "r"]) == 0
+    marked = page.read_text()
+    assert "Out of date:</strong> grades changed after this report was made" in marked
+    assert marked.replace(marked[marked.index('<p class="stale"'):marked.index("</p>", marked.index(
+        '<p class="stale"')) + 4], "") == before  # the notice, and nothing else, added
+    assert main(["report", str(hw)]) == 0
+    assert "Out of date" not in page.read_text()
+    assert main(["override", str(hw), "ben", wrong.variable, "--remove"]) == 0
+    assert "Out of date" in page.read_text()
+    assert main(["rescore", str(hw)]) == 0
+    assert "Out of date" not in page.read_text()
