@@ -186,10 +186,9 @@ def nutation_cubic(
 
 def _tilt_terms(beta0):
     """``cos β0``, ``sin²β0``, ``1 − cos β0 = 2 sin²(β0/2)`` and ``1 + cos β0 = 2 cos²(β0/2)``,
-    each to full relative accuracy (``sin β0 = 2 sin(β0/2) cos(β0/2)``: three calls of the
-    trigonometric functions instead of four, which are a good part of the cubic's cost)."""
+    each to full relative accuracy."""
     half_sin, half_cos = np.sin(0.5 * beta0), np.cos(0.5 * beta0)
-    s0 = 2.0 * half_sin * half_cos
+    s0 = np.sin(beta0)
     return np.cos(beta0), s0 * s0, 2.0 * half_sin * half_sin, 2.0 * half_cos * half_cos
 
 
