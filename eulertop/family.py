@@ -5,8 +5,11 @@ A family is one Python file (or package) that defines ``NAME``, ``TITLE``, ``SUM
 each with its known :class:`Mistake` s) and ``statement(params)``, and optionally ``draw(rng)``
 (default: :func:`draw_parameters`). An answer the statement asks to compute from earlier ones
 is declared with :func:`follows_from`, and ``follow(name, params, earlier)`` recomputes it from
-a student's own earlier values (follow-through credit). ``eulertop new-family NAME --out DIR``
-writes a working, commented example; ``eulertop problems test FILE`` checks one.
+a student's own earlier values (follow-through credit). ``draw_many(rngs)`` and
+``answers_many(params_list)`` are an optional batch form: the same draws and answers for many
+students at once, a rejected one None or an :class:`IllPosed` (``problems/API.md``).
+``eulertop new-family NAME --out DIR`` writes a working, commented example; ``eulertop
+problems test FILE`` checks one.
 
 Examples
 --------
