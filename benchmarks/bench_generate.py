@@ -208,12 +208,13 @@ def render_margin(record: dict) -> list[str]:
         f"questions (every built-in family), one worker process per core, each run a fresh "
         f"process, {record['rounds']} of each alternating: the call took {ms(t_small)} and "
         f"{ms(t_large)} (medians), so **one more student costs {ms(margin)}** of wall time "
-        "(issue 34's target: at most 3 ms). Per student, in one process (CPU time, medians of "
+        "(the target: at most 3 ms). Per student, in one process (CPU time, medians of "
         "the same rounds):",
         "",
         "| per student, all questions | CPU |",
         "|---|---|",
-        f"| drawing them one student at a time (before issue 34) | {ms(parts['one at a time'])} |",
+        f"| drawing them one student at a time (every family, as before batch forms) | "
+        f"{ms(parts['one at a time'])} |",
         f"| drawing them in one pass (families with a batch form: all students at once) | "
         f"{ms(parts['one pass'])} |",
         f"| writing the files of the students drawn — the floor | {ms(parts['files'])} |",
