@@ -15,6 +15,16 @@ and the median over the runs of
 ``--breakdown`` adds one pass in one process that says where the CPU goes: the templates'
 one-time work, drawing the variants, writing the notebooks, and the manifest and key entries.
 
+``--margin`` measures instead what one more student costs (issue 34), against its floor, in
+one run: ``eulertop generate``'s whole call for ``--students`` and for twice as many, in
+fresh processes and alternating (the cost at the margin is the difference over the students
+added, wall time, one worker process per core); and, in this process, per student, drawing
+every question one student at a time, drawing them in one pass (each family with a batch form
+for all the students at once), and writing the files of the students drawn (notebooks,
+manifest and key entries: the floor, what generating costs when drawing is free). Rounds
+alternate them; medians. ``--record FILE`` keeps every timing, ``--page FILE`` writes the
+text into that page's ``bench_generate`` block (``docs/speed.md``).
+
 Run from the repository root (or after ``pip install -e .``):
 ``PYTHONPATH=. python benchmarks/bench_generate.py [--students 300] [--questions 14]
 [--runs 3] [--jobs N] [--breakdown]``
@@ -34,6 +44,9 @@ from pathlib import Path
 
 TARGET_S = 5.0
 ROOT = Path(__file__).resolve().parent.parent
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import speed_page  # noqa: E402  (a module beside this script)
 
 
 def machine() -> str:
@@ -104,6 +117,127 @@ def breakdown(students: int, questions: int) -> dict[str, float]:
     return parts
 
 
+def _timed_child(students: int, questions: int, jobs: int | None, seed: int) -> dict:
+    """One fresh process generating ``students`` (:func:`child`): its JSON line."""
+    import tempfile
+
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        p for p in (str(ROOT), os.environ.get("PYTHONPATH", "")) if p)}
+    with tempfile.TemporaryDirectory() as folder:
+        command = [sys.executable, str(Path(__file__).resolve()), "--child",
+                   str(Path(folder) / "HW"), "--seed", str(seed), "--students", str(students),
+                   "--questions", str(questions), *(["--jobs", str(jobs)] if jobs else [])]
+        done = subprocess.run(command, env=env, capture_output=True, text=True, check=True)
+    return json.loads(done.stdout.splitlines()[-1])
+
+
+def margin_parts(students: int, questions: int, rounds: int) -> dict[str, list]:
+    """In this process, per round: the CPU seconds per student of drawing one student at a
+    time, drawing in one pass, and writing the files of the students drawn."""
+    import tempfile
+
+    from problems.generate import (
+        CompactJSON,
+        Question,
+        class_variants,
+        key_entry,
+        manifest_entry,
+        prepare_families,
+        student_variants,
+    )
+    from problems.notebook import build_notebooks, notebook_text
+
+    families, problems, roster = _setup(students, questions)
+    prepare_families(families, problems)
+    asked = [Question.of(p) for p in problems]
+    ids = [row["id"] for row in roster.rows]
+    drawn: list = []
+
+    def one_at_a_time():
+        drawn[:] = [student_variants(families, asked, 0, sid) for sid in ids]
+
+    def one_pass():
+        drawn[:] = class_variants(families, asked, 0, ids, {})
+
+    def files():
+        with tempfile.TemporaryDirectory() as folder:
+            for row, variants in zip(roster.rows, drawn, strict=True):
+                memo: dict = {}
+                for kind, notebook in zip(("release", "solutions"),
+                                          build_notebooks("benchmark", row, variants),
+                                          strict=True):
+                    text = notebook_text(notebook, validate=False, memo=memo)
+                    (Path(folder) / f"{kind}-{row['id']}.ipynb").write_text(text,
+                                                                             encoding="utf-8")
+                CompactJSON.of(manifest_entry(variants, 0)), CompactJSON.of(key_entry(variants))
+
+    one_pass()
+    times = speed_page.interleaved({"one at a time": one_at_a_time, "one pass": one_pass,
+                                    "files": files}, rounds)
+    return {name: [r["cpu"] / students for r in rows] for name, rows in times.items()}
+
+
+def measure_margin(students: int, questions: int, jobs: int | None, rounds: int,
+                   command: str) -> dict:
+    """Every timing of a ``--margin`` run, as its record holds them."""
+    record = {"bench": "bench_generate", "command": command, "date": speed_page.now(),
+              "machine": speed_page.machine(), "students": [students, 2 * students],
+              "questions": questions, "jobs": jobs, "rounds": rounds}
+    runs: dict[int, list] = {students: [], 2 * students: []}
+    for r in range(rounds):
+        for n in (students, 2 * students) if r % 2 == 0 else (2 * students, students):
+            runs[n].append(_timed_child(n, questions, jobs, seed=r))
+    record["generate"] = {str(n): [x["generate"] for x in found] for n, found in runs.items()}
+    record["per_student_cpu"] = margin_parts(students, questions, rounds)
+    record["load_after"] = [round(x, 2) for x in os.getloadavg()]
+    return record
+
+
+def render_margin(record: dict) -> list[str]:
+    """The page's text, from the record alone."""
+    small, large = record["students"]
+    t_small = statistics.median(record["generate"][str(small)])
+    t_large = statistics.median(record["generate"][str(large)])
+    margin = (t_large - t_small) / (large - small)
+    parts = {k: statistics.median(v) for k, v in record["per_student_cpu"].items()}
+    ms = speed_page.seconds
+    return [
+        speed_page.header(record),
+        "",
+        f"`eulertop generate` of {small} and of {large} students × {record['questions']} "
+        f"questions (every built-in family), one worker process per core, each run a fresh "
+        f"process, {record['rounds']} of each alternating: the call took {ms(t_small)} and "
+        f"{ms(t_large)} (medians), so **one more student costs {ms(margin)}** of wall time "
+        "(the target: at most 3 ms). Per student, in one process (CPU time, medians of "
+        "the same rounds):",
+        "",
+        "| per student, all questions | CPU |",
+        "|---|---|",
+        f"| drawing them one student at a time (every family, as before batch forms) | "
+        f"{ms(parts['one at a time'])} |",
+        f"| drawing them in one pass (families with a batch form: all students at once) | "
+        f"{ms(parts['one pass'])} |",
+        f"| writing the files of the students drawn — the floor | {ms(parts['files'])} |",
+        "",
+        f"Drawing in one pass is {parts['one at a time'] / parts['one pass']:.2f}× drawing "
+        f"one at a time; drawing and writing together are "
+        f"{(parts['one pass'] + parts['files']) / parts['files']:.2f}× the floor.",
+    ]
+
+
+def margin_main(args: argparse.Namespace) -> int:
+    speed_page.check_page(args.page, "bench_generate")
+    command = " ".join(["python benchmarks/bench_generate.py", *sys.argv[1:]])
+    record = measure_margin(args.students, args.questions, args.jobs, args.runs, command)
+    if args.record:
+        speed_page.write_record(args.record, record)
+    lines = render_margin(record)
+    if args.page:
+        speed_page.write_block(args.page, "bench_generate", lines)
+    print("\n".join(lines))
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--students", type=int, default=300)
@@ -113,12 +247,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--breakdown", action="store_true",
                         help="also say where the CPU goes (one more pass, in one process)")
+    parser.add_argument("--margin", action="store_true",
+                        help="what one more student costs, against the floor (issue 34)")
+    parser.add_argument("--record", type=Path, help="with --margin: every timing, as JSON")
+    parser.add_argument("--page", type=Path, help="with --margin: write the text into this "
+                        "page's bench_generate block (docs/speed.md)")
     parser.add_argument("--child", metavar="OUT", help=argparse.SUPPRESS)
     parser.add_argument("--seed", type=int, default=0, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.child:
         child(args.students, args.questions, args.jobs, args.seed, args.child)
         return 0
+    if args.margin:
+        return margin_main(args)
     from problems.templates import FAMILIES
 
     if not FAMILIES:

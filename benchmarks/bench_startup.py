@@ -25,6 +25,13 @@ varies by a third from one minute to the next).
 Run from the repository root: ``PYTHONPATH=. python benchmarks/bench_startup.py [--rounds 4]
 [--small 10] [--large 50] [--no-nbgrader] [--imports] [--work S]``. ``--work S`` adds a cell
 that keeps the kernel's CPU busy for S seconds: the class of a notebook that computes.
+
+Each round also times the floor of a run's start-up (issue 34): a fresh interpreter importing
+what the zygotes preload for these notebooks (IPython, the kernel's modules and, with
+``--imports``, numpy, scipy, sympy and matplotlib) — what any grader that has them loaded
+before the first notebook pays at least once. ``--record FILE`` keeps every timing (JSON),
+``--page FILE`` writes start-up and floor side by side into that page's ``bench_startup``
+block (``docs/speed.md``).
 """
 
 from __future__ import annotations
@@ -126,6 +133,53 @@ def grade(hw: Path, subs: Path, jobs: int) -> tuple[float, float]:
                   str(jobs), "--force"])
 
 
+def floor_command(imports: bool) -> list[str]:
+    """A fresh interpreter importing what the zygotes preload (:func:`floor_modules`)."""
+    return [sys.executable, "-c", f"import {', '.join(floor_modules(imports))}"]
+
+
+def floor_modules(imports: bool) -> tuple[str, ...]:
+    """What a class's zygotes import before the first kernel: IPython, the kernel's modules,
+    and the preloaded packages of what the notebooks import."""
+    from grader.kernels.preload import preload_for
+    from grader.kernels.zygote import KERNEL_MODULES
+
+    packages = {"numpy", "scipy", "sympy", "matplotlib"} if imports else set()
+    return ("IPython", *preload_for(packages), *KERNEL_MODULES)
+
+
+def render(record: dict) -> list[str]:
+    """The page's text, from the record alone."""
+    import speed_page
+
+    floor = statistics.median(record["floor"])
+    rows = []
+    for jobs in ("1", "2"):
+        startup = statistics.median(r[0] for r in record["samples"][jobs])
+        marginal = statistics.median(r[1] for r in record["samples"][jobs])
+        rows.append(f"| `--jobs {jobs}` | **{speed_page.seconds(startup)}** | "
+                    f"{speed_page.seconds(marginal)} | {startup / floor:.2f} |")
+    imported = ("each first importing numpy, scipy, sympy and matplotlib" if record["imports"]
+                else "importing nothing")
+    return [
+        speed_page.header(record),
+        "",
+        f"`eulertop grade --force` of classes of {record['small']} and {record['large']} "
+        f"correct submissions ({imported}), sandboxed, each run a fresh process, "
+        f"{record['rounds']} rounds alternating the order: start-up = what a run pays once "
+        "(the time of the small class less its notebooks at the margin). The floor: a fresh "
+        f"interpreter importing what the zygotes preload ({speed_page.seconds(floor)}, median "
+        "of the same rounds) — paid before any notebook can run.",
+        "",
+        "| | start-up | each notebook at the margin | start-up / floor |",
+        "|---|---|---|---|",
+        *rows,
+        "",
+        "The target: start-up at most 1.5 s with numpy, scipy, sympy and matplotlib "
+        "preloaded, on two cores.",
+    ]
+
+
 def split(small: float, large: float, n_small: int, n_large: int) -> tuple[float, float]:
     """(start-up, marginal) seconds from the times of a small and a large class."""
     marginal = (large - small) / (n_large - n_small)
@@ -145,7 +199,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--work", type=float, default=0.0, metavar="S",
                         help="every submission also computes for S seconds of CPU (a notebook "
                         "that does something, rather than only state its answers)")
+    parser.add_argument("--record", type=Path, help="write every timing into this JSON file")
+    parser.add_argument("--page", type=Path, help="write start-up and its floor into this "
+                        "page's bench_startup block (docs/speed.md)")
     args = parser.parse_args(argv)
+    import speed_page
+
+    speed_page.check_page(args.page, "bench_startup")
+    record = {"bench": "bench_startup", "date": speed_page.now(),
+              "command": " ".join(["python benchmarks/bench_startup.py", *sys.argv[1:]]),
+              "machine": speed_page.machine(), "small": args.small, "large": args.large,
+              "rounds": args.rounds, "imports": args.imports, "floor": []}
     print(f"machine: {machine()}")
     with tempfile.TemporaryDirectory(prefix="bench-startup-") as tmp:
         tmp = Path(tmp)
@@ -166,6 +230,7 @@ def main(argv: list[str] | None = None) -> int:
                 s, m = split(t[args.small][0], t[args.large][0], args.small, args.large)
                 cs, cm = split(t[args.small][1], t[args.large][1], args.small, args.large)
                 samples[jobs].append((s, m, cs, cm))
+                record["floor"].append(timed(floor_command(args.imports))[0])
                 print(f"  round {r + 1} --jobs {jobs}: {args.small} in {t[args.small][0]:.2f} s,"
                       f" {args.large} in {t[args.large][0]:.2f} s -> start-up {s:.2f} s, "
                       f"marginal {1000 * m:.0f} ms/notebook; machine CPU: start-up {cs:.2f} s, "
@@ -199,6 +264,13 @@ def main(argv: list[str] | None = None) -> int:
                       f"{1000 * m:.0f} ms/notebook; eulertop --jobs 2 is "
                       f"{m / medians[2][1]:.1f}x faster at the margin")
         print(f"load average after: {os.getloadavg()[0]:.2f}; {python_speed()}")
+    record["samples"] = {str(j): rows for j, rows in samples.items()}
+    record["load_after"] = [round(x, 2) for x in os.getloadavg()]
+    if args.record:
+        speed_page.write_record(args.record, record)
+    if args.page:
+        speed_page.write_block(args.page, "bench_startup", render(record))
+    print("\n".join(render(record)))
     return 0
 
 

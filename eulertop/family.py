@@ -11,8 +11,10 @@ every family gets (:mod:`problems.genuine`; :func:`statement_number` names a par
 copies). A family may offer written parts — a derivation or an explanation the student writes
 in Markdown, scored by a person against a rubric — with ``written(params)`` returning
 :class:`Written` records; an assignment spec asks for them (``written = true``).
-``eulertop new-family NAME --out DIR`` writes a working, commented example;
-``eulertop problems test FILE`` checks one.
+``draw_many(rngs)`` and ``answers_many(params_list)`` are an optional batch form: the same
+draws and answers for many students at once, a rejected one None or an :class:`IllPosed`
+(``problems/API.md``). ``eulertop new-family NAME --out DIR`` writes a working, commented
+example; ``eulertop problems test FILE`` checks one.
 
 Examples
 --------

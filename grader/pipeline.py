@@ -328,6 +328,8 @@ def grade_assignment(
         # the kernels' zygotes start first: they import while this process writes
         with warm_kernels(warm and bool(to_run) and cluster is None, min(jobs, len(to_run)),
                           isolation, preload_for(packages)) as f:
+            if to_run and cluster is None:
+                prepare_report()  # while the zygotes import: the preflight waits for them
             run = execute if f is None else partial(execute, kernel_factory=f)
             if own_execute and to_run and cluster is None:
                 preflight(run, limits)  # before anything of the class is written
@@ -400,8 +402,6 @@ def _execute_all(to_run, run, execute, limits, jobs, writer, cluster, *, sandbox
         _run_on_cluster(cluster, to_run, execute, limits, writer, sandbox=sandbox, cold=cold,
                         preload=preload)
         return
-    if to_run:
-        prepare_report()
     run_local(to_run, run, limits, jobs, writer)
 
 

@@ -24,6 +24,15 @@ earlier values (follow-through credit), and ``degenerate(name, params, earlier) 
 may say why such values are no ground for that credit — a value that leaves nothing to work out
 (the defaults every family gets, :mod:`problems.genuine`, apply besides).
 
+The batch form (optional): ``draw_many(rngs) -> list`` and ``answers_many(params_list) -> list``
+do for many students at once what ``draw`` and ``answers`` do for one — so that a family can
+call the solver once for a whole class instead of once per student. Element ``i`` of the result
+must be exactly what ``draw(rngs[i])`` (each student's draw from that student's own generator,
+which it uses as ``draw`` would) or ``answers(params_list[i])`` gives; a rejected element is
+None (``draw_many``) or an :class:`IllPosed` instance (``answers_many``), not raised.
+:meth:`Family.generate_many` draws a class through them, one student at a time for a family
+without them: the variants, and so the files, are the same either way.
+
 Drawing is kept apart from answering, so that a key can be recomputed from the parameters an
 assignment recorded: :meth:`Family.variant` is ``answers(params)`` and ``statement(params)``
 and nothing else. A draw that is ill-posed (turning points that nearly coincide, a known mistake
@@ -36,7 +45,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -317,12 +326,48 @@ class Family:
         """The answers a question of this family asks for ``params``: :meth:`answers`, then
         the written parts ``settings`` ask for (its ``written``: all, some by name, or none),
         before the settings change points and tolerances."""
-        answers = self.answers(params)
+        return self.with_written(params, self.answers(params), settings)
+
+    def with_written(self, params: Mapping[str, Any], answers: tuple[Answer, ...],
+                     settings: QuestionSettings | None) -> tuple[Answer, ...]:
+        """``answers`` (of ``params``) and the written parts ``settings`` ask for (its
+        ``written``: all, some by name, or none) after them."""
         chosen = None if settings is None else settings.written
         if not chosen:
             return answers
         parts = self.written(params)
         return answers + tuple(w for w in parts if chosen is True or w.name in chosen)
+
+    @property
+    def batched(self) -> bool:
+        """Whether the family has a batch form (``draw_many`` or ``answers_many``)."""
+        return any(hasattr(self.module, hook) for hook in ("draw_many", "answers_many"))
+
+    def draw_many(self, rngs: Sequence[np.random.Generator]) -> list[dict[str, Any] | None]:
+        """:meth:`draw` of each generator (None: rejected): the family's ``draw_many``, else
+        one at a time."""
+        own = getattr(self.module, "draw_many", None)
+        if own is not None:
+            return self._checked_many("draw_many", own(list(rngs)), len(rngs))
+        drawn = (_unless_ill_posed(self.draw, rng) for rng in rngs)
+        return [None if isinstance(params, IllPosed) else params for params in drawn]
+
+    def answers_many(self, many: Sequence[Mapping[str, Any]]
+                     ) -> list[tuple[Answer, ...] | IllPosed]:
+        """:meth:`answers` of each parameter set (an :class:`IllPosed` where rejected): the
+        family's ``answers_many``, else one at a time."""
+        own = getattr(self.module, "answers_many", None)
+        if own is None or not many:
+            return [_unless_ill_posed(self.answers, params) for params in many]
+        found = self._checked_many("answers_many", own([dict(p) for p in many]), len(many))
+        return [r if isinstance(r, IllPosed) else tuple(r) for r in found]
+
+    def _checked_many(self, hook: str, found: Any, n: int) -> list:
+        found = list(found)
+        if len(found) != n:
+            raise TypeError(f"{self.where}: {hook}() must return one element per student "
+                            f"({n}), got {len(found)}")
+        return found
 
     def statement(self, params: Mapping[str, Any]) -> str:
         return self.module.statement(dict(params))
@@ -414,6 +459,56 @@ class Family:
                 return self.variant(params, answers)
         raise RuntimeError(f"{self.name}: no acceptable draw in {self.max_attempts} attempts")
 
+    def generate_many(self, rngs: Sequence[np.random.Generator],
+                      settings: QuestionSettings | None = None) -> list[Variant]:
+        """:meth:`generate` for each generator — the same variants — drawn together: each
+        round draws once for every student still without a well-posed draw (:meth:`draw_many`)
+        and answers all of them at once (:meth:`answers_many`), up to ``MAX_ATTEMPTS`` rounds.
+
+        Raises
+        ------
+        RuntimeError
+            A student without an acceptable draw in ``MAX_ATTEMPTS`` tries.
+        """
+        rngs = list(rngs)
+        found: list[tuple[dict[str, Any], tuple[Answer, ...]] | None] = [None] * len(rngs)
+        pending = list(range(len(rngs)))
+        for _ in range(self.max_attempts):
+            for i, drawn in zip(pending, self.accepted_many([rngs[i] for i in pending],
+                                                            settings), strict=True):
+                found[i] = drawn
+            pending = [i for i in pending if found[i] is None]
+            if not pending:
+                return [self.variant(params, answers if settings is None
+                                     else settings.adjust_answers(answers))
+                        for params, answers in found]
+        raise RuntimeError(f"{self.name}: no acceptable draw in {self.max_attempts} attempts")
+
+    def accepted_many(self, rngs: Sequence[np.random.Generator],
+                      settings: QuestionSettings | None = None
+                      ) -> list[tuple[dict[str, Any], tuple[Answer, ...]] | None]:
+        """:meth:`accepted` of each generator, the draws and the answers each made at once."""
+        drawn = [None if params is None else self._adjusted(params, rng, settings)
+                 for params, rng in zip(self.draw_many(rngs), rngs, strict=True)]
+        shown = [params for params in drawn if params is not None]
+        answered = iter(self.answers_many(shown))
+        accepted: list[tuple[dict[str, Any], tuple[Answer, ...]] | None] = []
+        for params in drawn:
+            answers = None if params is None else next(answered)
+            ok = answers is not None and not isinstance(answers, IllPosed)
+            accepted.append((params, self.with_written(params, answers, settings)) if ok
+                            else None)
+        return accepted
+
+    def _adjusted(self, params: dict[str, Any], rng: np.random.Generator,
+                  settings: QuestionSettings | None) -> dict[str, Any] | None:
+        """A draw with the settings applied (None: rejected), as the family records it."""
+        if settings is not None:
+            params = _unless_ill_posed(settings.adjust_parameters, params, self, rng)
+            if isinstance(params, IllPosed):
+                return None
+        return None if params is None else self.recorded(params)
+
     def accepted(self, rng: np.random.Generator, settings: QuestionSettings | None = None
                  ) -> tuple[dict[str, Any], tuple[Answer, ...]] | None:
         """One attempt: ``(params, answers)``, or None when the draw was rejected."""
@@ -427,6 +522,14 @@ class Family:
             return params, self.asked(params, settings)
         except IllPosed:
             return None
+
+
+def _unless_ill_posed(function: Callable, *args: Any) -> Any:
+    """``function(*args)``, or the :class:`IllPosed` it raised."""
+    try:
+        return function(*args)
+    except IllPosed as e:
+        return e
 
 
 def check_contract(module: Any, where: str) -> None:
@@ -443,7 +546,7 @@ def check_contract(module: Any, where: str) -> None:
         if not isinstance(text, str) or not text.strip() or "\n" in text:
             raise FamilyError(f"{where}: {attr} must be one line of text, got {text!r}")
     for attr in ("answers", "statement", "draw", "heading", "prepare", "follow", "degenerate",
-                 "written"):
+                 "written", "draw_many", "answers_many"):
         if hasattr(module, attr) and not callable(getattr(module, attr)):
             raise FamilyError(f"{where}: {attr} must be a function")
     from problems.conventions import TOPICS

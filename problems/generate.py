@@ -230,22 +230,80 @@ def student_variants(
     a failing or misbehaving family raises TemplateError."""
     variants = []
     for k, question in enumerate(questions, start=1):
-        if isinstance(question, str):
-            question = Question.of(question)
+        question = Question.of(question) if isinstance(question, str) else question
         if question.written is not None:
             variants.append(written_variant(question.written, question.title))
             continue
         name = pool_member(question.pool, seed, student_id, k, reroll)
-        where = f"template {name!r}, student {student_id!r}, question {k}"
-        try:
-            rng = variant_rng(seed, student_id, k, name, reroll)
-            variant = families[name].generate(rng, question.settings)
-        except Exception as e:
-            raise TemplateError(f"{where} failed: {type(e).__name__}: {e}") from e
-        if not isinstance(variant, Variant) or variant.family != name:
-            raise TemplateError(f"{where}: generate() must return a Variant of family {name!r}")
-        variants.append(variant)
+        variants.append(_one_variant(families, question, k, name, seed, student_id, reroll))
     return tuple(variants)
+
+
+def class_variants(
+    families: Mapping[str, Family],
+    questions: Sequence[Question | str],
+    seed: int,
+    student_ids: Sequence[str],
+    rerolls: Mapping[str, int],
+) -> list[tuple[Variant, ...]]:
+    """:func:`student_variants` of each student — the same variants — question by question:
+    a family with a batch form draws and solves all the students it is given at once
+    (:meth:`Family.generate_many`), the others are drawn one student at a time."""
+    drawn: dict[str, list[Variant]] = {sid: [] for sid in student_ids}
+    for k, question in enumerate(questions, start=1):
+        question = Question.of(question) if isinstance(question, str) else question
+        if question.written is not None:  # a written part alone: nothing drawn
+            for sid in student_ids:
+                drawn[sid].append(written_variant(question.written, question.title))
+            continue
+        by_family: dict[str, list[str]] = {}
+        for sid in student_ids:
+            name = pool_member(question.pool, seed, sid, k, rerolls.get(sid, 0))
+            by_family.setdefault(name, []).append(sid)
+        for name, sids in by_family.items():
+            variants = _question_variants(families, question, k, name, seed, sids, rerolls)
+            for sid, variant in zip(sids, variants, strict=True):
+                drawn[sid].append(variant)
+    return [tuple(drawn[sid]) for sid in student_ids]
+
+
+def _question_variants(families: Mapping[str, Family], question: Question, k: int, name: str,
+                       seed: int, sids: Sequence[str], rerolls: Mapping[str, int]
+                       ) -> list[Variant]:
+    """Question ``k`` of family ``name`` for the students ``sids``: drawn together by a family
+    with a batch form (:meth:`Family.generate_many`; a failure is a TemplateError naming the
+    question and the students), else one student at a time (one naming the student)."""
+    family = families[name]
+    if not family.batched:
+        return [_one_variant(families, question, k, name, seed, sid, rerolls.get(sid, 0))
+                for sid in sids]
+    where = f"template {name!r}, question {k}, students {sids[0]!r} to {sids[-1]!r}"
+    try:
+        rngs = [variant_rng(seed, sid, k, name, rerolls.get(sid, 0)) for sid in sids]
+        variants = family.generate_many(rngs, question.settings)
+    except Exception as e:
+        raise TemplateError(f"{where} (drawn together) failed: {type(e).__name__}: {e}") from e
+    for sid, variant in zip(sids, variants, strict=True):
+        _check_variant(variant, name, f"template {name!r}, student {sid!r}, question {k}")
+    return variants
+
+
+def _one_variant(families: Mapping[str, Family], question: Question, k: int, name: str,
+                 seed: int, student_id: str, reroll: int) -> Variant:
+    """Question ``k`` of ``student_id`` from family ``name``; TemplateError naming them."""
+    where = f"template {name!r}, student {student_id!r}, question {k}"
+    try:
+        rng = variant_rng(seed, student_id, k, name, reroll)
+        variant = families[name].generate(rng, question.settings)
+    except Exception as e:
+        raise TemplateError(f"{where} failed: {type(e).__name__}: {e}") from e
+    _check_variant(variant, name, where)
+    return variant
+
+
+def _check_variant(variant: Any, name: str, where: str) -> None:
+    if not isinstance(variant, Variant) or variant.family != name:
+        raise TemplateError(f"{where}: generate() must return a Variant of family {name!r}")
 
 
 def _compact(obj: Any) -> str:
@@ -345,24 +403,43 @@ def _write_student(
 PARALLEL_MIN = 16
 """Fewer students than this are generated in this process (forking would cost more)."""
 
-CHUNK = 8
-"""Students handed to a worker process at once."""
+BATCH = 32
+"""Most students drawn together (each question of theirs by one :meth:`Family.generate_many`
+per family with a batch form) and handed to a worker process at once."""
+
+MIN_BATCH = 8
+"""Fewest students a worker process is given at once (fewer would not pay for the worker)."""
 
 _FORKED: dict = {}
 """What worker processes inherit by ``fork`` (family modules cannot be pickled)."""
 
 
-def _student_files(
-    task: tuple[Path, str, Mapping[str, str], int, bool],
-) -> tuple[CompactJSON, CompactJSON]:
-    """In a worker process: draw one student's questions, write their two notebooks into the
-    staging folder (schema-checked when the task says so: the first student's), and return
-    their manifest and key entries, encoded."""
-    tmp, title, row, reroll, validate = task
+def _batch_files(
+    task: tuple[Path, str, Sequence[Mapping[str, str]], Mapping[str, int], bool],
+) -> list[tuple[CompactJSON, CompactJSON]]:
+    """In a worker process (or this one): draw a batch of students' questions together, write
+    their notebooks into the staging folder (the first one's schema-checked when the task says
+    so) and return each one's manifest and key entries, encoded, in the batch's order."""
+    tmp, title, rows, rerolls, validate = task
     families, questions, seed = _FORKED["families"], _FORKED["questions"], _FORKED["seed"]
-    variants = student_variants(families, questions, seed, row["id"], reroll)
-    _write_student(tmp, title, row, variants, validate, families, _FORKED.get("install"))
-    return CompactJSON.of(manifest_entry(variants, reroll)), CompactJSON.of(key_entry(variants))
+    drawn = class_variants(families, questions, seed, [row["id"] for row in rows], rerolls)
+    entries = []
+    for i, (row, variants) in enumerate(zip(rows, drawn, strict=True)):
+        _write_student(tmp, title, row, variants, validate and i == 0, families,
+                       _FORKED.get("install"))
+        reroll = rerolls.get(row["id"], 0)
+        entries.append((CompactJSON.of(manifest_entry(variants, reroll)),
+                        CompactJSON.of(key_entry(variants))))
+    return entries
+
+
+def _batch_tasks(tmp: Path, title: str, rows: Sequence[Mapping[str, str]],
+                 rerolls: Mapping[str, int], workers: int = 1) -> list[tuple]:
+    """The roster in batches, at most :data:`BATCH` each and at least one per worker (the
+    first student's notebooks schema-checked)."""
+    size = max(1, min(BATCH, -(-len(rows) // workers)))
+    return [(tmp, title, tuple(rows[i:i + size]), rerolls, i == 0)
+            for i in range(0, len(rows), size)]
 
 
 def _students_in_parallel(
@@ -371,7 +448,8 @@ def _students_in_parallel(
     install: str | None = None,
 ) -> Iterator[tuple[CompactJSON, CompactJSON]]:
     """``(manifest entry, key entry)`` of each row, in roster order, computed by ``jobs``
-    forked processes that each write their students' notebooks (:func:`_student_files`).
+    forked processes that each draw batches of students and write their notebooks
+    (:func:`_batch_files`).
 
     Every student's questions depend only on (seed, id, question, family, reroll), and each
     file is written by exactly one process, so the files are byte-identical to a serial run.
@@ -381,10 +459,10 @@ def _students_in_parallel(
 
     prepare_families(families, questions)  # once here, inherited by every worker
     _FORKED.update(families=families, questions=tuple(questions), seed=seed, install=install)
-    tasks = [(tmp, title, row, rerolls.get(row["id"], 0), i == 0) for i, row in enumerate(rows)]
     try:
         with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("fork")) as pool:
-            yield from pool.map(_student_files, tasks, chunksize=CHUNK)
+            for entries in pool.map(_batch_files, _batch_tasks(tmp, title, rows, rerolls, jobs)):
+                yield from entries
     finally:
         _FORKED.clear()
 
@@ -413,7 +491,7 @@ def _parallel_jobs(jobs: int | None, students: int) -> int:
     if jobs is None:
         jobs = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else \
             os.cpu_count() or 1
-    return max(1, min(jobs, -(-students // CHUNK)))
+    return max(1, min(jobs, -(-students // MIN_BATCH)))
 
 
 def _write_json(folder: Path, manifest: dict, key: dict) -> None:
@@ -664,13 +742,13 @@ def _student_entries(tmp: Path, plan: _Plan, rows: Sequence[Mapping[str, str]],
 
 def _students_here(tmp: Path, plan: _Plan, rows: Sequence[Mapping[str, str]]
                    ) -> Iterator[tuple[CompactJSON, CompactJSON]]:
-    """:func:`_student_files` of each row in this process (the schema checked for the
-    first)."""
+    """:func:`_batch_files` of each batch of rows in this process (the schema checked for the
+    first student)."""
     _FORKED.update(families=plan.families, questions=plan.questions, seed=plan.seed,
                    install=plan.install)
     try:
-        for i, row in enumerate(rows):
-            yield _student_files((tmp, plan.title, row, plan.rerolls.get(row["id"], 0), i == 0))
+        for task in _batch_tasks(tmp, plan.title, rows, plan.rerolls):
+            yield from _batch_files(task)
     finally:
         _FORKED.clear()
 

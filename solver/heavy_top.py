@@ -51,6 +51,7 @@ from solver.nutation import (
     NutationCubic,
     cos_beta_of,
     nutation_cubic,
+    nutation_integrals,
     nutation_period_of,
     precession_angle_of,
     precession_rate_at,
@@ -94,7 +95,7 @@ def _state(I1, I3, Mgl, beta0, alpha_dot0, beta_dot0, gamma_dot0):
         i1, i3, positive("Mgl", Mgl), _tilt("beta0", beta0), as_real("alpha_dot0", alpha_dot0),
         as_real("beta_dot0", beta_dot0), as_real("gamma_dot0", gamma_dot0),
     )
-    return arrays[0].shape, [np.ravel(x).astype(float) for x in arrays]
+    return arrays[0].shape, [np.ravel(x).astype(float, copy=False) for x in arrays]
 
 
 def _cubic(*state) -> tuple[tuple[int, ...], NutationCubic, list[NDArray[np.float64]]]:
@@ -228,7 +229,11 @@ def turning_points(
 def _sleeping(flat) -> NDArray[np.bool_]:
     """Started exactly upright and at rest in β, with a stable spin (R19): a sleeping top."""
     i1, i3, mgl, b0, _, bd, _ = flat
-    return (b0 == 0) & (bd == 0) & sleeping_top_stable(i1, i3, mgl, _omega3(flat))
+    upright = (b0 == 0) & (bd == 0)
+    if upright.any():  # rare: the stability test only where it can matter
+        upright[upright] = sleeping_top_stable(i1[upright], i3[upright], mgl[upright],
+                                               _omega3([x[upright] for x in flat]))
+    return upright
 
 
 def _revolves(cubic: NutationCubic) -> NDArray[np.bool_]:
@@ -284,12 +289,16 @@ def nutation_period(
     return _out(_period(cubic, flat), shape)
 
 
-def _mean_rate(cubic: NutationCubic, flat, period) -> NDArray[np.float64]:
+def _mean_rate(cubic: NutationCubic, flat, period, angle=None) -> NDArray[np.float64]:
     sleeping = _sleeping(flat)
+    if angle is None:
+        angle = precession_angle_of(cubic)
     with np.errstate(invalid="ignore"):
-        mean = precession_angle_of(cubic) / period
-    steady_rate = precession_rate_at(cubic, 1)
-    mean = np.where(cubic.steady, steady_rate, np.where(np.isfinite(period), mean, np.nan))
+        mean = angle / period
+    mean = np.where(np.isfinite(period), mean, np.nan)
+    steady = cubic.steady
+    if steady.any():
+        mean = np.where(steady, precession_rate_at(cubic, 1), mean)
     return np.where(sleeping, np.nan, mean)
 
 
@@ -318,8 +327,10 @@ def nutation(
     """Turning points, nutation period and mean precession rate in one vectorised pass (R17, R20).
 
     The same values as :func:`turning_points`, :func:`nutation_period` and
-    :func:`mean_precession_rate`, from one solution of the cubic instead of three: the call to
-    use for many tops at once (the bench times it on 10^5).
+    :func:`mean_precession_rate`, from one solution of the cubic instead of three and one
+    ``R_F`` for both integrals: the call to use for many tops at once. It solves them in blocks
+    of ``_BLOCK``, whose temporaries stay in the processor's cache; ``benchmarks/
+    bench_heavy_top.py`` times it on 10^6 tops against the special functions it calls.
 
     Returns
     -------
@@ -328,14 +339,25 @@ def nutation(
         of the broadcast shape of the inputs, NaN where the quantity does not exist (see the
         single-quantity functions).
     """
-    shape, cubic, flat = _cubic(I1, I3, Mgl, beta0, alpha_dot0, beta_dot0, gamma_dot0)
-    period = _period(cubic, flat)
-    return {
-        "beta1": _out(cubic.beta[:, 1], shape),
-        "beta2": _out(cubic.beta[:, 0], shape),
-        "nutation_period": _out(period, shape),
-        "mean_precession_rate": _out(_mean_rate(cubic, flat, period), shape),
-    }
+    shape, flat = _state(I1, I3, Mgl, beta0, alpha_dot0, beta_dot0, gamma_dot0)
+    out = {key: np.empty(flat[0].size) for key in _NUTATION}
+    for start in range(0, flat[0].size, _BLOCK):
+        block = slice(start, start + _BLOCK)
+        for key, column in zip(_NUTATION, _nutation_block([x[block] for x in flat]), strict=True):
+            out[key][block] = column
+    return {key: _out(column, shape) for key, column in out.items()}
+
+
+_NUTATION = ("beta1", "beta2", "nutation_period", "mean_precession_rate")
+_BLOCK = 16384  # tops solved together: a block's temporaries stay in the processor's cache
+
+
+def _nutation_block(flat):
+    """:func:`nutation`'s four columns for validated 1-D states."""
+    cubic = nutation_cubic(*flat)
+    period, angle = nutation_integrals(cubic)
+    beta = cubic.beta
+    return beta[:, 1], beta[:, 0], period, _mean_rate(cubic, flat, period, angle)
 
 
 def cos_beta(
@@ -417,36 +439,35 @@ def undefined_reasons(table: dict[str, NDArray]) -> NDArray[np.object_]:
     field that has no finite value (``{}`` if none): the documented reasons of ``REASONS``.
 
     A NaN or infinity in the table is never left unexplained: a non-finite value outside the
-    documented cases is reported as ``REASONS["overflow"]``.
+    documented cases is reported as ``REASONS["overflow"]``. Vectorised: the reasons are
+    decided column by column, and a dict is written out only for the rows that have one.
     """
-    n = len(table["motion"])
-    out = np.empty(n, dtype=object)
-    for i in range(n):
-        out[i] = _row_reasons(table, i)
+    columns = [(key, bad, _why(table, key)) for key in _EXPLAINED
+               if (bad := ~np.isfinite(table[key])).any()]
+    slow, fast = table["steady_precession_rates"].T
+    steady = np.where(~np.isfinite(slow), "no_steady", np.where(~np.isfinite(fast),
+                                                               "horizontal", ""))
+    out = np.empty(len(table["motion"]), dtype=object)
+    out[:] = [{} for _ in range(out.size)]
+    rows = (steady != "") | np.logical_or.reduce([bad for _, bad, _ in columns] or [False])
+    for i in np.flatnonzero(rows):
+        out[i].update((key, REASONS[why[i]]) for key, bad, why in columns if bad[i])
+        if steady[i]:
+            out[i]["steady_precession_rates"] = REASONS[steady[i]]
     return out
 
 
-def _row_reasons(table, i) -> dict[str, str]:
-    reasons: dict[str, str] = {}
-    sleeping = table["motion"][i] == "sleeping"
-    infinite = not np.isfinite(table["nutation_period"][i])
-    for key in ("alpha_dot_beta1", "alpha_dot_beta2", "nutation_period", "mean_precession_rate",
-                "p_alpha", "p_gamma", "E_prime", "beta1", "beta2"):
-        if np.isfinite(table[key][i]):
-            continue
-        if sleeping and key != "nutation_period":
-            reasons[key] = REASONS["sleeping"]
-        elif infinite and key in ("nutation_period", "mean_precession_rate") and (
-                np.isinf(table["nutation_period"][i])):
-            reasons[key] = REASONS["unstable_rest"]
-        else:
-            reasons[key] = REASONS["overflow"]
-    slow, fast = table["steady_precession_rates"][i]
-    if not np.isfinite(slow):
-        reasons["steady_precession_rates"] = REASONS["no_steady"]
-    elif not np.isfinite(fast):
-        reasons["steady_precession_rates"] = REASONS["horizontal"]
-    return reasons
+# The fields whose NaN or infinity undefined_reasons explains, in the order it lists them.
+_EXPLAINED = ("alpha_dot_beta1", "alpha_dot_beta2", "nutation_period", "mean_precession_rate",
+              "p_alpha", "p_gamma", "E_prime", "beta1", "beta2")
+
+
+def _why(table, key) -> NDArray[np.str_]:
+    """The ``REASONS`` key of a non-finite ``table[key]``, row by row."""
+    sleeping = (table["motion"] == "sleeping") & (key != "nutation_period")
+    unstable = np.isinf(table["nutation_period"]) & (
+        key in ("nutation_period", "mean_precession_rate"))
+    return np.where(sleeping, "sleeping", np.where(unstable, "unstable_rest", "overflow"))
 
 
 def solve_heavy_top(

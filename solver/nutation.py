@@ -19,11 +19,13 @@ initial rates, where nothing cancels::
 
 * ``β̇0 = 0``: ``w = 0`` is an exact root; it is deflated analytically, and the remaining
   quadratic ``B w² + c2 w + c1`` is solved in the cancellation-free ("citardauq") form.
-* ``β̇0 ≠ 0``: the largest root ``w3`` is found by Newton's method started above it (a cubic
-  with three real roots is increasing and convex there, so the iterates decrease monotonically;
-  they stop when they stop decreasing), then Vieta gives ``w1 + w2 = (c1 + c0/w3)/(B w3)`` and
-  ``w1 w2 = −c0/(B w3)``; the discriminant of that quadratic is a sum of two non-negative terms,
-  so the two nutation limits — however close — come out to full relative accuracy.
+* ``β̇0 ≠ 0``: the largest root ``w3`` is found by Newton's method started above it — at the
+  trigonometric (Viète) root raised a little, where that is provably above it, else at
+  Fujiwara's bound (a cubic with three real roots is increasing and convex there, so the
+  iterates decrease monotonically; they stop when they stop decreasing), then Vieta gives
+  ``w1 + w2 = (c1 + c0/w3)/(B w3)`` and ``w1 w2 = −c0/(B w3)``; the discriminant of that
+  quadratic is a sum of two non-negative terms, so the two nutation limits — however close —
+  come out to full relative accuracy.
 
 Distances to the poles ``1 ∓ u`` are carried separately (``1 − u0 = 2 sin²(β0/2)``). Where
 ``1 + u1`` would be a cancelling difference it is taken from the exact identity
@@ -52,13 +54,15 @@ __all__ = [
     "NutationCubic",
     "cos_beta_of",
     "nutation_cubic",
+    "nutation_integrals",
     "nutation_period_of",
     "precession_angle_of",
     "precession_rate_at",
 ]
 
 _EPS = np.finfo(float).eps
-_NEWTON_MAX_ITER = 200  # monotone Newton: ~10 linear steps from the bound, then quadratic
+_TINY = np.finfo(float).tiny
+_NEWTON_MAX_ITER = 200  # monotone Newton: ~10 linear steps from Fujiwara's bound, then quadratic
 
 
 @dataclass(frozen=True)
@@ -154,37 +158,69 @@ def nutation_cubic(
     other root of the deflated quadratic: a separation ``u2 − u1`` below it is the rounding of
     ``c1`` (e.g. a steady-precession rate typed with 16 digits), not nutation.
     """
-    u0, s0 = np.cos(beta0), np.sin(beta0)
-    s2 = s0 * s0
-    hm, hp = 2.0 * np.sin(0.5 * beta0) ** 2, 2.0 * np.cos(0.5 * beta0) ** 2
+    u0, s2, hm, hp = _tilt_terms(beta0)
     B = 2.0 * Mgl / I1
     a = I3 * (alpha_dot0 * u0 + gamma_dot0) / I1
     Q = alpha_dot0 * s2
     P = beta_dot0**2 + alpha_dot0**2 * s2
     c0 = s2 * beta_dot0**2
-    c1_terms = np.stack([-B * s2, -2.0 * u0 * P, 2.0 * a * Q])
-    c1 = c1_terms.sum(axis=0)
+    c1_terms = (-B * s2, -2.0 * u0 * P, 2.0 * a * Q)
+    c1 = c1_terms[0] + c1_terms[1] + c1_terms[2]
     c2 = 2.0 * u0 * B - P - a * a
 
     exact = c0 == 0
-    w = np.empty((u0.size, 3))
-    big = np.ones_like(u0)  # B·(the deflated quadratic's large root): scale for steady_tolerance
-    if np.any(exact):
-        w[exact], big[exact] = _roots_with_zero(B[exact], c1[exact], c2[exact])
-    if np.any(~exact):
-        g = ~exact
-        w[g] = _roots_general(B[g], c0[g], c1[g], c2[g], hm[g])
-    w.sort(axis=1)
-    steady_tol = 32.0 * _EPS * np.abs(c1_terms).max(axis=0) / np.maximum(np.abs(big), 1e-300)
+    w, big = _roots(exact, B, c0, c1, c2, hm)
+    c1_scale = np.maximum(np.maximum(np.abs(c1_terms[0]), np.abs(c1_terms[1])),
+                          np.abs(c1_terms[2]))
+    steady_tol = 32.0 * _EPS * c1_scale / np.maximum(np.abs(big), 1e-300)
 
     b_minus_a = Q - a * hm
     b_plus_a = Q + a * hp
     s1, s2, d = _upper_pole_distances(hm, w, B, a, Q, P, b_minus_a)
     t1, t2, t3 = _lower_pole_distances(hp, w, B, a, Q, b_plus_a)
-    one_minus_u = np.stack([s1, s2, np.zeros_like(s1)], axis=1)
-    one_plus_u = np.stack([t1, t2, t3], axis=1)
+    one_minus_u = _columns(s1, s2, np.zeros_like(s1))
+    one_plus_u = _columns(t1, t2, t3)
     return NutationCubic(u0, hm, hp, B, a, Q, b_minus_a, b_plus_a, c0, c1, c2, w,
                          one_minus_u, one_plus_u, d, exact, steady_tol)
+
+
+def _tilt_terms(beta0):
+    """``cos β0``, ``sin²β0``, ``1 − cos β0 = 2 sin²(β0/2)`` and ``1 + cos β0 = 2 cos²(β0/2)``,
+    each to full relative accuracy."""
+    half_sin, half_cos = np.sin(0.5 * beta0), np.cos(0.5 * beta0)
+    s0 = np.sin(beta0)
+    return np.cos(beta0), s0 * s0, 2.0 * half_sin * half_sin, 2.0 * half_cos * half_cos
+
+
+def _columns(*columns):
+    """An (n, k) array whose columns are contiguous in memory (each is read as a whole)."""
+    return np.stack(columns).T
+
+
+def _roots(exact, B, c0, c1, c2, hm):
+    """The cubic's roots ``w``, (n, 3) ascending, and ``big`` (see :func:`_roots_with_zero`).
+
+    Where ``β̇0 = 0`` (``exact``) the root ``w = 0`` is deflated exactly; the other tops go
+    through Newton. A batch mixing both computes both for every top and picks, which costs
+    less than gathering each kind's rows apart.
+    """
+    if exact.all():
+        w, big = _roots_with_zero(B, c1, c2)
+        return _ascending(*w), big
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w, big = _roots_general(B, c0, c1, c2, hm), np.ones_like(B)
+        if exact.any():
+            zero, q = _roots_with_zero(B, c1, c2)
+            w, big = np.where(exact, zero, w), np.where(exact, q, big)
+    return _ascending(*w), big
+
+
+def _ascending(x, y, z):
+    """The three roots of each top in ascending order, (n, 3): a sorting network of elementwise
+    minima and maxima (a NaN root, from a state out of double range, makes all three NaN)."""
+    low, high = np.minimum(x, y), np.maximum(x, y)
+    middle, top = np.minimum(high, z), np.maximum(high, z)
+    return _columns(np.minimum(low, middle), np.maximum(low, middle), top)
 
 
 def _roots_with_zero(B, c1, c2):
@@ -193,33 +229,70 @@ def _roots_with_zero(B, c1, c2):
     q = -0.5 * (c2 + np.where(c2 < 0, -1.0, 1.0) * np.sqrt(disc))
     with np.errstate(divide="ignore", invalid="ignore"):
         small = np.where(q != 0, c1 / q, 0.0)
-    return np.stack([np.zeros_like(B), q / B, small], axis=1), q
+    return np.stack([np.zeros_like(B), q / B, small]), q
 
 
 def _roots_general(B, c0, c1, c2, hm):
     """Roots of ``B w³ + c2 w² + c1 w + c0`` with ``c0 > 0``: Newton for w3, then Vieta."""
-    # Fujiwara's bound exceeds every root's magnitude; w3 ≥ 1 − u0 anyway.
-    bound = 2.0 * np.maximum.reduce(
-        [np.abs(c2 / B), np.sqrt(np.abs(c1 / B)), np.cbrt(np.abs(c0 / (2.0 * B)))]
-    )
-    w3 = np.maximum(bound, hm) * (1.0 + 4.0 * _EPS) + np.finfo(float).tiny
-    active = np.ones(B.shape, dtype=bool)
-    for _ in range(_NEWTON_MAX_ITER):
-        x = w3[active]
-        fx = ((B[active] * x + c2[active]) * x + c1[active]) * x + c0[active]
-        dfx = (3.0 * B[active] * x + 2.0 * c2[active]) * x + c1[active]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            nxt = x - fx / dfx
-        moving = (fx > 0) & (nxt < x)
-        x[moving] = nxt[moving]
-        w3[active] = x
-        active[np.flatnonzero(active)[~moving]] = False
-        if not active.any():
-            break
+    w3 = _newton_from_above(B, c0, c1, c2, _start_above_w3(B, c0, c1, c2, hm))
     s = (c1 + c0 / w3) / (B * w3)  # w1 + w2
     p = -c0 / (B * w3)  # w1 w2 < 0
     q = 0.5 * (s + np.where(s < 0, -1.0, 1.0) * np.sqrt(s * s - 4.0 * p))
-    return np.stack([q, p / q, w3], axis=1)
+    return np.stack([q, p / q, w3])
+
+
+def _start_above_w3(B, c0, c1, c2, hm):
+    """A start for Newton above the largest root ``w3``, close to it where that can be proved.
+
+    The trigonometric (Viète) formula for the largest root, raised by 10⁻⁹ of its scale, is
+    kept where ``f > 0`` and ``f' > 0`` right of the inflection point — which puts it above
+    ``w3`` — so Newton needs two or three steps; elsewhere Fujiwara's bound, which exceeds
+    every root's magnitude (``w3 ≥ 1 − u0`` anyway).
+    """
+    shift = c2 / (3.0 * B)
+    a1 = c1 / B
+    p = a1 - 3.0 * shift * shift  # t³ + p t + q = 0 in t = w + shift
+    q = shift * (2.0 * shift * shift - a1) + c0 / B
+    with np.errstate(invalid="ignore", divide="ignore"):
+        m = 2.0 * np.sqrt(-p / 3.0)
+        t = m * np.cos(np.arccos(np.clip(3.0 * q / (p * m), -1.0, 1.0)) / 3.0)
+    x = t - shift
+    x += 1e-9 * (np.abs(x) + np.abs(shift) + m)
+    fx = ((B * x + c2) * x + c1) * x + c0
+    slope = (3.0 * B * x + 2.0 * c2) * x + c1
+    above = (fx > 0) & (slope > 0) & (x > -shift)  # False where NaN
+    if above.all():
+        return x
+    bound = 2.0 * np.maximum.reduce(
+        [np.abs(3.0 * shift), np.sqrt(np.abs(a1)), np.cbrt(np.abs(c0 / (2.0 * B)))]
+    )
+    fujiwara = np.maximum(bound, hm) * (1.0 + 4.0 * _EPS) + _TINY
+    return np.where(above, x, fujiwara)
+
+
+def _newton_from_above(B, c0, c1, c2, w3):
+    """Newton's method on the cubic from ``w3`` above its largest root.
+
+    Above that root the cubic is increasing and convex, so the iterates decrease monotonically;
+    each stops when it stops decreasing. All tops step together while many still move (no
+    indexing), the stragglers (a near-double ``w2 ≈ w3`` converges linearly) on their own.
+    """
+    for _ in range(_NEWTON_MAX_ITER):
+        fx = ((B * w3 + c2) * w3 + c1) * w3 + c0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            nxt = w3 - fx / ((3.0 * B * w3 + 2.0 * c2) * w3 + c1)
+        moving = (fx > 0) & (nxt < w3)
+        count = np.count_nonzero(moving)
+        if count == 0:
+            return w3
+        w3 = np.where(moving, nxt, w3)
+        if 16 * count < w3.size:
+            break
+    else:
+        return w3
+    rows = np.flatnonzero(moving)
+    w3[rows] = _newton_from_above(B[rows], c0[rows], c1[rows], c2[rows], w3[rows])
+    return w3
 
 
 def _upper_pole_distances(hm, w, B, a, Q, P, b_minus_a):
@@ -240,31 +313,34 @@ def _upper_pole_distances(hm, w, B, a, Q, P, b_minus_a):
     the planar pendulum) makes ``p = 0`` and the pole an exact root.
     """
     s1 = hm - w[:, 0]
-    direct_s2 = np.maximum(hm - w[:, 1], 0.0)
-    direct_d = np.maximum(w[:, 2] - hm, 0.0)
-    k_terms = np.abs(P) + np.abs(a * Q) + hm * (a * a + B)
-    K = P - a * Q + hm * (a * a - B)
+    aq, aa = a * Q, a * a
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         p = b_minus_a * b_minus_a / (B * s1)
-        S = (p - 2.0 * K / B) / s1
+        S = (p - 2.0 * (P - aq + hm * (aa - B)) / B) / s1  # K = P − a Q + (1 − u0)(a² − B)
         root = np.sqrt(S * S + 4.0 * p)
-        q = 0.5 * (S + np.where(S < 0, -1.0, 1.0) * root)  # the larger-magnitude root
+        q = 0.5 * (S + np.copysign(root, S))  # the larger-magnitude root (S is never −0)
         small = np.where(q != 0, -p / q, 0.0)  # the other root, a quotient: relative accuracy
+        k_terms = np.abs(P) + np.abs(aq) + hm * (aa + B)
         err_big = 8.0 * _EPS * ((p + 2.0 * k_terms / B) / s1 + root + np.abs(S))
         rel_p = 4.0 * _EPS * (np.abs(Q) + np.abs(a) * hm) / np.abs(b_minus_a) + 4.0 * _EPS
-        rel_small = rel_p + err_big / np.abs(q)
+        err_small = np.abs(small) * (rel_p + err_big / np.abs(q))
     up = S >= 0  # q = 1 − u2 (u2 far from the pole) or q = 1 − u3 (u3 far from it)
-    pole_s2 = np.where(up, q, small)
-    pole_d = -np.where(up, small, q)
-    err_pole_s2 = np.where(up, err_big, np.abs(small) * rel_small)
-    err_pole_d = np.where(up, np.abs(small) * rel_small, err_big)
-    err_s2 = 8.0 * _EPS * (hm + np.abs(w[:, 1]))
-    err_d = 8.0 * _EPS * (hm + np.abs(w[:, 2]))
-    exact = b_minus_a == 0
-    good = np.isfinite(pole_s2) & np.isfinite(pole_d)
-    s2 = np.where(good & (exact | (err_pole_s2 < err_s2)), np.maximum(pole_s2, 0.0), direct_s2)
-    d = np.where(good & (exact | (err_pole_d < err_d)), np.maximum(pole_d, 0.0), direct_d)
+    forced = np.isfinite(q) & np.isfinite(small)
+    usable = forced & (b_minus_a != 0)
+    forced &= b_minus_a == 0
+    s2 = _better(np.where(up, q, small), np.where(up, err_big, err_small), hm - w[:, 1],
+                 hm + np.abs(w[:, 1]), usable, forced)
+    d = _better(-np.where(up, small, q), np.where(up, err_small, err_big), w[:, 2] - hm,
+                hm + np.abs(w[:, 2]), usable, forced)
     return s1, s2, d
+
+
+def _better(pole, err_pole, direct, scale, usable, forced):
+    """A pole distance (clipped at 0): the re-solved ``pole`` form where ``forced``, or where
+    ``usable`` and its rounding estimate ``err_pole`` is below the direct difference's
+    (``8 ε scale``); the ``direct`` difference elsewhere."""
+    use = forced | (usable & (err_pole < 8.0 * _EPS * scale))
+    return np.maximum(np.where(use, pole, direct), 0.0)
 
 
 def _lower_pole_distances(hp, w, B, a, Q, b_plus_a):
@@ -322,9 +398,19 @@ def nutation_period_of(cubic: NutationCubic) -> NDArray[np.float64]:
     ``k → 1`` (``u3 − u2 → 0``) loses nothing; it is ``inf`` at ``u2 = u3`` (the asymptotic
     fall of an unstable sleeping top).
     """
-    y, z = _gaps(cubic)
+    return _period_from(elliprf(0.0, *_gaps(cubic)), cubic)
+
+
+def _period_from(rf, cubic):
     with np.errstate(divide="ignore"):
-        return 4.0 * elliprf(0.0, y, z) / np.sqrt(cubic.B)
+        return 4.0 * rf / np.sqrt(cubic.B)
+
+
+def nutation_integrals(cubic: NutationCubic) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """:func:`nutation_period_of` and :func:`precession_angle_of` from one evaluation of
+    ``R_F(0, u3 − u2, u3 − u1)``, which both need."""
+    rf = elliprf(0.0, *_gaps(cubic))
+    return _period_from(rf, cubic), precession_angle_of(cubic, rf)
 
 
 def _gaps(cubic):
@@ -334,7 +420,9 @@ def _gaps(cubic):
     return d + cubic.one_minus_u[:, 1], d + cubic.one_minus_u[:, 0]
 
 
-def precession_angle_of(cubic: NutationCubic) -> NDArray[np.float64]:
+def precession_angle_of(
+    cubic: NutationCubic, rf: NDArray[np.float64] | None = None
+) -> NDArray[np.float64]:
     """Precession ``Δα`` over one nutation period (R20), rad, without cancellation.
 
     ``Δα = 2 ∫_{u1}^{u2} (b − a u) / ((1 − u²) √f) du = [(b − a) J₊ + (b + a) J₋] / √B`` with
@@ -366,41 +454,38 @@ def precession_angle_of(cubic: NutationCubic) -> NDArray[np.float64]:
     Each top uses the form in which its terms share one sign. A top whose axis passes through a
     pole (``b = ±a``, ``sgn 0 = 0``) has the mean of the finite ``α̇`` between the jumps of π
     that ``α`` makes there (the average of the two one-sided limits); the planar pendulum
-    (``a = b = 0``) has ``Δα = 0``.
+    (``a = b = 0``) has ``Δα = 0``. ``rf``, if given, is ``R_F(0, y, z)`` already evaluated.
     """
+    y, z = _gaps(cubic)
+    if rf is None:
+        rf = elliprf(0.0, y, z)
     opposite = cubic.b_minus_a * cubic.b_plus_a < 0
-    out = np.empty(cubic.B.shape)
-    same = ~opposite
-    if np.any(same):
-        out[same] = _same_sign_form(cubic, same)
-    if np.any(opposite):
-        out[opposite] = _split_form(cubic, opposite)
-    return out
-
-
-def _same_sign_form(cubic: NutationCubic, rows) -> NDArray[np.float64]:
-    """Form 1 of :func:`precession_angle_of` for the tops ``rows``."""
-    y, z = (g[rows] for g in _gaps(cubic))
-    w1, w2 = cubic.w[rows, 0], cubic.w[rows, 1]
-    om1, om2 = cubic.one_minus_u[rows, 0], cubic.one_minus_u[rows, 1]
-    op1, op2 = cubic.one_plus_u[rows, 0], cubic.one_plus_u[rows, 1]
-    bma, bpa, gap = cubic.b_minus_a[rows], cubic.b_plus_a[rows], w2 - w1
+    om, op = cubic.one_minus_u, cubic.one_plus_u
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        value_terms = _ratio(bma, om1) + _ratio(bpa, op2)
-        rj_plus = _product(bma, z / om1**2 * elliprj(0.0, y, z, z * om2 / om1))
-        rj_minus = _product(bpa, y / op2**2 * elliprj(0.0, y, z, y * op1 / op2))
-        total = 2.0 * elliprf(0.0, y, z) * value_terms + (2.0 / 3.0) * gap * (rj_plus + rj_minus)
-    return total / np.sqrt(cubic.B[rows])
+        # each top's two third-kind integrals, those of its form: two R_J calls for all tops
+        rj_plus = elliprj(0.0, y, z, np.where(opposite, cubic.u3_minus_one,
+                                                z * om[:, 1] / om[:, 0]))
+        rj_minus = elliprj(0.0, y, z, np.where(opposite, op[:, 2], y * op[:, 0] / op[:, 1]))
+        angle = np.where(opposite, _split_form(cubic, rj_plus, rj_minus),
+                         _same_sign_form(cubic, rj_plus, rj_minus, rf, y, z))
+    return angle
 
 
-def _split_form(cubic: NutationCubic, rows) -> NDArray[np.float64]:
-    """Form 2 of :func:`precession_angle_of` (π split off) for the tops ``rows``."""
-    y, z = (g[rows] for g in _gaps(cubic))
-    bma, bpa = cubic.b_minus_a[rows], cubic.b_plus_a[rows]
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        split = (2.0 / 3.0) * (_product(bpa, elliprj(0.0, y, z, cubic.one_plus_u[rows, 2]))
-                               - _product(bma, elliprj(0.0, y, z, cubic.u3_minus_one[rows])))
-    return np.pi * (np.sign(bma) + np.sign(bpa)) + split / np.sqrt(cubic.B[rows])
+def _same_sign_form(cubic: NutationCubic, rj_plus, rj_minus, rf, y, z) -> NDArray[np.float64]:
+    """Form 1 of :func:`precession_angle_of`, given its ``R_J`` and ``R_F``."""
+    om1, op2 = cubic.one_minus_u[:, 0], cubic.one_plus_u[:, 1]
+    bma, bpa = cubic.b_minus_a, cubic.b_plus_a
+    value_terms = _ratio(bma, om1) + _ratio(bpa, op2)
+    third_kind = _product(bma, z / om1**2 * rj_plus) + _product(bpa, y / op2**2 * rj_minus)
+    gap = cubic.w[:, 1] - cubic.w[:, 0]
+    return (2.0 * rf * value_terms + (2.0 / 3.0) * gap * third_kind) / np.sqrt(cubic.B)
+
+
+def _split_form(cubic: NutationCubic, rj_plus, rj_minus) -> NDArray[np.float64]:
+    """Form 2 of :func:`precession_angle_of` (π split off), given its two ``R_J``."""
+    bma, bpa = cubic.b_minus_a, cubic.b_plus_a
+    split = (2.0 / 3.0) * (_product(bpa, rj_minus) - _product(bma, rj_plus))
+    return np.pi * (np.sign(bma) + np.sign(bpa)) + split / np.sqrt(cubic.B)
 
 
 def _product(coef, integral):

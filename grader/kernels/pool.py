@@ -446,7 +446,8 @@ class Slot:
     """
 
     def __init__(self, folder: Path, preload: Sequence[str] | None = None,
-                 sandbox: Sandbox | None = None, marker: str | None = None) -> None:
+                 sandbox: Sandbox | None = None, marker: str | None = None,
+                 start: bool = True) -> None:
         self.folder = Path(folder)
         self.sandbox, self.marker = sandbox, marker
         self.mode = 0o711 if sandbox is not None else 0o700
@@ -460,8 +461,15 @@ class Slot:
         self._prewarming: threading.Thread | None = None
         self.forks = 0
         self.starts = 0
-        if not self.alone:  # else a zygote per kernel, in a sandbox of its own (fork)
+        self._starting = threading.Lock()
+        if not self.alone and start:  # else a zygote per kernel, in a sandbox of its own (fork)
             self.start_zygote()
+
+    def ensure_zygote(self) -> None:
+        """Start the slot's zygote unless it has one (alive, or still importing)."""
+        with self._starting:
+            if self.zygote is None and not self.alone:
+                self.start_zygote()
 
     def start_zygote(self) -> None:
         if self.zygote is not None:
@@ -474,8 +482,9 @@ class Slot:
         """Fork a new kernel (restarting a dead zygote first); :class:`ZygoteError`."""
         if self.alone:
             return self._fork_alone(limits)
-        if not self.zygote.alive:
-            self.start_zygote()
+        with self._starting:
+            if self.zygote is None or not self.zygote.alive:
+                self.start_zygote()
         self.zygote.wait_ready()
         self.folder.mkdir(mode=0o700, parents=True, exist_ok=True)  # a closed zygote's rmdir
         os.chmod(self.folder, self.mode)
@@ -639,7 +648,10 @@ class KernelPool:
     Parameters
     ----------
     slots : int
-        Kernels running at once (``--jobs``); one zygote each, started now, in parallel.
+        Kernels running at once (``--jobs``); one zygote each: the first slot's started now,
+        the others' once it is ready, each slot lent out once its zygote is (zygotes importing
+        at once share the cores with each other and with the grader: the first kernel would
+        start later).
     prewarm : bool
         Fork each slot's next kernel while the current one runs.
     cold : bool
@@ -671,6 +683,7 @@ class KernelPool:
         self.slots: list[Slot] = []
         self._free: queue.Queue[Slot] = queue.Queue()
         self._run = contextlib.ExitStack()
+        self._closing, self._closed = threading.Lock(), False
         if not self.cold:
             run = self._run.enter_context(run_folder())
             self.folder = fresh_folder(run, "p")
@@ -678,12 +691,33 @@ class KernelPool:
                 os.chmod(self.folder, 0o711)
             try:
                 for i in range(max(1, slots)):
-                    slot = Slot(self.folder / str(i), preload, sandbox, run.name)
-                    self.slots.append(slot)
-                    self._free.put(slot)
+                    self.slots.append(Slot(self.folder / str(i), preload, sandbox, run.name,
+                                           start=i == 0))
             except BaseException:
                 self.close()
                 raise
+            later = [] if self.slots[0].alone else self.slots[1:]
+            for slot in self.slots:
+                if slot not in later:
+                    self._free.put(slot)
+            if later:
+                threading.Thread(target=self._start_later, args=(later,), daemon=True,
+                                 name="eulertop-zygotes").start()
+
+    def _start_later(self, later: list[Slot]) -> None:
+        """Start the zygotes of ``later`` once the first slot's is ready, and lend out each
+        slot once its own is (never after :meth:`close`)."""
+        with contextlib.suppress(ZygoteError):
+            self.slots[0].zygote.wait_ready()
+        for slot in later:
+            with self._closing:
+                if self._closed:
+                    return
+                slot.ensure_zygote()
+        for slot in later:
+            with contextlib.suppress(ZygoteError):
+                slot.zygote.wait_ready()  # a zygote that failed is replaced by fork()
+            self._free.put(slot)
 
     def kernel(self, workdir: Path, control: Path, limits: Limits) -> LocalKernel:
         """The kernel factory: ``(workdir, control, limits) -> KernelProcess``."""
@@ -714,8 +748,12 @@ class KernelPool:
 
     def close(self) -> None:
         """Kill every zygote, kernel and leftover; remove the pool's folder."""
+        with self._closing:  # no zygote is started after this
+            self._closed = True
         for slot in self.slots:  # all of them end at once; then each is waited for
             if slot.zygote is not None:
+                if slot.zygote.ready is None:  # still importing (started late): no kernels
+                    slot.zygote.kill()  # to wait for, and its imports are not needed now
                 slot.zygote.end_input()
         for slot in self.slots:
             slot.close()

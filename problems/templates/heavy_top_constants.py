@@ -53,7 +53,7 @@ from typing import Any
 import numpy as np
 
 from problems.answers import Answer, Mistake
-from problems.family import Parameter, reject_unless
+from problems.family import IllPosed, Parameter, reject_unless
 from problems.genuine import statement_number
 from problems.rounding import latex_sig, round_sig
 from solver.heavy_top import constants_of_motion, turning_points
@@ -488,7 +488,26 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     mistake close to the key.
     """
     top, state = top_from_params(params), state_from_params(params)
-    beta1, beta2 = turning_points(*state_args(top, state))
+    return _answers_inside(top, state, *turning_points(*state_args(top, state)))
+
+
+def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
+    """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
+    rejected) — the batch form (:mod:`problems.family`): every top's turning points in one
+    solver call."""
+    motions = [(top_from_params(p), state_from_params(p)) for p in many]
+    ends = turning_points(*np.array([state_args(*m) for m in motions]).T)
+    found: list[tuple[Answer, ...] | IllPosed] = []
+    for (top, state), beta1, beta2 in zip(motions, *map(np.atleast_1d, ends), strict=True):
+        try:
+            found.append(_answers_inside(top, state, beta1, beta2))
+        except IllPosed as e:
+            found.append(e)
+    return found
+
+
+def _answers_inside(top: Top, state: State, beta1: float, beta2: float) -> tuple[Answer, ...]:
+    """:func:`answers`, given the motion's turning points."""
     reject_unless(motion_within_limits(top, float(beta1), float(beta2)),
                   "the motion leaves the scene's limits")
     found = _answers(top, state)

@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 
 from problems.answers import Answer, Mistake
-from problems.family import reject_unless
+from problems.family import IllPosed, reject_unless
 from problems.templates.heavy_top_constants import (
     CONVENTIONS as CONVENTIONS,  # the same convention topics (problems.conventions)
 )
@@ -66,7 +66,14 @@ from problems.templates.heavy_top_constants import (
 from problems.templates.heavy_top_constants import (
     PARAMETERS as PARAMETERS,  # the same tops and states
 )
-from solver.heavy_top import constants_of_motion, precession_rate, solve_heavy_top, turning_points
+from solver.heavy_top import (
+    constants_of_motion,
+    heavy_top_record,
+    precession_rate,
+    solve_heavy_top,
+    solve_heavy_top_many,
+    turning_points,
+)
 
 NAME = "motion_type"
 TITLE = "Heavy symmetric top: waves, loops or cusps?"
@@ -130,10 +137,19 @@ def _robust(state: State, figure: str, rates: tuple[float, float]) -> bool:
 def _moment_mistakes(top: Top, state: State):
     """The moment mistakes' solver arguments, and their turning points ``(β1, β2)`` after the
     key's (index 0): one vectorised pass, done first since it is the cheap rejection test."""
-    mistaken = {k: v for k, v in mistaken_states(top, state).items() if k != "degree_mode"}
-    rows = np.array([state_args(top, state), *mistaken.values()]).T
-    beta1, beta2 = (np.atleast_1d(b) for b in turning_points(*rows))
-    return mistaken, rows, beta1, beta2
+    return _moment_mistakes_many([(top, state)])[0]
+
+
+def _moment_mistakes_many(motions: list[tuple[Top, State]]) -> list[tuple]:
+    """:func:`_moment_mistakes` of each ``(top, state)``, in one solver call for all."""
+    mistaken = [{k: v for k, v in mistaken_states(top, state).items() if k != "degree_mode"}
+                for top, state in motions]
+    rows = [np.array([state_args(top, state), *m.values()]).T
+            for (top, state), m in zip(motions, mistaken, strict=True)]
+    ends = np.cumsum([r.shape[1] for r in rows])[:-1]
+    beta1, beta2 = (np.split(np.atleast_1d(b), ends)
+                    for b in turning_points(*np.concatenate(rows, axis=1)))
+    return list(zip(mistaken, rows, beta1, beta2, strict=True))
 
 
 def _rate_answers(rates: tuple[float, float], names: tuple[str, ...], rows: np.ndarray,
@@ -193,11 +209,41 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     the rounding of a turning point could change, or a primary mistake close to the key.
     """
     top, state = top_from_params(params), state_from_params(params)
-    mistaken, rows, beta1, beta2 = _moment_mistakes(top, state)
+    return _answers(top, state, _moment_mistakes(top, state))
+
+
+def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
+    """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
+    rejected) — the batch form (:mod:`problems.family`): the turning points of every state,
+    then the solver's summary of every key inside the scene's limits, each in one call."""
+    motions = [(top_from_params(p), state_from_params(p)) for p in many]
+    moments = _moment_mistakes_many(motions)
+    inside = [i for i, ((top, _), (*_, beta1, beta2)) in enumerate(zip(motions, moments,
+                                                                         strict=True))
+              if motion_within_limits(top, float(beta1[0]), float(beta2[0]))]
+    solutions = {}
+    if inside:
+        table = solve_heavy_top_many(*np.array([state_args(*motions[i]) for i in inside]).T)
+        solutions = {i: heavy_top_record(table, j) for j, i in enumerate(inside)}
+    found: list[tuple[Answer, ...] | IllPosed] = []
+    for i, ((top, state), moment) in enumerate(zip(motions, moments, strict=True)):
+        try:
+            found.append(_answers(top, state, moment, solutions.get(i)))
+        except IllPosed as e:
+            found.append(e)
+    return found
+
+
+def _answers(top: Top, state: State, moment: tuple, solution: dict | None = None
+             ) -> tuple[Answer, ...]:
+    """:func:`answers` from the motion's :func:`_moment_mistakes` (and the key's
+    ``solve_heavy_top``, if already computed)."""
+    mistaken, rows, beta1, beta2 = moment
     reject_unless(motion_within_limits(top, float(beta1[0]), float(beta2[0])),
                   "the motion leaves the scene's limits")
     # the key from the solver's one-state summary: exact α̇ = 0 at a cusp, and the figure
-    solution = solve_heavy_top(*state_args(top, state))
+    if solution is None:
+        solution = solve_heavy_top(*state_args(top, state))
     rates = (solution["alpha_dot_beta1"], solution["alpha_dot_beta2"])
     figure = solution["motion"]
     reject_unless(None not in rates and _robust(state, figure, rates), "an ambiguous figure")

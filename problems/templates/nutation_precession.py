@@ -46,7 +46,7 @@ import numpy as np
 from scipy.special import ellipk
 
 from problems.answers import Answer, Mistake
-from problems.family import Parameter, distinguishable, reject_unless
+from problems.family import IllPosed, Parameter, distinguishable, reject_unless
 from problems.rounding import latex_sig, round_sig
 from problems.templates.sleeping_top import TOP_KINDS, TOP_PARAMETERS, draw_top
 from solver.heavy_top import constants_of_motion, critical_spin, cubic_roots, nutation
@@ -89,8 +89,12 @@ def _state(I1, I3, Mgl, beta0, omega3, alpha_dot0):
 
 
 def _well_posed(state) -> bool:
-    u1, u2, u3 = (float(x) for x in cubic_roots(*state))
-    n = nutation(*state)
+    return _well_posed_motion(cubic_roots(*state), nutation(*state))
+
+
+def _well_posed_motion(roots, n) -> bool:
+    """Whether the motion of ``roots`` (u1, u2, u3) and ``n`` (its ``nutation``) is asked."""
+    u1, u2, u3 = (float(x) for x in roots)
     amplitude = float(n["beta2"]) - float(n["beta1"])
     return (amplitude >= MIN_AMPLITUDE and (u2 - u1) / (u3 - u1) <= MAX_K2
             and float(n["beta2"]) <= MAX_BETA2 and math.isfinite(n["nutation_period"]))
@@ -98,10 +102,40 @@ def _well_posed(state) -> bool:
 
 def _values(states: dict[str, tuple]) -> dict[str, tuple[float, float]]:
     """``{label: (T_nut, mean_rate)}`` for each state, in one vectorised solver call."""
-    columns = np.array(list(states.values()), dtype=float).T
+    return _values_many([states])[0]
+
+
+def _values_many(many: list[dict[str, tuple]]) -> list[dict[str, tuple[float, float]]]:
+    """:func:`_values` of each student's states, in one solver call for all of them."""
+    if not many:
+        return []
+    columns = np.array([state for states in many for state in states.values()], dtype=float).T
     n = nutation(*columns)
-    return {k: (float(n["nutation_period"][i]), float(n["mean_precession_rate"][i]))
-            for i, k in enumerate(states)}
+    period, mean = n["nutation_period"], n["mean_precession_rate"]
+    found, first = [], 0
+    for states in many:
+        found.append({k: (float(period[first + j]), float(mean[first + j]))
+                      for j, k in enumerate(states)})
+        first += len(states)
+    return found
+
+
+def _solved(states: dict[str, tuple]) -> tuple:
+    """What :func:`_answers` takes from the solver for ``states``: their ``(T_nut, mean_rate)``,
+    the key's ``p_γ`` and its roots ``u1, u2, u3``."""
+    _, p_gamma, _ = constants_of_motion(*states["key"])
+    return _values(states), p_gamma, tuple(float(x) for x in cubic_roots(*states["key"]))
+
+
+def _states(I1, I3, Mgl, beta0, omega3, alpha_dot0) -> dict[str, tuple]:
+    """The key's state and each mistaken one the solver computes, by label (key first)."""
+    states = {"key": _state(I1, I3, Mgl, beta0, omega3, alpha_dot0),
+              "degrees": _state(I1, I3, Mgl, math.radians(beta0), omega3, alpha_dot0)}
+    if I1 <= 2 * I3:  # the swapped moments still describe a body (R4)
+        states["swapped"] = _state(I3, I1, Mgl, beta0, omega3, alpha_dot0)
+    if alpha_dot0 != 0.0:  # the given ω3 taken for γ̇0 (R12): γ̇0 = ω3, so ω3 would be larger
+        states["spin"] = (I1, I3, Mgl, beta0, alpha_dot0, 0.0, omega3)
+    return states
 
 
 _GAMMA_DOT_IS_OMEGA3 = (
@@ -116,18 +150,12 @@ def _apart(value: float, others: list[float]) -> bool:
         abs(value - o) > MARGIN * RTOL * max(abs(value), abs(o)) for o in others)
 
 
-def _answers(I1, I3, Mgl, beta0, omega3, alpha_dot0) -> tuple[Answer, Answer]:
-    state = _state(I1, I3, Mgl, beta0, omega3, alpha_dot0)
-    states = {"key": state, "degrees": _state(I1, I3, Mgl, math.radians(beta0), omega3,
-                                              alpha_dot0)}
-    if I1 <= 2 * I3:  # the swapped moments still describe a body (R4)
-        states["swapped"] = _state(I3, I1, Mgl, beta0, omega3, alpha_dot0)
-    if alpha_dot0 != 0.0:  # the given ω3 taken for γ̇0 (R12): γ̇0 = ω3, so ω3 would be larger
-        states["spin"] = (I1, I3, Mgl, beta0, alpha_dot0, 0.0, omega3)
-    values = _values(states)
+def _answers(I1, I3, Mgl, beta0, omega3, alpha_dot0, solved=None) -> tuple[Answer, Answer]:
+    """The two answers; ``solved``: :func:`_solved` of :func:`_states`, if already computed."""
+    if solved is None:
+        solved = _solved(_states(I1, I3, Mgl, beta0, omega3, alpha_dot0))
+    values, p_gamma, (u1, u2, u3) = solved
     T, mean = values["key"]
-    _, p_gamma, _ = constants_of_motion(*state)
-    u1, u2, u3 = (float(x) for x in cubic_roots(*state))
     scale = 4.0 / math.sqrt(2.0 * Mgl / I1 * (u3 - u1))
     k = math.sqrt((u2 - u1) / (u3 - u1))
 
@@ -231,6 +259,31 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     numbers = _numbers(params)
     reject_unless(_well_posed(_state(*numbers)), "nearly steady, near the separatrix, or low")
     return distinguishable(lambda: _answers(*numbers), MARGIN)
+
+
+def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
+    """:func:`answers` of each parameter set, an :class:`~problems.family.IllPosed` for each
+    rejected one — the family's batch form (:mod:`problems.family`): the solver is called for
+    all of them at once (the roots and motions of the keys, then every state's period and
+    mean rate, then the keys' ``p_γ``), the rest as for one."""
+    numbers = [_numbers(params) for params in many]
+    keys = np.array([_state(*n) for n in numbers], dtype=float).T
+    roots, motions = np.array(cubic_roots(*keys)).T, nutation(*keys)
+    posed = [i for i in range(len(many))
+             if _well_posed_motion(roots[i], {k: v[i] for k, v in motions.items()})]
+    states = [_states(*numbers[i]) for i in posed]
+    values = _values_many(states)
+    _, p_gamma, _ = constants_of_motion(*keys[:, posed])
+    found: list[tuple[Answer, ...] | IllPosed] = [
+        IllPosed("nearly steady, near the separatrix, or low")] * len(many)
+    for j, i in enumerate(posed):
+        solved = (values[j], p_gamma[j], tuple(float(x) for x in roots[i]))
+        try:
+            found[i] = distinguishable(lambda i=i, s=solved: _answers(*numbers[i], solved=s),
+                                       MARGIN)
+        except IllPosed as e:
+            found[i] = e
+    return found
 
 
 def statement(params: Mapping[str, Any]) -> str:

@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from problems.answers import Answer
-from problems.family import Parameter, reject_unless
+from problems.family import IllPosed, Parameter, reject_unless
 from problems.rounding import latex_sig, round_sig
 from problems.templates import heavy_top_constants
 from problems.templates.heavy_top_constants import (
@@ -168,33 +168,85 @@ def _solve(top: Top, state: State) -> tuple[dict, np.ndarray, np.ndarray, dict, 
                                              np.ndarray]:
     """One solver pass for the key and every mistaken state (rows: key first): the mistaken
     states, ``p_α``, ``p_γ``, the states whose turning points move, and those turning points."""
-    mistaken = mistaken_states(top, state)
-    p_alpha, p_gamma, _ = constants_of_motion(*np.array([state_args(top, state),
-                                                         *mistaken.values()]).T)
-    moved = {k: v for k, v in mistaken.items() if k != "degree_mode"}  # the answer is in rad
-    moved["E_not_E_prime"] = _energy_state(top, state, float(p_gamma[0]))
-    low, high = turning_points(*np.array([state_args(top, state), *moved.values()]).T)
-    return mistaken, p_alpha, p_gamma, moved, low, high
+    return _solve_many([(top, state)])[0]
 
 
-def draw(rng: np.random.Generator) -> dict[str, Any] | None:
-    """A real top, released from rest in α and β one time in three, else launched; the tilt
-    ``beta`` for ``V_eff`` drawn around the motion's range (None: the motion leaves the
-    scene's limits)."""
+def _solve_many(motions: list[tuple[Top, State]]) -> list[tuple]:
+    """:func:`_solve` of each ``(top, state)``, each solver function called once for all."""
+    mistaken = [mistaken_states(top, state) for top, state in motions]
+    rows = [[state_args(top, state), *m.values()] for (top, state), m in
+            zip(motions, mistaken, strict=True)]
+    p_alpha, p_gamma, _ = (_split(x, rows) for x in constants_of_motion(*_columns(rows)))
+    moved = []
+    for (top, state), m, gamma in zip(motions, mistaken, p_gamma, strict=True):
+        moved.append({k: v for k, v in m.items() if k != "degree_mode"})  # the answer is in rad
+        moved[-1]["E_not_E_prime"] = _energy_state(top, state, float(gamma[0]))
+    rows = [[state_args(top, state), *m.values()] for (top, state), m in
+            zip(motions, moved, strict=True)]
+    low, high = (_split(x, rows) for x in turning_points(*_columns(rows)))
+    return list(zip(mistaken, p_alpha, p_gamma, moved, low, high, strict=True))
+
+
+def _columns(rows: list[list[tuple]]) -> np.ndarray:
+    """Every student's solver arguments (rows of rows), as the solver's columns."""
+    return np.array([row for student in rows for row in student], dtype=float).T
+
+
+def _split(column: np.ndarray, rows: list[list[tuple]]) -> list[np.ndarray]:
+    """A solver result for all students back into each student's rows."""
+    return np.split(np.atleast_1d(column), np.cumsum([len(r) for r in rows])[:-1])
+
+
+def _draw_motion(rng: np.random.Generator) -> tuple[Top, State]:
+    """A real top, released from rest in α and β one time in three, else launched."""
     top = draw_top(rng)
     if rng.uniform() < RELEASED:
-        state = draw_state(rng, top, 0.0, 0.0)
-    else:
-        sense = rng.choice([1.0, 1.0, -1.0])
-        nod = rng.choice([0.0, 1.0, -1.0]) * rng.uniform(0.02, 0.15)
-        state = draw_state(rng, top, sense * rng.uniform(0.3, 2.5), nod)
-    *_, low, high = _solve(top, state)
+        return top, draw_state(rng, top, 0.0, 0.0)
+    sense = rng.choice([1.0, 1.0, -1.0])
+    nod = rng.choice([0.0, 1.0, -1.0]) * rng.uniform(0.02, 0.15)
+    return top, draw_state(rng, top, sense * rng.uniform(0.3, 2.5), nod)
+
+
+def _draw_query(rng: np.random.Generator, top: Top, state: State, low: np.ndarray,
+                high: np.ndarray) -> dict[str, Any] | None:
+    """The parameters of a drawn motion, with the tilt ``beta`` drawn around its range (None:
+    the motion leaves the scene's limits)."""
     beta1, beta2 = float(low[0]), float(high[0])
     if not motion_within_limits(top, beta1, beta2):
         return None
     low_q = max(QUERY_MIN, beta1 - QUERY_MARGIN)
     beta = round_sig(rng.uniform(low_q, min(math.pi - QUERY_MIN, beta2 + QUERY_MARGIN)), SIG)
     return variant_params(top, state, beta=beta)
+
+
+def draw(rng: np.random.Generator) -> dict[str, Any] | None:
+    """A real top, released from rest in α and β one time in three, else launched; the tilt
+    ``beta`` for ``V_eff`` drawn around the motion's range (None: the motion leaves the
+    scene's limits)."""
+    top, state = _draw_motion(rng)
+    *_, low, high = _solve(top, state)
+    return _draw_query(rng, top, state, low, high)
+
+
+def draw_many(rngs: list[np.random.Generator]) -> list[dict[str, Any] | None]:
+    """:func:`draw` of each generator, the motions solved together (the batch form,
+    :mod:`problems.family`)."""
+    motions = [_draw_motion(rng) for rng in rngs]
+    return [_draw_query(rng, top, state, *solved[4:]) for rng, (top, state), solved
+            in zip(rngs, motions, _solve_many(motions), strict=True)]
+
+
+def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
+    """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
+    rejected), the motions solved together (the batch form)."""
+    motions = [(top_from_params(p), state_from_params(p)) for p in many]
+    found: list[tuple[Answer, ...] | IllPosed] = []
+    for p, (top, state), solved in zip(many, motions, _solve_many(motions), strict=True):
+        try:
+            found.append(_answers(top, state, p["beta"], solved))
+        except IllPosed as e:
+            found.append(e)
+    return found
 
 
 def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
@@ -204,8 +256,13 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     Raises :class:`~problems.family.IllPosed` for a motion outside the scene's limits, an
     ill-conditioned ``V_eff``, or a primary mistake close to the key.
     """
-    top, state, beta = top_from_params(params), state_from_params(params), params["beta"]
-    mistaken, p_alpha, p_gamma, moved, low, high = _solve(top, state)
+    top, state = top_from_params(params), state_from_params(params)
+    return _answers(top, state, params["beta"], _solve(top, state))
+
+
+def _answers(top: Top, state: State, beta: float, solved: tuple) -> tuple[Answer, ...]:
+    """:func:`answers` from the motion's :func:`_solve`."""
+    mistaken, p_alpha, p_gamma, moved, low, high = solved
     reject_unless(motion_within_limits(top, float(low[0]), float(high[0])),
                   "the motion leaves the scene's limits")
     potential = _potential_answer(top, state, beta, mistaken, p_alpha, p_gamma)

@@ -44,7 +44,9 @@ __all__ = [
     "RUN_FILE",
     "TARGETS",
     "BlockError",
+    "current_block",
     "load_results",
+    "markers_of",
     "page_block",
     "replace_block",
     "run_record",
@@ -504,24 +506,33 @@ def summary_markdown(results: dict[str, list[dict]], run: dict) -> str:
 # --- the page --------------------------------------------------------------------------------
 
 
-def replace_block(text: str, block: str, name: str = "the page") -> str:
+def replace_block(text: str, block: str, name: str = "the page",
+                  markers: tuple[str, str] = (BEGIN, END)) -> str:
     """``text`` with everything from ``BEGIN`` to ``END`` (markers included) replaced by
     ``block``; raises :class:`BlockError` naming ``name`` unless each marker occurs once, in
-    order, each on a line of its own."""
+    order, each on a line of its own. ``markers`` names another block of the page (each
+    benchmark of ``benchmarks/`` that writes into the page has its own, :func:`markers_of`)."""
+    begin, end = markers
     lines = text.splitlines(keepends=True)
-    starts = [i for i, line in enumerate(lines) if line.strip() == BEGIN]
-    ends = [i for i, line in enumerate(lines) if line.strip() == END]
+    starts = [i for i, line in enumerate(lines) if line.strip() == begin]
+    ends = [i for i, line in enumerate(lines) if line.strip() == end]
     if len(starts) != 1 or len(ends) != 1 or ends[0] < starts[0]:
-        raise BlockError(f"{name}: needs one line '{BEGIN}' followed by one line '{END}' "
-                         f"(found {len(starts)} and {len(ends)}); eulertop bench writes its "
+        raise BlockError(f"{name}: needs one line '{begin}' followed by one line '{end}' "
+                         f"(found {len(starts)} and {len(ends)}); the bench writes its "
                          "numbers between them")
     return "".join(lines[:starts[0]]) + block + "".join(lines[ends[0] + 1:])
 
 
-def current_block(text: str, name: str = "the page") -> str:
-    """The ``BEGIN`` … ``END`` block of ``text``, markers included (as :func:`page_block`)."""
+def current_block(text: str, name: str = "the page",
+                  markers: tuple[str, str] = (BEGIN, END)) -> str:
+    """The ``BEGIN`` … ``END`` block of ``text`` (or that of ``markers``), markers included."""
+    replace_block(text, "", name, markers)  # validates
     lines = text.splitlines(keepends=True)
-    replace_block(text, "", name)  # validates
-    start = next(i for i, line in enumerate(lines) if line.strip() == BEGIN)
-    end = next(i for i, line in enumerate(lines) if line.strip() == END)
+    start = next(i for i, line in enumerate(lines) if line.strip() == markers[0])
+    end = next(i for i, line in enumerate(lines) if line.strip() == markers[1])
     return "".join(lines[start:end + 1])
+
+
+def markers_of(bench: str) -> tuple[str, str]:
+    """The lines around the block that ``benchmarks/<bench>.py --page`` writes."""
+    return f"<!-- {bench}: begin -->", f"<!-- {bench}: end -->"

@@ -284,3 +284,39 @@ def test_a_zygote_removes_only_what_it_was_given(tmp_path):
                           env=kernel_environment(tmp_path, tmp_path))
     assert json.loads(done.stdout.splitlines()[0])["ready"] is True
     assert (tmp_path / "keep.txt").read_text() == "not the zygote's"
+
+
+def test_the_other_slots_zygotes_start_once_the_first_is_ready(monkeypatch):
+    """Zygotes importing at once share the cores: slot 1's starts after slot 0's is ready,
+    and both slots are lent out; closing kills a zygote still importing (nothing to wait
+    for)."""
+    started, killed, by_name = [], [], {}
+    start, kill = kernel_pool.Slot.start_zygote, kernel_pool.Zygote.kill
+
+    def recording_start(slot):
+        first = by_name.get((slot.folder.parent, "0"))
+        started.append((slot.folder.name, [] if first is None else [first.zygote.ready
+                                                                    is not None]))
+        by_name[slot.folder.parent, slot.folder.name] = slot
+        start(slot)
+
+    def recording_kill(zygote):
+        killed.append(zygote.ready)
+        kill(zygote)
+
+    monkeypatch.setattr(kernel_pool.Slot, "start_zygote", recording_start)
+    monkeypatch.setattr(kernel_pool.Zygote, "kill", recording_kill)
+    own = KernelPool(2, preload=())
+    try:
+        slots = {own.acquire().folder.name, own.acquire().folder.name}
+    finally:
+        own.close()
+    assert slots == {"0", "1"}
+    assert started == [("0", []), ("1", [True])]
+    assert killed == []  # both were ready: ended by end of input, not killed
+    late = KernelPool(2, preload=("sympy",))  # closed once slot 1's zygote is importing
+    deadline = time.monotonic() + 60
+    while late.slots[1].zygote is None and time.monotonic() < deadline:
+        time.sleep(0.005)
+    late.close()
+    assert killed == [None]  # slot 1's, still importing sympy

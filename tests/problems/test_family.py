@@ -256,3 +256,78 @@ def test_what_a_family_returns_is_checked_and_named():
         family(answers=lambda p: (1.0,)).generate(np.random.default_rng(0))
     with pytest.raises(FamilyError, match=r"CONVENTIONS \['tennis'\] are not topics"):
         family(CONVENTIONS=("tennis",))
+
+
+# --------------------------------------------------------------------------------------------
+# The batch form (issue 34)
+
+
+def _batch_drop(seen: list) -> Family:
+    """The falling ball with a batch form whose draw rejects every third student's first try
+    and whose answers reject every draw with h < 5 m, counting its calls in ``seen``."""
+    tries: dict[int, int] = {}
+
+    def draw(rng):
+        h = round_sig(rng.uniform(1.0, 20.0), 3)
+        tries[id(rng)] = tries.get(id(rng), 0) + 1
+        return None if tries[id(rng)] == 1 and h > 13.0 else {"h": h, "g": 9.81,
+                                                              "where": "a tower"}
+
+    def answers(p):
+        if p["h"] < 5.0:
+            raise IllPosed("too low")
+        return family().module.answers(p)
+
+    def draw_many(rngs):
+        seen.append(("draw_many", len(rngs)))
+        return [draw(rng) for rng in rngs]
+
+    def answers_many(many):
+        seen.append(("answers_many", len(many)))
+        found = []
+        for p in many:
+            try:
+                found.append(answers(p))
+            except IllPosed as e:
+                found.append(e)
+        return found
+
+    return family(draw=draw, answers=answers, draw_many=draw_many, answers_many=answers_many)
+
+
+def test_a_batch_form_gives_each_student_the_variant_drawn_alone():
+    """30 students drawn together, rejections by draw and by answers redrawn from each one's
+    own generator in rounds, equal those drawn one at a time — with settings too."""
+    settings = QuestionSettings(parameters={"h": ParameterSetting(low=2.0, high=19.0)})
+    for given in (None, settings):
+        seen: list = []
+        batch = _batch_drop(seen)
+        together = batch.generate_many([np.random.default_rng(s) for s in range(30)], given)
+        alone = [_batch_drop([]).generate(np.random.default_rng(s), given) for s in range(30)]
+        assert [v.to_dict() for v in together] == [v.to_dict() for v in alone]
+        assert batch.batched and seen[0] == ("draw_many", 30)
+        assert len(seen) > 2 and seen[-1][1] < 30  # later rounds: only the rejected again
+
+
+def test_generate_many_without_a_batch_form_draws_one_at_a_time():
+    plain = family()
+    assert not plain.batched
+    together = plain.generate_many([np.random.default_rng(s) for s in range(5)])
+    assert together == [plain.generate(np.random.default_rng(s)) for s in range(5)]
+
+
+def test_a_batch_form_that_loses_a_student_is_refused():
+    short = family(answers_many=lambda many: [family().module.answers(p) for p in many[1:]])
+    with pytest.raises(TypeError, match=r"answers_many\(\) must return one element per student "
+                                        r"\(3\), got 2"):
+        short.generate_many([np.random.default_rng(s) for s in range(3)])
+
+
+@pytest.mark.parametrize("name", [n for n, f in FAMILIES.items() if f.batched])
+def test_a_built_in_batch_form_gives_the_variants_drawn_alone(name):
+    """Each built-in family with a batch form: 60 students together, bit for bit the
+    variants of one at a time (the solver called on all of them at once)."""
+    found = FAMILIES[name]
+    together = found.generate_many([np.random.default_rng([7, s]) for s in range(60)])
+    alone = [found.generate(np.random.default_rng([7, s])) for s in range(60)]
+    assert [v.to_dict() for v in together] == [v.to_dict() for v in alone]

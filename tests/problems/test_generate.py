@@ -239,9 +239,10 @@ def test_force_refuses_a_folder_with_foreign_files(make_hw, read_tree):
 def test_a_failing_template_leaves_nothing(tmp_path, write_roster):
     roster = read_roster(write_roster(ROSTER))
     before = sorted(os.listdir(tmp_path))
-    # "rod" is questions 1 and 3, so its 4th call is bob's question 3: half-way through
+    # "rod" is questions 1 and 3, each drawn for the whole class in turn: its 5th call is
+    # bob's question 3, half-way through
     with pytest.raises(TemplateError, match="'rod', student 'bob', question 3 failed"):
-        generate_assignment(roster, tmp_path / "HW", make_families(fail_on_call=4),
+        generate_assignment(roster, tmp_path / "HW", make_families(fail_on_call=5),
                             problems=PROBLEMS, seed=7)
     assert sorted(os.listdir(tmp_path)) == before
 

@@ -129,3 +129,35 @@ def test_roots_are_ordered_and_solve_the_cubic():
         want = _mp_roots([x[i] for x in state])
         for k in range(3):
             assert abs(u[i, k] - float(want[k])) <= 1e-10 * max(1.0, abs(float(want[k])))
+
+
+def _cubics(n, seed):
+    """The coefficients ``B, c0 > 0, c1, c2`` of ``n`` random moving tops' cubics, and ``1 − u0``
+    (fast and slow tops, near and far from the poles)."""
+    rng = np.random.default_rng(seed)
+    I1 = 10 ** rng.uniform(-4, -2, n)
+    state = (I1, I1 * rng.uniform(0.1, 1.9, n), 10 ** rng.uniform(-3, 0, n),
+             rng.uniform(1e-6, np.pi - 1e-6, n), rng.normal(0, 5, n), rng.normal(0, 2, n),
+             rng.normal(0, 1, n) * 10 ** rng.uniform(0, 3.7, n))
+    cubic = nutation_cubic(*state)
+    return cubic.B, cubic.c0, cubic.c1, cubic.c2, cubic.one_minus_u0
+
+
+@pytest.mark.parametrize("fallback", [False, True])
+def test_newton_starts_above_the_largest_root_and_finds_it(fallback, monkeypatch):
+    """For 200 random cubics, the start (the raised trigonometric root, or Fujiwara's bound
+    where that is not provably above) lies above the largest root of the float coefficients
+    (mpmath, 40 digits), and Newton from it finds that root to 1e-14 relative."""
+    from solver import nutation
+
+    B, c0, c1, c2, hm = _cubics(200, 20261127)
+    if fallback:  # as if the trigonometric root were never provably above the largest one
+        monkeypatch.setattr(nutation.np, "arccos", lambda x: np.full_like(x, np.nan))
+    start = nutation._start_above_w3(B, c0, c1, c2, hm)
+    monkeypatch.undo()
+    w3 = nutation._newton_from_above(B, c0, c1, c2, start.copy())
+    for i in range(200):
+        coefficients = [mp.mpf(float(x[i])) for x in (B, c2, c1, c0)]
+        largest = max(mp.re(r) for r in mp.polyroots(coefficients, maxsteps=400, extraprec=400))
+        assert start[i] >= largest
+        assert abs(w3[i] - float(largest)) <= 1e-14 * abs(float(largest))
