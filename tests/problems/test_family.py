@@ -331,3 +331,17 @@ def test_a_built_in_batch_form_gives_the_variants_drawn_alone(name):
     together = found.generate_many([np.random.default_rng([7, s]) for s in range(60)])
     alone = [found.generate(np.random.default_rng([7, s])) for s in range(60)]
     assert [v.to_dict() for v in together] == [v.to_dict() for v in alone]
+
+
+def test_a_batch_drawn_question_keeps_the_written_parts_its_settings_ask_for():
+    """turning_points has a batch form and a written part: drawn together for 12 students with
+    ``written = true``, each variant equals the one drawn alone, written part included."""
+    from problems.templates import FAMILIES
+
+    family = FAMILIES["turning_points"]
+    assert family.batched
+    settings = QuestionSettings(written=True)
+    together = family.generate_many([np.random.default_rng(s) for s in range(12)], settings)
+    alone = [family.generate(np.random.default_rng(s), settings) for s in range(12)]
+    assert [v.to_dict() for v in together] == [v.to_dict() for v in alone]
+    assert all(any(a.kind == "written" for a in v.answers) for v in together)
