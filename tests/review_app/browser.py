@@ -81,10 +81,12 @@ def screenshots(browser: Any, made: Any, out: Path) -> list[Path]:
         try:
             context = browser.new_context(viewport={"width": 1280, "height": 900})
             page = question_page(context, server.url, OWN)
-            page.keyboard.press("n")  # past ada's, whose hostile lines fill the page
-            page.wait_for_function("() => document.querySelector('#who').textContent"
-                                   ".startsWith('Anonymous')")
-            for key in ("1", "3"):
+            first = page.get_attribute("#desk", "data-shown")
+            for key in "123s":  # a review of the first, and on to the next
+                page.keyboard.press(key)
+            page.wait_for_function("a => document.querySelector('#desk').dataset.shown !== a",
+                                   arg=first)
+            for key in "13":
                 page.keyboard.press(key)
             page.fill("#comment", "Both ends argued well; say why the stationary point is a "
                       "*minimum* ($V_\\text{eff}'' > 0$).")

@@ -29,6 +29,7 @@ function flagRow(f) {
   cell(row, f.variable, "th");
   cell(row, f.student);
   cell(row, f.why);
+  cell(row, f.message);
   cell(row, shown(f.submitted)).className = "value";
   cell(row, shown(f.key)).className = "value";
   cell(row, `${points(f.points)} / ${points(f.max)}`);

@@ -6,7 +6,7 @@ const question = desk.dataset.question;
 const $ = (id) => document.getElementById(id);
 const state = {
   meta: null, answers: [], index: -1, current: null, comments: {},
-  dirty: false, warned: false, busy: false, asked: 0,
+  dirty: false, warned: false, busy: false, asked: 0, loading: false, queued: [],
 };
 
 function shortcutsOn() {
@@ -153,14 +153,22 @@ async function show(index, force = false) {
   const wanted = ((index % n) + n) % n;
   const asked = ++state.asked;  // a later move wins over an earlier one still loading
   const names = $("names").checked ? "&names=1" : "";
-  const found = await api(`/api/answer?id=${state.answers[wanted].id}${names}`);
-  if (asked !== state.asked) {
-    return;
+  state.loading = true;
+  try {
+    const found = await api(`/api/answer?id=${state.answers[wanted].id}${names}`);
+    if (asked !== state.asked) {
+      return;
+    }
+    state.index = wanted;
+    state.answers[wanted] = {...state.answers[wanted], status: found.status,
+      review: found.review};
+    render(found);
+    state.queued.splice(0).forEach(toggle);  // items pressed while it loaded: this answer's
+  } finally {
+    if (asked === state.asked) {
+      state.loading = false;
+    }
   }
-  state.index = wanted;
-  state.answers[wanted] = {...state.answers[wanted], status: found.status,
-    review: found.review};
-  render(found);
 }
 
 async function nextPending(from) {
@@ -222,6 +230,10 @@ async function setPoints(i, value) {
 }
 
 function toggle(i) {
+  if (state.loading) {
+    state.queued.push(i);
+    return;
+  }
   const box = $(`item-${i}`);
   if (box && !box.disabled && !$("rubric").disabled) {
     box.checked = !box.checked;
