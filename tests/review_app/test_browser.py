@@ -96,6 +96,52 @@ def test_leaving_an_unsubmitted_review_asks_first(desk_class, serve, context):
     assert not (desk_class.out / REVIEWS).exists()
 
 
+def test_a_rubric_key_pressed_while_the_next_answer_loads_counts_for_it(desk_class, serve,
+                                                                       context):
+    served = serve(desk_class)
+    page = question_page(context, served.url, OWN)
+    first = _shown(page)
+    page.keyboard.press("j")
+    page.keyboard.press("3")
+    assert _next_shown(page, first) != first
+    page.wait_for_function("() => document.querySelector('#item-2').checked")
+    assert not page.is_checked("#item-0")
+
+
+def test_the_page_keeps_reusable_comments_and_changes_a_rubric_items_points(desk_class,
+                                                                             serve, context):
+    served = serve(desk_class)
+    reviewed = next(a for a in served.session.written(OWN) if a["student"] == "dee")
+    served.session.submit(reviewed["id"], [2], 0.0, "")
+    page = question_page(context, served.url, OWN)
+    page.fill("#comment", "Argue both ends.")
+    page.fill("#save-name", "ends")
+    page.click("#save-comment")
+    page.wait_for_function("() => document.querySelector('#saved').options.length === 1")
+    page.fill("#comment", "")
+    page.click("#insert")
+    assert page.input_value("#comment") == "Argue both ends."
+    assert served.session.comments(OWN) == {"ends": "Argue both ends."}
+    page.click("#rubric-points summary")
+    page.fill("#points-2", "3")
+    page.get_by_role("button", name="Set item 3's points").click()
+    page.wait_for_function("() => document.querySelector('#status').textContent"
+                           ".startsWith('Item 3 is now worth 3 points')")
+    assert _points(desk_class, "dee") == ("reviewed", 3.0)
+    assert "(3 points)" in page.text_content("#items")
+
+
+def test_a_pasted_image_is_shown_from_the_page_itself(desk_class, serve, context):
+    served = serve(desk_class)
+    bob = next(a["id"] for a in served.session.written(OWN) if a["student"] == "bob")
+    page = open_desk(context, served.url)
+    page.goto(f"{served.base}/question/{OWN}#{bob}")
+    page.wait_for_selector("#desk[data-ready]")
+    image = page.locator("#text img")
+    assert image.get_attribute("alt") == "sketch.png"
+    assert image.evaluate("i => i.complete && i.naturalWidth") == 1
+
+
 def test_shortcuts_can_be_turned_off(desk_class, serve, context):
     """WCAG 2.1.4: single-key shortcuts can be turned off."""
     served = serve(desk_class)

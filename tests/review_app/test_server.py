@@ -383,3 +383,35 @@ def test_unknown_routes_and_questions_are_404_in_one_sentence(desk):
     page = ask(desk.url, "GET", "/question/q9_nothing")
     assert page.status == 404 and "no written question 'q9_nothing'" in page.text
     assert ask(desk.url, "GET", "/api/written").json()["error"] == "the query needs question=…"
+
+
+def test_a_change_while_another_command_holds_the_class_is_409_and_readings_go_on(
+        desk_class):
+    """A grading run (here: the lock held by the test) holds the class longer than the
+    desk's ``--wait``: the review is refused, naming the holder, and nothing is written; the
+    desk still answers readings meanwhile, and the same review lands once the class is free."""
+    from eulertop.review_app.server import ReviewServer
+    from grader.review import ReviewSession
+    from grader.transaction import class_lock
+
+    with ReviewSession(desk_class.hw, grader="ta-one", wait=0.3) as session:
+        server = ReviewServer(session).start()
+        try:
+            body = {"id": _ids(Served(server))["dee"], "rubric": [0]}
+            before = _state(desk_class)
+            with class_lock(desk_class.out, desk_class.hw, command="eulertop grade"):
+                refused = ask(server.url, "POST", "/api/review", body)
+                assert ask(server.url, "GET", "/api/questions").status == 200
+            assert refused.status == 409 and "eulertop grade" in refused.json()["error"]
+            assert _state(desk_class) == before
+            assert ask(server.url, "POST", "/api/review", body).status == 200
+        finally:
+            server.stop()
+            server.join(10)
+
+
+class Served:
+    """What :func:`_ids` needs of a desk: its address."""
+
+    def __init__(self, server) -> None:
+        self.url = server.url

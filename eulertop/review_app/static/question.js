@@ -163,7 +163,8 @@ async function show(index, force = false) {
     state.answers[wanted] = {...state.answers[wanted], status: found.status,
       review: found.review};
     render(found);
-    state.queued.splice(0).forEach(toggle);  // items pressed while it loaded: this answer's
+    state.loading = false;
+    state.queued.splice(0).forEach((i) => toggle(i));  // pressed while it loaded: for it
   } finally {
     if (asked === state.asked) {
       state.loading = false;
