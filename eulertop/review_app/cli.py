@@ -19,8 +19,13 @@ import sys
 import tempfile
 import webbrowser
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from grader.review import WAIT
+
+if TYPE_CHECKING:
+    from eulertop.review_app.server import ReviewServer
+    from grader.review import ReviewSession
 
 
 def add_review_arguments(parser: argparse.ArgumentParser) -> None:
@@ -46,20 +51,11 @@ def add_review_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run_review(args: argparse.Namespace) -> int:
     """Run ``eulertop review``: serve until stopped, then close the session."""
-    from eulertop.review_app.server import ReviewServer
     from grader.assignment import UsageError
-    from grader.review import ReviewSession
 
     try:
-        session = ReviewSession(args.hw, args.out, grader=args.grader, reveal=args.reveal,
-                                wait=args.wait)
+        session, server = _desk(args)
     except UsageError as e:
-        print(f"eulertop review: {e}", file=sys.stderr)
-        return 2
-    try:
-        server = ReviewServer(session, args.port)
-    except UsageError as e:
-        session.close()
         print(f"eulertop review: {e}", file=sys.stderr)
         return 2
     _announce(session, server.url)
@@ -75,7 +71,22 @@ def run_review(args: argparse.Namespace) -> int:
     return 0
 
 
-def _announce(session, url: str) -> None:
+def _desk(args: argparse.Namespace) -> tuple[ReviewSession, ReviewServer]:
+    """The class loaded and the server bound (UsageError: either cannot be)."""
+    from eulertop.review_app.server import ReviewServer
+    from grader.assignment import UsageError
+    from grader.review import ReviewSession
+
+    session = ReviewSession(args.hw, args.out, grader=args.grader, reveal=args.reveal,
+                            wait=args.wait)
+    try:
+        return session, ReviewServer(session, args.port)
+    except UsageError:
+        session.close()
+        raise
+
+
+def _announce(session: ReviewSession, url: str) -> None:
     questions = session.questions()
     print(f"eulertop review: {session.a.title}: {len(questions)} written question(s), "
           f"{len(session.a.ids)} student(s), reviewing as {session.grader}")
@@ -83,7 +94,8 @@ def _announce(session, url: str) -> None:
     print("Open that address (its token is the key to the desk); Ctrl-C stops it.", flush=True)
 
 
-async def _until_stopped(server) -> None:
+async def _until_stopped(server: ReviewServer) -> None:
+    """Serve until SIGINT or SIGTERM (then :meth:`ReviewServer.stop`)."""
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(sig, server.stop)

@@ -184,8 +184,7 @@ class Question(Guarded):
     page = True
 
     async def get(self, question: str) -> None:
-        questions = await self.call(views.questions)
-        if question not in {q["question"] for q in questions}:
+        if question not in await self.call(lambda session: session.a.written()):
             raise Refused(404, f"no written question {question!r}; see the list at /")
         self.render_page("question.html", question=question)
 
