@@ -29,14 +29,15 @@ function flagRow(f) {
   cell(row, f.variable, "th");
   cell(row, f.student);
   cell(row, f.why);
-  cell(row, f.message);
+  cell(row, f.message).className = "message";
   cell(row, shown(f.submitted)).className = "value";
   cell(row, shown(f.key)).className = "value";
   cell(row, `${points(f.points)} / ${points(f.max)}`);
   cell(row, overridden(f.overridden));
   const button = document.createElement("button");
   button.type = "button";
-  button.textContent = `Override ${f.student}'s ${f.variable}`;
+  button.textContent = "Override";
+  button.setAttribute("aria-label", `Override ${f.student}'s ${f.variable}`);
   button.addEventListener("click", () => choose(f));
   cell(row, "").append(button);
   return row;
