@@ -135,14 +135,22 @@ def main() -> None:
     sys.path.insert(0, str(ROOT))
     from benchmarks.bench_grade import machine
     from benchmarks.bench_review import build
-    from eulertop.review_app.server import ReviewServer
-    from grader.review import ReviewSession
-    from tests.review_app.browser import launch, open_desk
+    from tests.review_app.browser import launch
 
     print(f"machine: {machine()}")
-    with tempfile.TemporaryDirectory() as tmp, launch() as browser:
-        hw = build(Path(tmp), args.students)
-        session = ReviewSession(hw, grader="bench")
+    with tempfile.TemporaryDirectory() as tmp:
+        hw = build(Path(tmp), args.students)  # before the browser: its loop blocks asyncio.run
+        with launch() as browser:
+            measure(browser, hw, args)
+
+
+def measure(browser, hw: Path, args: argparse.Namespace) -> None:
+    """Every measurement of the module docstring, printed, on a desk serving ``hw``."""
+    from eulertop.review_app.server import ReviewServer
+    from grader.review import ReviewSession
+    from tests.review_app.browser import open_desk
+
+    with ReviewSession(hw, grader="bench") as session:
         server = ReviewServer(session).start()
         base = server.url.split("/?")[0]
         question = session.questions()[0]["question"]
@@ -162,7 +170,6 @@ def main() -> None:
             print(f"{name}, over HTTP: {_ms(samples)}")
         server.stop()
         server.join(30)
-        session.close()
 
 
 if __name__ == "__main__":

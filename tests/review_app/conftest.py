@@ -8,7 +8,10 @@
     ``serve(desk_class, grader)``: a desk on that class, serving in a thread; stopped (and its
     session closed) after the test.
 ``browser``
-    One headless Chromium for the session (missing is a failure, never a skip).
+    One headless Chromium for the module (missing is a failure, never a skip). Playwright's
+    sync API leaves its event loop marked running in the thread while it lives, so that
+    ``asyncio.run`` (nbclient's kernels among its callers) fails there: the browser lives no
+    longer than the module that uses it, and the class is made before it starts.
 """
 
 from __future__ import annotations
@@ -67,8 +70,8 @@ def serve():
         served.session.close()
 
 
-@pytest.fixture(scope="session")
-def browser():
+@pytest.fixture(scope="module")
+def browser(pristine):
     why = chromium.missing()
     if why is not None:
         pytest.fail(why)

@@ -169,9 +169,10 @@ def main(argv: list[str]) -> int:
     from tests.review_app.browser import launch, screenshots
 
     out = Path(argv[0] if argv else "docs/instructors")
-    with tempfile.TemporaryDirectory() as tmp, launch() as browser:
-        made = build(Path(tmp))
-        written = screenshots(browser, made, out)
+    with tempfile.TemporaryDirectory() as tmp:
+        made = build(Path(tmp))  # before the browser, whose event loop blocks asyncio.run
+        with launch() as browser:
+            written = screenshots(browser, made, out)
     print("wrote " + ", ".join(str(p) for p in written))
     return 0
 
