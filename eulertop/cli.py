@@ -29,6 +29,8 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
               "solver, then rescore"),
     "override": ("grader.amend", "give one student's answer (or total) points, with a reason; "
                  "kept through every regrade"),
+    "review": ("eulertop.review_app.cli", "the review desk: score written answers by rubric "
+               "and look through flagged ones, in the browser"),
     "late": ("grader.amend", "the deadline, late penalty and extensions ('late set', 'late "
              "extend'), then rescore"),
     "export": ("grader.lms.export", "write the gradebook Canvas, Moodle, Blackboard or Gradescope "

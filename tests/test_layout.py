@@ -57,6 +57,8 @@ FLOORS = {
     "grader.lms.export": 28, "grader.hosted": 28,
     # the student package's front ends: check() in a notebook, eulertop-check (issue 33)
     "eulertop_check": 28,
+    # the review desk (issue 31): a web app above grader/, which nothing in grader/ imports
+    "eulertop.review_app": 30,
     # the console script and what composes the rooms
     "eulertop": 40,
 }
@@ -64,7 +66,8 @@ FLOORS = {
 SUBPACKAGES = ("grader.sandbox", "grader.kernels", "grader.executors", "grader.lms",
                "grader.report", "grader.hosted")
 
-WHOLE_ROOMS = ("eulertop_base", "solver", "problems", "eulertop", "eulertop_check", *SUBPACKAGES)
+WHOLE_ROOMS = ("eulertop_base", "solver", "problems", "eulertop", "eulertop_check",
+               "eulertop.review_app", *SUBPACKAGES)
 """Packages whose modules take the package's floor unless listed themselves (``grader.lms``'s
 formats are floor 5, its ``export`` front end is listed at 8). ``grader`` is not one."""
 
@@ -251,6 +254,17 @@ def test_the_circle_finder_finds_circles():
     """Control of the tests above: the finder reports a circle when there is one."""
     assert circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
     assert circles({"a": {"b"}, "b": set()}) == []
+
+
+def test_the_review_desk_is_a_room_above_grader():
+    """Issue 31: the web app's modules sit on its own floor, above every grader module, and
+    nothing in grader/ imports them."""
+    desk = [name for name in MODULES if name.startswith("eulertop.review_app")]
+    assert len(desk) > 3 and {floor(name) for name in desk} == {FLOORS["eulertop.review_app"]}
+    assert FLOORS["eulertop.review_app"] > max(v for k, v in FLOORS.items()
+                                               if k.startswith("grader"))
+    assert not [(a, b) for a, targets in GRAPH.items() if a.startswith("grader")
+                for b in targets if b.startswith("eulertop.review_app")]
 
 
 def test_every_grader_module_names_its_floor_in_its_docstring():
