@@ -88,8 +88,8 @@ def screenshots(browser: Any, made: Any, out: Path) -> list[Path]:
                                    arg=first)
             for key in "13":
                 page.keyboard.press(key)
-            page.fill("#comment", "Both ends argued well; say why the stationary point is a "
-                      "*minimum* ($V_\\text{eff}'' > 0$).")
+            page.fill("#comment", "Say why $V_\\text{eff} \\to +\\infty$ at both ends, and why "
+                      "the stationary point is a *minimum* ($V_\\text{eff}'' > 0$).")
             shots = [out / "review.png", out / "review_flagged.png"]
             page.screenshot(path=str(shots[0]))
             flagged = open_desk(context, server.url, "/flagged")
