@@ -285,19 +285,21 @@ class Answer:
 
     def to_dict(self) -> dict:
         """Plain JSON (lists for tuples); ``Answer.from_dict(a.to_dict()) == a``."""
-        # field by field, not asdict (which deep-copies through every dataclass: a tenth of
-        # 'eulertop generate'); values are plain JSON already, lists copied
-        d = {f.name: _json_copy(getattr(self, f.name)) for f in fields(self)}
-        d["mistakes"] = [{f.name: _json_copy(getattr(m, f.name)) for f in fields(m)}
-                         for m in self.mistakes]
-        d["options"], d["symbols"] = list(self.options), list(self.symbols)
-        d["rubric"] = [r.to_dict() for r in self.rubric]
-        for optional in ("accepted", "depends_on", "rubric"):  # only when set: older keys
-            # hash as before
-            if d[optional]:
-                d[optional] = list(d[optional])
-            else:
-                del d[optional]
+        # field by field in their order (the key file's bytes and hashes follow it), not
+        # asdict, which deep-copies through every dataclass; values are plain JSON already,
+        # lists copied so that the dict shares none with the answer
+        d = {"name": self.name, "kind": self.kind, "value": _json_copy(self.value),
+             "unit": self.unit, "rtol": self.rtol, "atol": self.atol, "points": self.points,
+             "mistakes": [{"name": m.name, "value": _json_copy(m.value), "feedback": m.feedback}
+                          for m in self.mistakes],
+             "options": list(self.options), "symbols": list(self.symbols),
+             "period": self.period, "description": self.description}
+        if self.accepted:  # the last three only when set: older keys hash as before
+            d["accepted"] = [_json_copy(v) for v in self.accepted]
+        if self.depends_on:
+            d["depends_on"] = list(self.depends_on)
+        if self.rubric:
+            d["rubric"] = [r.to_dict() for r in self.rubric]
         return d
 
     @classmethod
@@ -321,7 +323,7 @@ class Answer:
 def _json_copy(value: Any) -> Any:
     """A copy of plain JSON ``value`` sharing no list or dict with it (tuples stay tuples)."""
     if isinstance(value, list):
-        return [_json_copy(v) for v in value]
+        return [v if type(v) is float else _json_copy(v) for v in value]
     if isinstance(value, tuple):
         return tuple(_json_copy(v) for v in value)
     if isinstance(value, dict):

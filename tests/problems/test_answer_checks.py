@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import replace
+from dataclasses import fields, replace
 
 import numpy as np
 import pytest
@@ -19,6 +19,7 @@ import pytest
 from problems.answers import (
     Answer,
     Mistake,
+    RubricItem,
     distinguishable_answers,
     grade,
     mistakes_distinguishable,
@@ -176,3 +177,21 @@ def test_the_margin_is_a_generation_rule_and_a_key_file_is_graded_as_written():
     read = Answer.from_dict(json.loads(json.dumps(answer.to_dict())))
     assert grade(read, 1.0005).status == "correct"
     assert grade(read, 1.003).mistake == "near"
+
+
+# -- written back: every field, in order, sharing nothing
+
+
+def test_a_key_record_holds_every_field_in_order_and_shares_no_list():
+    names = [f.name for f in fields(Answer)]
+    vector = Answer("w", "vector", [1.0, 2.0], accepted=([2.0, 1.0],), depends_on=("L",),
+                    mistakes=(Mistake("m", [5.0, 5.0], "?"),), description="ω")
+    prompt = Answer("why", "written", "Explain.", points=2.0,
+                    rubric=(RubricItem("a", 1.0), RubricItem("b", 1.0)))
+    record = vector.to_dict()
+    assert list(record) == [n for n in names if n != "rubric"]
+    assert list(prompt.to_dict()) == [n for n in names if n not in ("accepted", "depends_on")]
+    record["value"][0] = record["accepted"][0][0] = record["mistakes"][0]["value"][0] = 9.0
+    assert vector.to_dict() == {**record, "value": [1.0, 2.0], "accepted": [[2.0, 1.0]],
+                                "mistakes": [{"name": "m", "value": [5.0, 5.0], "feedback": "?"}]}
+    assert Answer.from_dict(prompt.to_dict()) == prompt
