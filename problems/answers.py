@@ -311,6 +311,14 @@ class Answer:
         d["rubric"] = rubric_items(d.get("rubric", ()))
         return cls(**d)
 
+    def following(self, *names: str) -> Answer:
+        """This answer declared as computed from the earlier answers ``names``
+        (``depends_on``). Only the names are checked again: the rest of a valid answer stays
+        valid (``replace`` would read and regrade every value)."""
+        copy = _unchecked(self, depends_on=names)
+        _check_depends_on(copy)
+        return copy
+
     def with_points(self, points: float) -> Answer:
         """This answer worth ``points``: a written one's rubric scaled to add up to them."""
         if self.kind != WRITTEN or self.points == points:
@@ -1231,9 +1239,10 @@ def mistakes_distinguishable(answer: Answer, margin: float = 5.0) -> bool:
 
 
 def _unchecked(answer: Answer, **changes: Any) -> Answer:
-    """``replace(answer, **changes)`` without ``__post_init__``: only for tolerances that
-    :func:`mistakes_distinguishable` widens, which can make no field unreadable or the key
-    ungradable (it checks each mistake against the widened key itself)."""
+    """``replace(answer, **changes)`` without ``__post_init__``, for changes the caller checks
+    itself: :meth:`Answer.following`'s names; :func:`mistakes_distinguishable`'s widened
+    tolerances, which can make no value unreadable or the key ungradable (it checks each
+    mistake against the widened key itself)."""
     copy = object.__new__(Answer)
     for f in fields(Answer):
         object.__setattr__(copy, f.name, changes.get(f.name, getattr(answer, f.name)))

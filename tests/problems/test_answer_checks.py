@@ -195,3 +195,11 @@ def test_a_key_record_holds_every_field_in_order_and_shares_no_list():
     assert vector.to_dict() == {**record, "value": [1.0, 2.0], "accepted": [[2.0, 1.0]],
                                 "mistakes": [{"name": "m", "value": [5.0, 5.0], "feedback": "?"}]}
     assert Answer.from_dict(prompt.to_dict()) == prompt
+
+
+def test_following_checks_the_names_it_is_given_and_keeps_the_rest():
+    answer = Answer("t", "scalar", 2.0, mistakes=(Mistake("half", 1.0, "?"),))
+    assert answer.following("L", "T") == replace(answer, depends_on=("L", "T"))
+    for names, fragment in ((("t",), "names of other answers"), (("2L",), "names of other")):
+        with pytest.raises(ParameterError, match=fragment):
+            answer.following(*names)
