@@ -1226,6 +1226,10 @@ def mistakes_distinguishable(answer: Answer, margin: float = 5.0) -> bool:
     if not answer.mistakes:
         return True
     wide = _unchecked(answer, rtol=margin * answer.rtol, atol=margin * answer.atol)
+    if (answer.kind == "scalar" or (answer.kind == "angle" and answer.period is None)) \
+            and wide.rtol >= 0 and wide.atol >= 0:
+        return _numbers_apart((wide.value, *wide.accepted), [m.value for m in wide.mistakes],
+                              wide.rtol, wide.atol)
     form = _Form.of(wide)
     keys = [_read_key(form, v, "value") for v in (wide.value, *wide.accepted)]
     seen: list = []
@@ -1235,6 +1239,19 @@ def mistakes_distinguishable(answer: Answer, margin: float = 5.0) -> bool:
                 or not _matches(wide, value, value):
             return False
         seen.append(value)
+    return True
+
+
+def _numbers_apart(keys: tuple[float, ...], mistakes: list[float], rtol: float,
+                   atol: float) -> bool:
+    """:func:`mistakes_distinguishable` of a scalar (an angle without a period): the same
+    comparisons as :func:`_within`'s, on the floats the answer holds (each matches itself:
+    its tolerances are ≥ 0)."""
+    seen: list[float] = []
+    for x in mistakes:
+        if any(abs(x - v) <= atol + rtol * abs(v) for v in (*keys, *seen)):
+            return False
+        seen.append(x)
     return True
 
 

@@ -100,6 +100,17 @@ def test_a_mistake_undefined_at_some_key_points_is_not_recognisable():
     assert not mistakes_distinguishable(answer, 5.0) and not _by_grading(answer, 5.0)
 
 
+@pytest.mark.parametrize("kind", ["scalar", "angle", "vector"])
+def test_a_mistake_exactly_at_the_widened_tolerance_is_not_told_apart(kind):
+    """Powers of two make the distance and the tolerance exact: grade() counts the edge as a
+    match (≤), and so must the rule."""
+    key, step = ([1.0, 0.0], [2**-7, 0.0]) if kind == "vector" else (1.0, 2**-7)
+    at = (np.add(key, step).tolist() if kind == "vector" else key + step)
+    answer = Answer("x", kind, key, rtol=2**-8, mistakes=(Mistake("edge", at, "?"),))
+    assert not _by_grading(answer, 2.0) and not mistakes_distinguishable(answer, 2.0)
+    assert _by_grading(answer, 1.0) and mistakes_distinguishable(answer, 1.0)
+
+
 def test_a_mistake_is_told_from_an_accepted_value_too():
     answer = Answer("x", "scalar", 1.0, accepted=(-1.0,), mistakes=(Mistake("sign", -1.001, "?"),))
     assert not mistakes_distinguishable(answer, 5.0)
