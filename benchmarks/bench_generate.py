@@ -18,12 +18,15 @@ one-time work, drawing the variants, writing the notebooks, and the manifest and
 ``--margin`` measures instead what one more student costs (issue 34), against its floor, in
 one run: ``eulertop generate``'s whole call for ``--students`` and for twice as many, in
 fresh processes and alternating (the cost at the margin is the difference over the students
-added, wall time, one worker process per core); and, in this process, per student, drawing
-every question one student at a time, drawing them in one pass (each family with a batch form
-for all the students at once), and writing the files of the students drawn (notebooks,
-manifest and key entries: the floor, what generating costs when drawing is free). Rounds
-alternate them; medians. ``--record FILE`` keeps every timing, ``--page FILE`` writes the
-text into that page's ``bench_generate`` block (``docs/speed.md``).
+added, in wall time with one worker process per core, and in CPU time of the call and its
+workers, which other jobs on the machine disturb less); and, in this process, per student,
+drawing every question one student at a time, drawing them in one pass (each family with a
+batch form for all the students at once), each question drawn in one pass alone (where the
+drawing goes, family by family), and writing the files of the students drawn (the floor, what
+generating costs when drawing is free: their notebooks, and their manifest and key entries,
+timed apart). Rounds alternate them; medians. ``--record FILE`` keeps every timing,
+``--page FILE`` writes the text into that page's ``bench_generate`` block
+(``docs/speed.md``).
 
 Run from the repository root (or after ``pip install -e .``):
 ``PYTHONPATH=. python benchmarks/bench_generate.py [--students 300] [--questions 14]
@@ -159,7 +162,7 @@ def margin_parts(students: int, questions: int, rounds: int) -> dict[str, list]:
     def one_pass():
         drawn[:] = class_variants(families, asked, 0, ids, {})
 
-    def files():
+    def notebooks():
         with tempfile.TemporaryDirectory() as folder:
             for row, variants in zip(roster.rows, drawn, strict=True):
                 memo: dict = {}
@@ -169,11 +172,19 @@ def margin_parts(students: int, questions: int, rounds: int) -> dict[str, list]:
                     text = notebook_text(notebook, validate=False, memo=memo)
                     (Path(folder) / f"{kind}-{row['id']}.ipynb").write_text(text,
                                                                              encoding="utf-8")
-                CompactJSON.of(manifest_entry(variants, 0)), CompactJSON.of(key_entry(variants))
+
+    def entries():
+        for variants in drawn:
+            CompactJSON.of(manifest_entry(variants, 0)), CompactJSON.of(key_entry(variants))
+
+    def question(k: int):
+        return lambda: class_variants(families, [asked[k]], 0, ids, {})
 
     one_pass()
-    times = speed_page.interleaved({"one at a time": one_at_a_time, "one pass": one_pass,
-                                    "files": files}, rounds)
+    contenders = {"one at a time": one_at_a_time, "one pass": one_pass,
+                  "notebooks": notebooks, "entries": entries}
+    contenders |= {f"question {k + 1}": question(k) for k in range(len(asked))}
+    times = speed_page.interleaved(contenders, rounds)
     return {name: [r["cpu"] / students for r in rows] for name, rows in times.items()}
 
 
@@ -188,18 +199,33 @@ def measure_margin(students: int, questions: int, jobs: int | None, rounds: int,
         for n in (students, 2 * students) if r % 2 == 0 else (2 * students, students):
             runs[n].append(_timed_child(n, questions, jobs, seed=r))
     record["generate"] = {str(n): [x["generate"] for x in found] for n, found in runs.items()}
+    record["cpu_generate"] = {str(n): [x["cpu_generate"] for x in found]
+                              for n, found in runs.items()}
+    from problems.templates import FAMILIES
+
+    record["problems"] = [[name, FAMILIES[name].batched]
+                          for name in _setup(students, questions)[1]]
     record["per_student_cpu"] = margin_parts(students, questions, rounds)
     record["load_after"] = [round(x, 2) for x in os.getloadavg()]
     return record
 
 
+def _margin(record: dict, key: str) -> tuple[float, float, float]:
+    """Medians of the call for the small and the large class, and their difference per
+    student added."""
+    small, large = record["students"]
+    t_small = statistics.median(record[key][str(small)])
+    t_large = statistics.median(record[key][str(large)])
+    return t_small, t_large, (t_large - t_small) / (large - small)
+
+
 def render_margin(record: dict) -> list[str]:
     """The page's text, from the record alone."""
     small, large = record["students"]
-    t_small = statistics.median(record["generate"][str(small)])
-    t_large = statistics.median(record["generate"][str(large)])
-    margin = (t_large - t_small) / (large - small)
+    t_small, t_large, margin = _margin(record, "generate")
+    cpu = _margin(record, "cpu_generate")[2]
     parts = {k: statistics.median(v) for k, v in record["per_student_cpu"].items()}
+    files = parts["notebooks"] + parts["entries"]
     ms = speed_page.seconds
     return [
         speed_page.header(record),
@@ -208,8 +234,8 @@ def render_margin(record: dict) -> list[str]:
         f"questions (every built-in family), one worker process per core, each run a fresh "
         f"process, {record['rounds']} of each alternating: the call took {ms(t_small)} and "
         f"{ms(t_large)} (medians), so **one more student costs {ms(margin)}** of wall time "
-        "(the target: at most 3 ms). Per student, in one process (CPU time, medians of "
-        "the same rounds):",
+        f"(the target: at most 3 ms), and {ms(cpu)} of CPU time of the call and its worker "
+        "processes. Per student, in one process (CPU time, medians of the same rounds):",
         "",
         "| per student, all questions | CPU |",
         "|---|---|",
@@ -217,11 +243,22 @@ def render_margin(record: dict) -> list[str]:
         f"{ms(parts['one at a time'])} |",
         f"| drawing them in one pass (families with a batch form: all students at once) | "
         f"{ms(parts['one pass'])} |",
-        f"| writing the files of the students drawn — the floor | {ms(parts['files'])} |",
+        f"| writing the files of the students drawn — the floor | {ms(files)} |",
+        f"| of which their notebooks (built, encoded, written) | {ms(parts['notebooks'])} |",
+        f"| of which their manifest and key entries (encoded) | {ms(parts['entries'])} |",
         "",
         f"Drawing in one pass is {parts['one at a time'] / parts['one pass']:.2f}× drawing "
         f"one at a time; drawing and writing together are "
-        f"{(parts['one pass'] + parts['files']) / parts['files']:.2f}× the floor.",
+        f"{(parts['one pass'] + files) / files:.2f}× the floor. Where the drawing goes, "
+        "each question drawn in one pass alone, per student (CPU time, medians of the same "
+        "rounds), the costliest first:",
+        "",
+        "| question | family | batch form | CPU per student |",
+        "|---|---|---|---|",
+        *(f"| {k} | `{name}` | {'yes' if batched else 'no'} | "
+          f"{ms(parts[f'question {k}'])} |" for k, (name, batched) in sorted(
+              enumerate(record["problems"], start=1),
+              key=lambda q: -parts[f"question {q[0]}"])),
     ]
 
 

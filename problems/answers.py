@@ -59,7 +59,7 @@ import numbers
 import sys
 from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, fields, replace
-from functools import lru_cache, partial
+from functools import cache, lru_cache, partial
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
@@ -267,23 +267,17 @@ class Answer:
         key = _read_key(form, self.value, "value")
         object.__setattr__(self, "value", _to_json(key))
         _require_gradable_key(self)
+        if self.kind in ("vector", "expression"):  # the graded form knows the key: its length,
+            form = _Form.of(self)  # the points where it is defined
         object.__setattr__(self, "accepted", tuple(
             _to_json(_read_key(form, v, "accepted")) for v in self.accepted))
-        depends = tuple(self.depends_on)
-        if not all(isinstance(n, str) and n.isidentifier() and n != self.name for n in depends):
-            raise ParameterError("depends_on", f"answer {self.name!r}: names of other answers, "
-                                 f"got {depends!r}")
-        object.__setattr__(self, "depends_on", depends)
-        if self.mistakes:  # read in the graded form once, for all of them
-            form = _Form.of(self)
-            key = _read_key(form, self.value, "value")
-            mistakes = tuple(_checked_mistake(self, m, form, key) for m in self.mistakes)
-        else:
-            mistakes = ()
+        _check_depends_on(self)
+        # each mistake read in the graded form, against the key read once
+        mistakes = tuple(_checked_mistake(self, m, form, key) for m in self.mistakes)
         object.__setattr__(self, "mistakes", mistakes)
-        names = [m.name for m in mistakes]
-        if len(set(names)) != len(names):
-            raise ParameterError("mistakes", f"answer {self.name!r}: duplicate names {names}")
+        if len(mistakes) > 1 and len({m.name for m in mistakes}) != len(mistakes):
+            raise ParameterError("mistakes", f"answer {self.name!r}: duplicate names "
+                                 f"{[m.name for m in mistakes]}")
 
     def mistake(self, name: str) -> Mistake | None:
         """The known mistake called ``name``, or None if this answer does not list it."""
@@ -291,30 +285,39 @@ class Answer:
 
     def to_dict(self) -> dict:
         """Plain JSON (lists for tuples); ``Answer.from_dict(a.to_dict()) == a``."""
-        # field by field, not asdict (which deep-copies through every dataclass: a tenth of
-        # 'eulertop generate'); values are plain JSON already, lists copied
-        d = {f.name: _json_copy(getattr(self, f.name)) for f in fields(self)}
-        d["mistakes"] = [{f.name: _json_copy(getattr(m, f.name)) for f in fields(m)}
-                         for m in self.mistakes]
-        d["options"], d["symbols"] = list(self.options), list(self.symbols)
-        d["rubric"] = [r.to_dict() for r in self.rubric]
-        for optional in ("accepted", "depends_on", "rubric"):  # only when set: older keys
-            # hash as before
-            if d[optional]:
-                d[optional] = list(d[optional])
-            else:
-                del d[optional]
+        # field by field in their order (the key file's bytes and hashes follow it), not
+        # asdict, which deep-copies through every dataclass; values are plain JSON already,
+        # lists copied so that the dict shares none with the answer
+        d = {"name": self.name, "kind": self.kind, "value": _json_copy(self.value),
+             "unit": self.unit, "rtol": self.rtol, "atol": self.atol, "points": self.points,
+             "mistakes": [{"name": m.name, "value": _json_copy(m.value), "feedback": m.feedback}
+                          for m in self.mistakes],
+             "options": list(self.options), "symbols": list(self.symbols),
+             "period": self.period, "description": self.description}
+        if self.accepted:  # the last three only when set: older keys hash as before
+            d["accepted"] = [_json_copy(v) for v in self.accepted]
+        if self.depends_on:
+            d["depends_on"] = list(self.depends_on)
+        if self.rubric:
+            d["rubric"] = [r.to_dict() for r in self.rubric]
         return d
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> Answer:
         """Inverse of :meth:`to_dict`; unknown keys are an error (a key file from elsewhere)."""
-        d = dict(_known_keys(cls, d, "answer"))
-        d["mistakes"] = tuple(
-            Mistake(**_known_keys(Mistake, m, "mistake")) for m in d.get("mistakes", ())
-        )
+        d = _known_keys(cls, d, "answer")
+        d["mistakes"] = tuple(Mistake(**_known_keys(Mistake, m, "mistake"))
+                              for m in d.get("mistakes", ()))
         d["rubric"] = rubric_items(d.get("rubric", ()))
         return cls(**d)
+
+    def following(self, *names: str) -> Answer:
+        """This answer declared as computed from the earlier answers ``names``
+        (``depends_on``). Only the names are checked again: the rest of a valid answer stays
+        valid (``replace`` would read and regrade every value)."""
+        copy = _unchecked(self, depends_on=names)
+        _check_depends_on(copy)
+        return copy
 
     def with_points(self, points: float) -> Answer:
         """This answer worth ``points``: a written one's rubric scaled to add up to them."""
@@ -328,7 +331,7 @@ class Answer:
 def _json_copy(value: Any) -> Any:
     """A copy of plain JSON ``value`` sharing no list or dict with it (tuples stay tuples)."""
     if isinstance(value, list):
-        return [_json_copy(v) for v in value]
+        return [v if type(v) is float else _json_copy(v) for v in value]
     if isinstance(value, tuple):
         return tuple(_json_copy(v) for v in value)
     if isinstance(value, dict):
@@ -517,8 +520,7 @@ def numbers_of(answer: Answer, value: Any) -> NDArray[np.float64] | None:
         return None
     if answer.kind != "expression":
         return np.atleast_1d(np.asarray(read, dtype=float))
-    with np.errstate(all="ignore"):
-        return np.asarray(evaluate_expression(read, form.symbols, form.sample), dtype=float)
+    return np.array(_values(read, form.symbols, form.where))
 
 
 TOO_FEW_FIGURES = "too_few_figures"
@@ -658,19 +660,18 @@ class _Form(NamedTuple):
     length: int | None  # vector
     options: tuple[str, ...]  # choice
     symbols: tuple[str, ...]  # expression
-    sample: Mapping[str, NDArray] | None  # expression: where to try it
+    where: tuple | None  # expression: where to try it (_sample)
 
     @classmethod
     def of(cls, answer: Answer, reading_key: bool = False) -> _Form:
         """The form of ``answer``; ``reading_key`` while its key is not read yet (no length, and
         expressions tried at every candidate point, not only where the key is defined)."""
         length = len(answer.value) if answer.kind == "vector" and not reading_key else None
-        sample = None
+        where = None
         if answer.kind == "expression":
-            sample = _candidates(answer.name, answer.symbols) if reading_key \
-                else _key_points(answer.name, answer.symbols, answer.value, answer.atol)
+            where = (answer.name,) if reading_key else _at_key(answer)
         return cls(answer.name, answer.kind, answer.unit, answer.points, length,
-                   answer.options, answer.symbols, sample)
+                   answer.options, answer.symbols, where)
 
     @classmethod
     def of_spec(cls, spec: Mapping[str, Any]) -> _Form:
@@ -678,9 +679,9 @@ class _Form(NamedTuple):
         if kind not in ANSWER_KINDS:
             raise ParameterError("kind", f"must be one of {ANSWER_KINDS}, got {kind!r}")
         symbols = tuple(spec.get("symbols") or ())
-        sample = _candidates(name, symbols) if kind == "expression" else None
+        where = (name,) if kind == "expression" else None
         return cls(name, kind, spec.get("unit", ""), float(spec.get("points", 1.0)),
-                   spec.get("length"), tuple(spec.get("options") or ()), symbols, sample)
+                   spec.get("length"), tuple(spec.get("options") or ()), symbols, where)
 
 
 class _Missing(Exception):
@@ -727,6 +728,8 @@ def _read(form: _Form, submitted: Any) -> Any:
 
 def _read_key(form: _Form, value: Any, field: str) -> Any:
     """Read a value written by the template (key or mistake): malformed is a template bug."""
+    if type(value) is float and form.kind in _NUMBER_KINDS and math.isfinite(value):
+        return value  # what _read gives, without its calls: most of a key
     try:
         return _read(form, value)
     except (_Missing, _Invalid) as err:
@@ -738,9 +741,13 @@ def _read_key(form: _Form, value: Any, field: str) -> Any:
 # Readers: plain value -> normal form of the kind
 
 
+_PLAIN = frozenset({float, int, bool, str, list, dict})
+"""Types :func:`_plain` gives back as they are (no numpy or sympy object is one of them)."""
+
+
 def _plain(x: Any) -> Any:
     """numpy and sympy objects as plain Python, one level deep (elements are read one by one)."""
-    if type(x) is float:  # the common case first
+    if type(x) in _PLAIN:  # the common cases first
         return x
     if isinstance(x, np.ndarray):
         return x.tolist() if x.ndim else x.item()
@@ -853,6 +860,9 @@ def _read_scalar(x: Any, form: _Form) -> float:
 
 
 def _read_vector(x: Any, form: _Form) -> NDArray[np.float64]:
+    if type(x) is list and x and (form.length is None or len(x) == form.length) \
+            and all(type(e) is float and math.isfinite(e) for e in x):
+        return np.array(x)  # what the checks below give a list of finite floats
     expected = f"a list of {form.length} numbers" if form.length else "a list of numbers"
     if not isinstance(x, list):
         raise _Invalid(f"{_describe(x)}; {expected} is expected")
@@ -893,17 +903,25 @@ def _read_expression(x: Any, form: _Form) -> str:
     if not isinstance(x, str):
         expected = "an expression (sympy, or a string) in " + ", ".join(form.symbols)
         raise _Invalid(f"{_describe(x)}; {expected} is expected")
-    try:
-        parse_expression(x, form.symbols)
-        values = evaluate_expression(x, form.symbols, form.sample)
-    except ExpressionError as err:
-        raise _Invalid(f"expression {_quote(x.strip())}: {err}") from None
-    if not np.any(np.isfinite(values)):
-        raise _Invalid(
-            f"expression {_quote(x.strip())} cannot be evaluated at any test point "
-            "(division by zero, overflow, or the root or logarithm of a negative number)"
-        )
+    problem = _expression_problem(x, form.symbols, form.where)
+    if problem:
+        raise _Invalid(problem)
     return x.strip()
+
+
+@lru_cache(maxsize=4096)
+def _expression_problem(x: str, symbols: tuple[str, ...], where: tuple) -> str | None:
+    """Why the text ``x`` is no expression in ``symbols`` to grade at the points ``where``
+    names (:func:`_sample`), or None: cached, as a key's texts recur in every student's key."""
+    try:
+        parse_expression(x, symbols)
+        values = _values(x, symbols, where)
+    except ExpressionError as err:
+        return f"expression {_quote(x.strip())}: {err}"
+    if not np.any(np.isfinite(values)):
+        return (f"expression {_quote(x.strip())} cannot be evaluated at any test point "
+                "(division by zero, overflow, or the root or logarithm of a negative number)")
+    return None
 
 
 PLACEHOLDER = ("*Write your answer here, in Markdown: formulas between `$…$` (or `$$…$$` on a "
@@ -927,6 +945,9 @@ def _read_written(x: Any, form: _Form) -> str:
         raise _Missing
     return text
 
+
+_NUMBER_KINDS = frozenset({"scalar", "angle"})
+"""Kinds whose normal form is one float (:func:`_read_scalar`)."""
 
 _READERS = {
     "scalar": _read_scalar,
@@ -962,10 +983,9 @@ def _same_vector(x: NDArray, v: NDArray, answer: Answer) -> bool:
 
 
 def _same_expression(x: str, v: str, answer: Answer) -> bool:
-    points = _key_points(answer.name, answer.symbols, answer.value, answer.atol)
+    where = _at_key(answer)
+    xs, vs = _values(x, answer.symbols, where), _values(v, answer.symbols, where)
     with np.errstate(all="ignore"):
-        xs = evaluate_expression(x, answer.symbols, points)
-        vs = evaluate_expression(v, answer.symbols, points)
         return bool(np.all(np.isfinite(xs))) and _within(xs, vs, answer)
 
 
@@ -1016,22 +1036,40 @@ def _candidates(name: str, symbols: tuple[str, ...]) -> Mapping[str, NDArray]:
     return sample_points(symbols, name, N_SAMPLE_CANDIDATES)
 
 
+def _at_key(answer: Answer) -> tuple[str, str]:
+    """Where ``answer``'s expressions are compared (:func:`_sample`): its key points."""
+    return answer.name, answer.value
+
+
+def _sample(where: tuple, symbols: tuple[str, ...]) -> Mapping[str, NDArray]:
+    """The points ``where`` names: ``(name,)`` the candidates of an answer called ``name``,
+    ``(name, key)`` those at which its key is defined (:func:`_key_points`)."""
+    if len(where) == 1:
+        return _candidates(where[0], symbols)
+    return _key_points(where[0], symbols, where[1])
+
+
+@lru_cache(maxsize=4096)
+def _values(text: str, symbols: tuple[str, ...], where: tuple) -> NDArray:
+    """``text`` evaluated at the points ``where`` names (:func:`_sample`), read-only: a key's
+    expressions, the same text for a whole class, are read and compared once, not once per
+    student and mistake (:class:`~problems.expressions.ExpressionError` is not cached)."""
+    values = evaluate_expression(text, symbols, _sample(where, symbols))
+    values.flags.writeable = False
+    return values
+
+
 @lru_cache(maxsize=1024)
-def _key_points(
-    name: str, symbols: tuple[str, ...], key: str, atol: float
-) -> Mapping[str, NDArray]:
+def _key_points(name: str, symbols: tuple[str, ...], key: str) -> Mapping[str, NDArray]:
     """The candidate points at which the key expression is defined."""
     candidates = _candidates(name, symbols)
-    values = evaluate_expression(key, symbols, candidates)
-    keep = np.isfinite(values)
+    keep = np.isfinite(_values(key, symbols, (name,)))
     if np.count_nonzero(keep) < MIN_SAMPLE_POINTS:
         raise ParameterError(
             "value",
             f"answer {name!r}: the key expression is defined at only {np.count_nonzero(keep)} "
             f"of {N_SAMPLE_CANDIDATES} sample points (need {MIN_SAMPLE_POINTS})",
         )
-    if atol == 0 and not np.any(values[keep]):
-        raise ParameterError("atol", f"answer {name!r}: the key is zero everywhere; set atol > 0")
     points = {}
     for symbol, column in candidates.items():
         points[symbol] = column[keep]
@@ -1123,13 +1161,24 @@ def _to_json(value: Any) -> Any:
 
 def _require_gradable_key(answer: Answer) -> None:
     if answer.kind == "expression":  # defined at enough sample points; zero needs atol
-        _key_points(answer.name, answer.symbols, answer.value, answer.atol)
+        values = _values(answer.value, answer.symbols, _at_key(answer))  # finite: key points
+        if answer.atol == 0 and not np.any(values):
+            raise ParameterError("atol", f"answer {answer.name!r}: the key is zero everywhere; "
+                                 "set atol > 0")
     elif answer.kind in ("scalar", "angle", "vector") and answer.atol == 0 \
             and _is_zero(answer.value):
         raise ParameterError(
             "atol", f"answer {answer.name!r}: the key is zero, so rtol alone accepts only an exact "
             "zero; set atol > 0"
         )
+
+
+def _check_depends_on(answer: Answer) -> None:
+    depends = tuple(answer.depends_on)
+    if not all(isinstance(n, str) and n.isidentifier() and n != answer.name for n in depends):
+        raise ParameterError("depends_on", f"answer {answer.name!r}: names of other answers, "
+                             f"got {depends!r}")
+    object.__setattr__(answer, "depends_on", depends)
 
 
 def _is_zero(value: float | list[float]) -> bool:
@@ -1148,16 +1197,22 @@ def _checked_mistake(answer: Answer, mistake: Any, form: _Form, key: Any) -> Mis
             f"answer {answer.name!r}: mistake {mistake.name!r} is indistinguishable from the key "
             "within tolerance",
         )
-    return Mistake(mistake.name, _to_json(value), mistake.feedback)
+    plain = _to_json(value)
+    return mistake if plain is mistake.value else Mistake(mistake.name, plain, mistake.feedback)
 
 
 def _known_keys(cls: type, d: Mapping[str, Any], what: str) -> dict[str, Any]:
-    if not isinstance(d, Mapping):
+    if type(d) is not dict and not isinstance(d, Mapping):
         raise ParameterError(what, f"expected a JSON object, got {type(d).__name__}")
-    unknown = sorted(set(d) - {f.name for f in fields(cls)})
+    unknown = d.keys() - _field_names(cls)
     if unknown:
-        raise ParameterError(what, f"unknown keys {unknown}")
+        raise ParameterError(what, f"unknown keys {sorted(unknown)}")
     return dict(d)
+
+
+@cache
+def _field_names(cls: type) -> frozenset[str]:
+    return frozenset(f.name for f in fields(cls))
 
 
 def mistakes_distinguishable(answer: Answer, margin: float = 5.0) -> bool:
@@ -1168,11 +1223,47 @@ def mistakes_distinguishable(answer: Answer, margin: float = 5.0) -> bool:
     the widened tolerance of the key). Templates reject draws that fail this, so the grader can
     name every listed mistake reliably even for a student whose arithmetic is slightly off.
     """
-    try:
-        wide = replace(answer, rtol=margin * answer.rtol, atol=margin * answer.atol)
-    except ValueError:  # ParameterError: a mistake within the widened tolerance of the key
-        return False
-    return all(grade(wide, m.value).mistake == m.name for m in wide.mistakes)
+    if not answer.mistakes:
+        return True
+    wide = _unchecked(answer, rtol=margin * answer.rtol, atol=margin * answer.atol)
+    if (answer.kind == "scalar" or (answer.kind == "angle" and answer.period is None)) \
+            and wide.rtol >= 0 and wide.atol >= 0:
+        return _numbers_apart((wide.value, *wide.accepted), [m.value for m in wide.mistakes],
+                              wide.rtol, wide.atol)
+    form = _Form.of(wide)
+    keys = [_read_key(form, v, "value") for v in (wide.value, *wide.accepted)]
+    seen: list = []
+    for mistake in wide.mistakes:  # what grade(wide, mistake.value) names, without its reads
+        value = _read_key(form, mistake.value, "mistakes")
+        if any(_matches(wide, value, v) for v in (*keys, *seen)) \
+                or not _matches(wide, value, value):
+            return False
+        seen.append(value)
+    return True
+
+
+def _numbers_apart(keys: tuple[float, ...], mistakes: list[float], rtol: float,
+                   atol: float) -> bool:
+    """:func:`mistakes_distinguishable` of a scalar (an angle without a period): the same
+    comparisons as :func:`_within`'s, on the floats the answer holds (each matches itself:
+    its tolerances are ≥ 0)."""
+    seen: list[float] = []
+    for x in mistakes:
+        if any(abs(x - v) <= atol + rtol * abs(v) for v in (*keys, *seen)):
+            return False
+        seen.append(x)
+    return True
+
+
+def _unchecked(answer: Answer, **changes: Any) -> Answer:
+    """``replace(answer, **changes)`` without ``__post_init__``, for changes the caller checks
+    itself: :meth:`Answer.following`'s names; :func:`mistakes_distinguishable`'s widened
+    tolerances, which can make no value unreadable or the key ungradable (it checks each
+    mistake against the widened key itself)."""
+    copy = object.__new__(Answer)
+    for f in fields(Answer):
+        object.__setattr__(copy, f.name, changes.get(f.name, getattr(answer, f.name)))
+    return copy
 
 
 def distinguishable_answers(

@@ -46,7 +46,7 @@ from __future__ import annotations
 import math
 import numbers
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -76,7 +76,7 @@ def follows_from(answer: Answer | None, *names: str) -> Answer | None:
     """``answer`` declared as computed from the earlier answers ``names`` of its question
     (``Answer.depends_on``; the family's ``follow`` recomputes it from them), None left None
     (a rejected draw's answer)."""
-    return None if answer is None else replace(answer, depends_on=tuple(names))
+    return None if answer is None else answer.following(*names)
 
 
 def reject_unless(condition: bool, reason: str) -> None:

@@ -28,13 +28,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from scipy.special import ellipk
 
 from problems.answers import Answer, Mistake
-from problems.family import distinguishable, reject_unless
+from problems.family import IllPosed, distinguishable
 from problems.rounding import latex_sig, round_sig
 from problems.templates import near_axis_stability as near_axis
 from problems.templates.near_axis_stability import Draw, draw_body
@@ -83,35 +83,71 @@ def _draw(rng: np.random.Generator) -> Draw:
                 tuple(round_sig(omega, SIG).tolist()))
 
 
-def _well_posed(d: Draw) -> bool:
+def _rigid(d: Draw) -> bool:
+    """Moments of a rigid body, clearly apart (the rounding may have made them neither)."""
     I1, I2, I3 = d.moments
-    if I3 > I1 + I2 or min(I2 - I1, I3 - I2) < MIN_GAP * I3:  # the rounding made no rigid body
-        return False
-    T, L2 = invariants(I1, I2, I3, d.omega0)
-    return abs(float(L2 - 2 * T * I2)) >= SEPARATRIX_GAP * float(L2)
+    return not (I3 > I1 + I2 or min(I2 - I1, I3 - I2) < MIN_GAP * I3)
 
 
-def _circled_axis(d: Draw) -> int:
-    """ê3 if ``L² > 2T I2``, else ê1 (R10; the separatrix itself is rejected)."""
-    T, L2 = invariants(*d.moments, d.omega0)
-    return 3 if L2 > 2 * T * d.moments[1] else 1
+def _off_separatrix(d: Draw, T: float, L2: float) -> bool:
+    return abs(float(L2 - 2 * T * d.moments[1])) >= SEPARATRIX_GAP * float(L2)
 
 
-def _parameter_m(d: Draw) -> float:
+class _Solved(NamedTuple):
+    """What the solver gives one motion: its invariants (R7), its period and flip time (R10),
+    and R9's rate about ê1 and about ê3 with that axis's component of ω(0)."""
+
+    T: float
+    L2: float
+    period: float
+    t_flip: float
+    rate1: float
+    rate3: float
+
+
+def _moments_and_omega(draws: list[Draw]) -> tuple[np.ndarray, ...]:
+    I1, I2, I3 = np.array([d.moments for d in draws], dtype=float).T
+    return I1, I2, I3, np.array([d.omega0 for d in draws], dtype=float)
+
+
+def _solve_many(draws: list[Draw]) -> list[_Solved | IllPosed]:
+    """:class:`_Solved` of each draw, or the :class:`IllPosed` of one not well posed; every
+    solver function called once for all of them (element by element what one draw alone
+    gives)."""
+    found: list[_Solved | IllPosed | None] = [
+        None if _rigid(d) else IllPosed("moments too close, or no rigid body") for d in draws]
+    rigid = [i for i, f in enumerate(found) if f is None]
+    kept = {}
+    if rigid:
+        for i, t, l2 in zip(rigid, *invariants(*_moments_and_omega([draws[i] for i in rigid])),
+                            strict=True):
+            if _off_separatrix(draws[i], t, l2):
+                kept[i] = (t, l2)
+            else:
+                found[i] = IllPosed("a motion near the separatrix")
+    if kept:
+        I1, I2, I3, omega = _moments_and_omega([draws[i] for i in kept])
+        columns = zip(asymmetric_top_period(I1, I2, I3, omega), flip_time(I1, I2, I3, omega),
+                      near_axis_stability(I1, I2, I3, omega[:, 0], axis=1)["rate"],
+                      near_axis_stability(I1, I2, I3, omega[:, 2], axis=3)["rate"], strict=True)
+        for (i, invariant), solved in zip(kept.items(), columns, strict=True):
+            found[i] = _Solved(*invariant, *solved)
+    return found
+
+
+def _parameter_m(d: Draw, T: float, L2: float) -> float:
     """R10's ``m = k²``: ``x = (I2 − I1)(2T I3 − L²)/((I3 − I2)(L² − 2T I1))`` for
     ``L² > 2T I2``, and ``1/x`` (indices 1 and 3 exchanged) otherwise; so ``m = min(x, 1/x)``."""
     I1, I2, I3 = d.moments
-    T, L2 = invariants(I1, I2, I3, d.omega0)
     x = float((I2 - I1) * (2 * T * I3 - L2) / ((I3 - I2) * (L2 - 2 * T * I1)))
     return min(x, 1 / x)
 
 
-def _answers(d: Draw) -> tuple[Answer, ...]:
-    period = float(asymmetric_top_period(*d.moments, d.omega0))
-    t_flip = float(flip_time(*d.moments, d.omega0))
-    c = _circled_axis(d)
-    r9 = float(near_axis_stability(*d.moments, d.omega0[c - 1], axis=c)["rate"])
-    m = _parameter_m(d)
+def _answers(d: Draw, solved: _Solved) -> tuple[Answer, ...]:
+    period, t_flip = float(solved.period), float(solved.t_flip)
+    c = 3 if solved.L2 > 2 * solved.T * d.moments[1] else 1  # ê3 if L² > 2T I2, else ê1 (R10)
+    r9 = float(solved.rate3 if c == 3 else solved.rate1)
+    m = _parameter_m(d, solved.T, solved.L2)
     # scipy's ellipk takes the parameter m = k²; passing the modulus k is the classic slip
     modulus_slip = float(ellipk(math.sqrt(m)) / ellipk(m))
     period_m = (
@@ -188,8 +224,25 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     near the separatrix, or a known mistake close to the key.
     """
     d = Draw.of(params)
-    reject_unless(_well_posed(d), "moments too close, or a motion near the separatrix")
-    return distinguishable(lambda: _answers(d), MARGIN)
+    solved = _solve_many([d])[0]
+    if isinstance(solved, IllPosed):
+        raise solved
+    return distinguishable(lambda: _answers(d, solved), MARGIN)
+
+
+def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
+    """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
+    rejected) — the batch form (:mod:`problems.family`): every motion's invariants, period,
+    flip time and R9 rates in one solver call each."""
+    draws = [Draw.of(p) for p in many]
+    found: list[tuple[Answer, ...] | IllPosed] = []
+    for d, solved in zip(draws, _solve_many(draws), strict=True):
+        try:
+            found.append(solved if isinstance(solved, IllPosed) else
+                         distinguishable(lambda d=d, solved=solved: _answers(d, solved), MARGIN))
+        except IllPosed as e:
+            found.append(e)
+    return found
 
 
 def statement(params: Mapping[str, Any]) -> str:

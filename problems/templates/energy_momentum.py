@@ -30,7 +30,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from problems.answers import Answer, Mistake
-from problems.family import Parameter, follows_from, redrawn_until_well_posed, reject_unless
+from problems.family import Parameter, redrawn_until_well_posed, reject_unless
 from problems.genuine import SAME
 from problems.rounding import format_sig, latex_sig, round_sig
 from solver.inertia import angular_momentum, kinetic_energy, shape_tensor
@@ -63,37 +63,47 @@ def _angle(u: np.ndarray, v: np.ndarray) -> float:
     return float(np.arctan2(np.linalg.norm(np.cross(u, v)), np.dot(u, v)))
 
 
-def _answer(name, kind, key, mistakes, unit, description) -> Answer | None:
-    """An answer, or None if a mistake is within SEPARATION tolerances of the key or another."""
+def _apart(key, mistakes) -> bool:
+    """Whether the key and every mistake lie SEPARATION tolerances apart."""
     values = [np.atleast_1d(np.asarray(v, float)) for v in (key, *(m[1] for m in mistakes))]
     tol = SEPARATION * RTOL * np.linalg.norm(values[0])
-    if any(np.linalg.norm(a - b) <= tol for i, a in enumerate(values) for b in values[i + 1:]):
-        return None
+    return not any(np.linalg.norm(a - b) <= tol
+                   for i, a in enumerate(values) for b in values[i + 1:])
+
+
+def _answer(name, kind, key, mistakes, unit, description) -> Answer:
     return Answer(  # Answer converts numpy values to plain JSON
         name, kind, key, unit=unit, rtol=RTOL, description=description,
         mistakes=tuple(Mistake(n, v, f) for n, v, f in mistakes),
     )
 
 
+def _built(specs: tuple) -> tuple[Answer, ...]:
+    """T, L and the angle from :func:`_answers`' arguments of :func:`_answer`."""
+    T, L, angle = (_answer(*spec) for spec in specs)
+    return T, L, angle.following("L")
+
+
 def _answers(tensor, omega, T_naive, L_naive, naive, extra_angle=()) -> tuple | None:
-    """T, L and the angle, with their mistakes; ``naive = (name, feedback on T, feedback on L)``
-    is the simplification that gave ``T_naive`` and ``L_naive``."""
+    """The arguments of :func:`_answer` for T, L and the angle, with their mistakes (None: an
+    angle below ``MIN_ANGLE``, or a mistake within SEPARATION tolerances of its key or another);
+    ``naive = (name, feedback on T, feedback on L)`` is the simplification that gave
+    ``T_naive`` and ``L_naive``."""
     T = float(kinetic_energy(tensor, omega))
     L = angular_momentum(tensor, omega)
     angle = _angle(L, omega)
     if angle < MIN_ANGLE:
         return None
     name, T_feedback, L_feedback = naive
-    answers = (
-        _answer("T", "scalar", T, [("missing_half", 2 * T, _HALF), (name, T_naive, T_feedback)],
-                "J", "kinetic energy"),
-        _answer("L", "vector", L, [(name, L_naive, L_feedback)], "kg m^2/s",
-                "angular momentum (same axes as ω)"),
-        follows_from(_answer("angle", "angle", angle,
-                             [("degrees", np.degrees(angle), _DEGREES), *extra_angle], "rad",
-                             "angle between L and ω"), "L"),
+    specs = (
+        ("T", "scalar", T, [("missing_half", 2 * T, _HALF), (name, T_naive, T_feedback)],
+         "J", "kinetic energy"),
+        ("L", "vector", L, [(name, L_naive, L_feedback)], "kg m^2/s",
+         "angular momentum (same axes as ω)"),
+        ("angle", "angle", angle, [("degrees", np.degrees(angle), _DEGREES), *extra_angle],
+         "rad", "angle between L and ω"),
     )
-    return None if None in answers else answers
+    return specs if all(_apart(spec[2], spec[3]) for spec in specs) else None
 
 
 def _physical(tensor: np.ndarray) -> bool:
@@ -218,7 +228,7 @@ def draw(rng: np.random.Generator) -> dict[str, Any] | None:
     """A scene of :data:`SCENES`, then draws of it until one is well posed (at most
     ``MAX_TRIES``)."""
     scene = SCENES[list(SCENES)[int(rng.integers(len(SCENES)))]][0]
-    return redrawn_until_well_posed(scene, answers, rng, MAX_TRIES)
+    return redrawn_until_well_posed(scene, _specs, rng, MAX_TRIES)
 
 
 def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
@@ -227,6 +237,12 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     Raises :class:`~problems.family.IllPosed` for an angle below ``MIN_ANGLE`` or a known
     mistake close to the key.
     """
+    return _built(_specs(params))
+
+
+def _specs(params: Mapping[str, Any]) -> tuple:
+    """What :func:`answers` builds its answers from; IllPosed where it rejects them (the
+    draw's test of each try, which builds none)."""
     found = SCENES[params["scene"]][1](params)
     reject_unless(found is not None, "too small an angle, or a mistake close to the key")
     return found

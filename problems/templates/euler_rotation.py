@@ -24,12 +24,12 @@ are exact inputs; entries of R are O(1) and a student computing with numpy is ex
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from problems.answers import Answer, Mistake
-from problems.family import Parameter, follows_from, reject_unless
+from problems.family import IllPosed, Parameter, follows_from, reject_unless
 from problems.rounding import format_sig, latex_sig, round_sig
 from solver.euler_angles import omega_body, rotation_matrix, to_body, to_inertial
 
@@ -77,55 +77,77 @@ def _answer(name, key, mistakes, unit, description) -> Answer | None:
     )
 
 
-def _matrix_answer(alpha, beta, gamma) -> Answer | None:
-    R = rotation_matrix(alpha, beta, gamma)
-    reversed_order = rotation_matrix(gamma, beta, alpha)  # R_α R_β R_γ: α and γ trade places
+class _Solved(NamedTuple):
+    """What the solver gives one instant: R, the mistaken matrices (the product reversed,
+    the angles read as degrees), ω in body components and ω with the angles read as degrees."""
+
+    R: np.ndarray
+    reversed_order: np.ndarray
+    R_deg: np.ndarray
+    omega: np.ndarray
+    omega_deg: np.ndarray
+
+
+def _solve_many(many: list[Mapping[str, Any]]) -> list[_Solved]:
+    """:class:`_Solved` of each instant, every matrix and ω of all of them in one solver call
+    each (element by element what one instant alone gives)."""
+    alpha, beta, gamma = np.array([[p[n] for n in _ANGLES] for p in many], dtype=float).T
+    rates = np.array([[p[n] for n in _RATES] for p in many], dtype=float).T
+    in_degrees = np.radians([alpha, beta, gamma])  # radian values read as degrees
+    return [_Solved(*found) for found in zip(
+        rotation_matrix(alpha, beta, gamma),
+        rotation_matrix(gamma, beta, alpha),  # R_α R_β R_γ: α and γ trade places
+        rotation_matrix(*in_degrees), omega_body(beta, gamma, *rates),
+        omega_body(*in_degrees[1:], *rates), strict=True)]
+
+
+def _matrix_answer(solved: _Solved) -> Answer | None:
+    R = solved.R
     return _answer("R", R, [
         ("transpose", R.T, "This is Rᵀ, which maps body components to lab components. "
          "R = R_γ R_β R_α maps lab components V to body components V' = R V (R11)."),
-        ("reversed_order", reversed_order, "The product is in the wrong order: the first "
+        ("reversed_order", solved.reversed_order, "The product is in the wrong order: the first "
          "rotation (α) acts first on V, so it stands rightmost, R = R_γ R_β R_α."),
-        ("degree_mode", rotation_matrix(*np.radians([alpha, beta, gamma])), _DEGREE_MODE),
+        ("degree_mode", solved.R_deg, _DEGREE_MODE),
     ], "", "R, its 9 entries row by row: [R11, R12, R13, R21, …, R33]")
 
 
-def _vector_answer(params: Mapping[str, Any]) -> tuple[Answer | None, str]:
-    """Either a marker body → lab (``r_body`` given), or a force lab → body (``F_lab``):
-    the answer and the sentence asking for it."""
-    alpha, beta, gamma = (params[n] for n in ("alpha", "beta", "gamma"))
-    R = rotation_matrix(alpha, beta, gamma)
-    R_deg = rotation_matrix(*np.radians([alpha, beta, gamma]))
+def _vector_answer(params: Mapping[str, Any], solved: _Solved) -> Answer | None:
+    """Either a marker body → lab (``r_body`` given), or a force lab → body (``F_lab``)."""
+    R, R_deg = solved.R, solved.R_deg
     if "r_body" in params:
         r_body = np.array(params["r_body"])
-        r_lab = to_inertial(R, r_body)
-        answer = _answer("r_lab", r_lab, [
+        return _answer("r_lab", to_inertial(R, r_body), [
             ("transpose", to_body(R, r_body), _TRANSPOSE),
             ("degree_mode", to_inertial(R_deg, r_body), _DEGREE_MODE),
         ], "m", "lab components of the marker's position")
-        text = ("`r_lab`: the lab coordinates of a marker at the body coordinates "
-                f"$\\mathbf r' = ({', '.join(format_sig(x, 2) for x in r_body)})$ m (`r_body`) "
-                "from the fixed point;")
-        return answer, text
     F_lab = np.array(params["F_lab"])
-    F_body = to_body(R, F_lab)
-    answer = _answer("F_body", F_body, [
+    return _answer("F_body", to_body(R, F_lab), [
         ("transpose", to_inertial(R, F_lab), _TRANSPOSE),
         ("degree_mode", to_body(R_deg, F_lab), _DEGREE_MODE),
     ], "N", "body components of the force")
-    text = ("`F_body`: the body components of a force with the lab components "
-            f"$\\mathbf F = ({', '.join(format_sig(x, 3) for x in F_lab)})$ N (`F_lab`);")
-    return answer, text
 
 
-def _omega_answer(alpha, beta, gamma, rates) -> Answer | None:
-    w = omega_body(beta, gamma, *rates)
+def _vector_text(params: Mapping[str, Any]) -> str:
+    """The sentence asking for :func:`_vector_answer`'s vector."""
+    if "r_body" in params:
+        shown = ", ".join(format_sig(x, 2) for x in np.array(params["r_body"]))
+        return ("`r_lab`: the lab coordinates of a marker at the body coordinates "
+                f"$\\mathbf r' = ({shown})$ m (`r_body`) from the fixed point;")
+    shown = ", ".join(format_sig(x, 3) for x in np.array(params["F_lab"]))
+    return ("`F_body`: the body components of a force with the lab components "
+            f"$\\mathbf F = ({shown})$ N (`F_lab`);")
+
+
+def _omega_answer(beta, rates, solved: _Solved) -> Answer | None:
+    w = solved.omega
     return _answer("omega_body", w, [
         ("rates_as_components", rates, "The Euler-angle rates are not the components of ω: "
          "ω = α̇ ẑ + β̇ ê'₂ + γ̇ ê₃ is a sum along three axes that are not orthogonal (R12)."),
-        ("lab_components", to_inertial(rotation_matrix(alpha, beta, gamma), w),
+        ("lab_components", to_inertial(solved.R, w),
          "These are the lab components of ω; the question asks for its body components "
          "(ω₁, ω₂, ω₃) along ê₁, ê₂, ê₃ (R12)."),
-        ("degree_mode", omega_body(*np.radians([beta, gamma]), *rates), _DEGREE_MODE),
+        ("degree_mode", solved.omega_deg, _DEGREE_MODE),
         *_spin_mistake(w, beta, rates),
     ], "rad/s", "body components (ω1, ω2, ω3) of the angular velocity")
 
@@ -180,10 +202,27 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
 
     Raises :class:`~problems.family.IllPosed` when a known mistake is close to the key.
     """
-    alpha, beta, gamma = (params[n] for n in _ANGLES)
+    return _answers(params, _solve_many([params])[0])
+
+
+def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
+    """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
+    rejected) — the batch form (:mod:`problems.family`): every instant's matrices and ω in
+    one solver call each."""
+    found: list[tuple[Answer, ...] | IllPosed] = []
+    for params, solved in zip(many, _solve_many(many), strict=True):
+        try:
+            found.append(_answers(params, solved))
+        except IllPosed as e:
+            found.append(e)
+    return found
+
+
+def _answers(params: Mapping[str, Any], solved: _Solved) -> tuple[Answer, ...]:
+    """:func:`answers` from the instant's :func:`_solve_many`."""
     rates = np.array([params[n] for n in _RATES])
-    found = (_matrix_answer(alpha, beta, gamma), follows_from(_vector_answer(params)[0], "R"),
-             _omega_answer(alpha, beta, gamma, rates))
+    found = (_matrix_answer(solved), follows_from(_vector_answer(params, solved), "R"),
+             _omega_answer(params["beta"], rates, solved))
     reject_unless(None not in found, "a known mistake close to the key")
     return found
 
@@ -202,7 +241,7 @@ def statement(params: Mapping[str, Any]) -> str:
         f"At one instant, the Euler angles of {BODIES[params['body']][0]} and their rates are "
         f"{shown}.\n\n"
         "1. `R`: the rotation matrix, its nine entries row by row (e.g. `R.ravel()`);\n"
-        f"2. {_vector_answer(params)[1]}\n"
+        f"2. {_vector_text(params)}\n"
         "3. `omega_body`: the body components of the angular velocity."
     )
 

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from problems.answers import Answer, Mistake
-from problems.family import Parameter, follows_from, redrawn_until_well_posed, reject_unless
+from problems.family import Parameter, redrawn_until_well_posed, reject_unless
 from problems.genuine import SAME
 from problems.rounding import format_sig, latex_sig, round_sig
 from solver.inertia import parallel_axis, point_mass_tensor, principal_axes, shape_tensor
@@ -80,21 +80,34 @@ def _separated(values: list[np.ndarray], tol: float) -> bool:
     )
 
 
-def _vector_answer(name, key, mistakes, unit, description) -> Answer | None:
+def _vector_answer(name, key, mistakes, unit, description, depends=()) -> Answer | None:
     """A vector answer, or None when a mistake is within SEPARATION tolerances of the key or of
     another mistake (the draw is then rejected: every listed mistake must be recognisable)."""
-    key = np.asarray(key, dtype=float)
-    values = [key, *(np.asarray(v, dtype=float) for _, v, _ in mistakes)]
-    if not _separated(values, SEPARATION * RTOL * np.linalg.norm(key)):
+    if not _apart(key, mistakes):
         return None
-    return Answer(
-        name, "vector", key.tolist(), unit=unit, rtol=RTOL, description=description,
+    answer = Answer(
+        name, "vector", np.asarray(key, dtype=float).tolist(), unit=unit, rtol=RTOL,
+        description=description,
         mistakes=tuple(Mistake(n, np.asarray(v, float).tolist(), f) for n, v, f in mistakes),
     )
+    return answer.following(*depends) if depends else answer
+
+
+def _apart(key, mistakes) -> bool:
+    """Whether the key and every mistake lie SEPARATION tolerances apart."""
+    key = np.asarray(key, dtype=float)
+    values = [key, *(np.asarray(v, dtype=float) for _, v, _ in mistakes)]
+    return _separated(values, SEPARATION * RTOL * np.linalg.norm(key))
 
 
 def _tensor_answers(tensor: np.ndarray, mistaken: dict[str, np.ndarray]) -> list[Answer | None]:
-    """Diagonal, products of inertia, principal moments and largest axis, with their mistakes.
+    """Diagonal, products of inertia, principal moments and largest axis, with their mistakes
+    (None for one whose mistakes are too close: :func:`_vector_answer`)."""
+    return [_vector_answer(*spec) for spec in _tensor_specs(tensor, mistaken)]
+
+
+def _tensor_specs(tensor: np.ndarray, mistaken: dict[str, np.ndarray]) -> list[tuple]:
+    """The arguments of :func:`_vector_answer` for each of the four answers.
 
     ``mistaken`` maps a mistake name to the tensor a student with that mistake gets; the
     mistakes of each answer are derived from it by the same (correct) later steps.
@@ -120,16 +133,14 @@ def _tensor_answers(tensor: np.ndarray, mistaken: dict[str, np.ndarray]) -> list
          "moment's axis is the *last column* of the eigenvector matrix."),
     ]
     return [
-        _vector_answer("I_diag", np.diag(tensor), diag_mistakes, "kg m^2",
-                       "diagonal (I_xx, I_yy, I_zz) of the inertia tensor about O"),
-        _vector_answer("I_offdiag", tensor[iu], off_mistakes, "kg m^2",
-                       "products of inertia (I_xy, I_xz, I_yz) about O"),
-        follows_from(_vector_answer("moments", moments, moment_mistakes, "kg m^2",
-                                    "principal moments about O, ascending"),
-                     "I_diag", "I_offdiag"),
-        follows_from(_vector_answer("axis_max", axis, axis_mistakes, "",
-                                    "unit principal axis of the largest moment, z component > 0"),
-                     "I_diag", "I_offdiag"),
+        ("I_diag", np.diag(tensor), diag_mistakes, "kg m^2",
+         "diagonal (I_xx, I_yy, I_zz) of the inertia tensor about O"),
+        ("I_offdiag", tensor[iu], off_mistakes, "kg m^2",
+         "products of inertia (I_xy, I_xz, I_yz) about O"),
+        ("moments", moments, moment_mistakes, "kg m^2", "principal moments about O, ascending",
+         ("I_diag", "I_offdiag")),
+        ("axis_max", axis, axis_mistakes, "",
+         "unit principal axis of the largest moment, z component > 0", ("I_diag", "I_offdiag")),
     ]
 
 
@@ -250,7 +261,7 @@ def draw(rng: np.random.Generator) -> dict[str, Any] | None:
     """A scene of :data:`SCENES`, then draws of it until one is well posed (at most
     ``MAX_TRIES``)."""
     scene = SCENES[list(SCENES)[int(rng.integers(len(SCENES)))]][0]
-    return redrawn_until_well_posed(scene, answers, rng, MAX_TRIES)
+    return redrawn_until_well_posed(scene, _accepted, rng, MAX_TRIES)
 
 
 def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
@@ -259,11 +270,24 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     Raises :class:`~problems.family.IllPosed` for a nearly degenerate largest moment, an axis
     near the xy plane, or a known mistake close to the key.
     """
-    tensor, mistaken = SCENES[params["scene"]][1](params)
-    reject_unless(_well_posed(tensor), "a nearly degenerate moment, or an axis near the xy plane")
-    found = _tensor_answers(tensor, mistaken)
+    found = _tensor_answers(*_posed_tensor(params))
     reject_unless(None not in found, "a known mistake close to the key")
     return tuple(found)
+
+
+def _posed_tensor(params: Mapping[str, Any]) -> tuple[np.ndarray, dict]:
+    """The scene's tensor and mistaken tensors; IllPosed unless :func:`_well_posed`."""
+    tensor, mistaken = SCENES[params["scene"]][1](params)
+    reject_unless(_well_posed(tensor), "a nearly degenerate moment, or an axis near the xy plane")
+    return tensor, mistaken
+
+
+def _accepted(params: Mapping[str, Any]) -> None:
+    """What :func:`answers` rejects, rejected alike (IllPosed), without building the answers:
+    the draw's test of each try."""
+    specs = _tensor_specs(*_posed_tensor(params))
+    reject_unless(all(_apart(spec[1], spec[2]) for spec in specs),
+                  "a known mistake close to the key")
 
 
 def heading(params: Mapping[str, Any]) -> str:

@@ -113,20 +113,27 @@ class Top:
         return {"radius": self.R} | ({} if self.h is None else {"height": self.h})
 
     @cached_property  # computed once per top (several templates ask often)
+    def tensor_cm(self) -> np.ndarray:
+        """Inertia tensor about the centre of mass, kg m² (R2), symmetry axis along z
+        (read-only: shared by the moments below)."""
+        tensor = shape_tensor(self.kind.shape, self.M, **self._dims())
+        tensor.flags.writeable = False
+        return tensor
+
+    @cached_property
     def I_cm(self) -> float:
         """Transverse moment about the centre of mass, kg m² (R2)."""
-        return float(shape_tensor(self.kind.shape, self.M, **self._dims())[0, 0])
+        return float(self.tensor_cm[0, 0])
 
-    @cached_property  # computed once per top (several templates ask often)
+    @cached_property
     def I1(self) -> float:
         """Transverse moment about the tip, kg m² (parallel-axis theorem, R2)."""
-        tensor = shape_tensor(self.kind.shape, self.M, **self._dims())
-        return float(parallel_axis(tensor, self.M, [0.0, 0.0, self.arm])[0, 0])
+        return float(parallel_axis(self.tensor_cm, self.M, [0.0, 0.0, self.arm])[0, 0])
 
-    @cached_property  # computed once per top (several templates ask often)
+    @cached_property
     def I3(self) -> float:
         """Moment about the symmetry axis, kg m²."""
-        return float(shape_tensor(self.kind.shape, self.M, **self._dims())[2, 2])
+        return float(self.tensor_cm[2, 2])
 
     @property
     def Mgl(self) -> float:
