@@ -149,6 +149,30 @@ def main() -> None:
               f"{statistics.median(dry):.2f} s "
               f"(runs: {', '.join(f'{s:.2f}' for s in dry)})")
         print(f"ratio grading run (no kernels) / rescore: {graded / statistics.median(wet):.2f}")
+        one_student(hw, args.runs)
+
+
+def one_student(hw: Path, runs: int) -> None:
+    """An override of one student (set, then taken back: each a fresh process), against its
+    floor: a fresh process importing what the command imports and reading the assignment."""
+    from grader.assignment import load_assignment
+
+    a = load_assignment(hw)
+    sid = a.ids[len(a.ids) // 2]
+    variable = a.expected(sid)[0].variable
+    eulertop = [sys.executable, "-m", "eulertop", "override", str(hw), sid, variable]
+    floor = [sys.executable, "-c", "import sys; from grader.assignment import load_assignment; "
+             "import grader.amend, grader.rescore; load_assignment(sys.argv[1])", str(hw)]
+    setting, taking, starting = [], [], []
+    for _ in range(runs):
+        starting.append(timed(floor)[0])
+        setting.append(timed([*eulertop, "--points", "0", "--reason", "bench"])[0])
+        taking.append(timed([*eulertop, "--remove"])[0])
+    med = statistics.median
+    print(f"eulertop override of one student (fresh process, median of {runs}): set "
+          f"{med(setting):.2f} s, taken back {med(taking):.2f} s; its floor — the command's "
+          f"imports and reading the assignment — {med(starting):.2f} s; ratio "
+          f"{med(setting) / med(starting):.2f}")
 
 
 if __name__ == "__main__":

@@ -151,12 +151,27 @@ def _tables(a: Assignment, present: Mapping[str, StudentResult],
     return "".join(grades), "".join(answers)
 
 
-def stage_stale_report(tx: Transaction, out: Path) -> None:
-    """Stage ``OUT/report.html`` with its out-of-date notice (:func:`grader.report.write.
-    stale_page`), for a change that leaves the report to a later command; nothing when there
-    is no report or it has the notice already."""
-    from grader.report.write import stale_page
+REPORT_STALE = '<p class="stale" role="status">'
+"""The notice a report page carries once the grades changed after it was made."""
 
+
+def stale_page(text: str) -> str | None:
+    """The report page ``text`` with :data:`REPORT_STALE`'s notice at the top of its body (None when
+    it has one already): the grades changed since it was made, by a change that does not
+    rebuild the report (an override, a review, an extension)."""
+    if REPORT_STALE in text or "<body>" not in text:
+        return None
+    notice = (f"{REPORT_STALE}<strong>Out of date:</strong> grades changed after this report was "
+              "made (an override, a review or an extension). <code>eulertop report HW</code>, "
+              "or the next <code>eulertop rescore</code> or <code>eulertop grade</code>, "
+              "brings it up to date.</p>")
+    return text.replace("<body>", "<body>" + notice, 1)
+
+
+def stage_stale_report(tx: Transaction, out: Path) -> None:
+    """Stage ``OUT/report.html`` with its out-of-date notice (:func:`stale_page`), for a change
+    that leaves the report to a later command; nothing when there is no report or it has the
+    notice already."""
     try:
         text = (out / REPORT).read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError):

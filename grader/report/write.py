@@ -26,23 +26,6 @@ def companion_paths(page: Path) -> tuple[Path, Path]:
     return page.with_suffix(".csv"), page.with_name(f"{page.stem}_items.csv")
 
 
-STALE = '<p class="stale" role="status">'
-"""The notice a report page carries once the grades changed after it was made."""
-
-
-def stale_page(text: str) -> str | None:
-    """The report page ``text`` with :data:`STALE`'s notice at the top of its body (None when
-    it has one already): the grades changed since it was made, by a change that does not
-    rebuild the report (an override, a review, an extension)."""
-    if STALE in text or "<body>" not in text:
-        return None
-    notice = (f"{STALE}<strong>Out of date:</strong> grades changed after this report was "
-              "made (an override, a review or an extension). <code>eulertop report HW</code>, "
-              "or the next <code>eulertop rescore</code> or <code>eulertop grade</code>, "
-              "brings it up to date.</p>")
-    return text.replace("<body>", "<body>" + notice, 1)
-
-
 def report_files(report: ClassReport, page: Path) -> dict[Path, str]:
     """The page (at ``page``) and its two CSV files beside it (:func:`companion_paths`): each
     path and its text, written by the caller (a class's change stages them in its
