@@ -404,7 +404,10 @@ class Family:
                 answers: tuple[Answer, ...] | None = None) -> Variant:
         """The variant of ``params`` (recorded or just drawn): their answers (unless given),
         statement and title; the parameter cell holds the numbers with ``cell=True``."""
-        params = self.recorded(params)
+        return self._variant(self.recorded(params), answers)
+
+    def _variant(self, params: dict[str, Any], answers: tuple[Answer, ...] | None) -> Variant:
+        """:meth:`variant` of parameters already as :meth:`recorded` gives them (a draw's)."""
         if answers is None:
             answers = self.answers(params)
         if not all(isinstance(a, Answer) for a in answers):
@@ -429,7 +432,9 @@ class Family:
             raise ValueError(f"{self.where}: parameters not declared in PARAMETERS: {unknown}")
         plain = {}
         for name, value in params.items():
-            if declared[name].is_choice:
+            if type(value) is float and math.isfinite(value) and not declared[name].choices:
+                plain[name] = value  # the common case, first
+            elif declared[name].is_choice:
                 if value not in declared[name].choices:
                     raise ValueError(f"{self.where}: parameter {name!r} must be one of "
                                      f"{declared[name].choices}, got {value!r}")
@@ -456,7 +461,7 @@ class Family:
                 params, answers = drawn
                 if settings is not None:
                     answers = settings.adjust_answers(answers)
-                return self.variant(params, answers)
+                return self._variant(params, answers)
         raise RuntimeError(f"{self.name}: no acceptable draw in {self.max_attempts} attempts")
 
     def generate_many(self, rngs: Sequence[np.random.Generator],
@@ -479,7 +484,7 @@ class Family:
                 found[i] = drawn
             pending = [i for i in pending if found[i] is None]
             if not pending:
-                return [self.variant(params, answers if settings is None
+                return [self._variant(params, answers if settings is None
                                      else settings.adjust_answers(answers))
                         for params, answers in found]
         raise RuntimeError(f"{self.name}: no acceptable draw in {self.max_attempts} attempts")
