@@ -114,6 +114,33 @@ def redrawn_until_well_posed(
     return None
 
 
+def remembered(work: Callable[[Mapping[str, Any]], Any]) -> Callable[[Mapping[str, Any]], Any]:
+    """``work(params)`` remembering its last result, given again for equal parameters: the
+    work a family's ``draw`` tests each try with (:func:`redrawn_until_well_posed`), which its
+    ``answers`` repeats on the accepted try, done once. ``work`` must be pure and its result
+    left unchanged by its callers; what it raises (:class:`IllPosed`) is not remembered."""
+    last: list = [None, None]  # (parameters, result)
+
+    def once(params: Mapping[str, Any]) -> Any:
+        key = tuple((name, _exact(value)) for name, value in params.items())
+        if last[0] != key:
+            last[:] = [key, work(params)]
+        return last[1]
+
+    once.__doc__, once.__name__ = work.__doc__, work.__name__
+    return once
+
+
+def _exact(value: Any) -> Any:
+    """``value`` as compared for :func:`remembered`: equal only to an equal value of the same
+    type (``1`` is not ``1.0``, nor ``0.0`` ``-0.0``; lists element by element)."""
+    if type(value) is float:
+        return value if value else (value, math.copysign(1.0, value))
+    if type(value) is list:
+        return (list, tuple(_exact(v) for v in value))
+    return (type(value), value)
+
+
 @dataclass(frozen=True)
 class Parameter:
     """One parameter of a family: a number (or an array of numbers) or a choice among labels.
