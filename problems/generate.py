@@ -451,10 +451,14 @@ def _batch_files(
         for i, (row, variants) in enumerate(zip(rows, drawn, strict=True)):
             _write_student(tmp, title, row, variants, validate and i == 0, families,
                            _FORKED.get("install"))
-            reroll = rerolls.get(row["id"], 0)
-            entries.append((CompactJSON.of(manifest_entry(variants, reroll)),
-                            key_entry_text(variants)))
+            entries.append(student_entries(variants, rerolls.get(row["id"], 0)))
     return entries
+
+
+def student_entries(variants: Sequence[Variant], reroll: int) -> tuple[CompactJSON, CompactJSON]:
+    """A student's entries in ``assignment.json`` and ``key.json``, encoded
+    (:func:`manifest_entry`, :func:`key_entry_text`)."""
+    return CompactJSON.of(manifest_entry(variants, reroll)), key_entry_text(variants)
 
 
 @contextmanager
