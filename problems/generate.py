@@ -189,6 +189,8 @@ def pool_member(pool: Sequence[str], seed: int, student_id: str, question: int,
     >>> pool_member(["only"], 1, "alice", 2)
     'only'
     """
+    if len(pool) == 1:  # what the hash below gives (any number modulo 1 is 0), without it
+        return pool[0]
     payload = json.dumps(
         ["eulertop-pool", 1, int(seed), student_id, int(question), list(pool), int(reroll)],
         ensure_ascii=False, separators=(",", ":"),
