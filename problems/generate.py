@@ -334,16 +334,28 @@ def json_text(document: Mapping[str, Any]) -> str:
     line keeps a reroll's change to one line (diff-friendly), and lets json use its C encoder:
     ``indent`` would select the pure-Python one, several times slower on a class of 300.
     """
-    fields = []
-    for name in sorted(document):
+    return "".join(json_pieces(document))
+
+
+def json_pieces(document: Mapping[str, Any]) -> Iterator[str]:
+    """:func:`json_text` in pieces, each student's entry one of them as it is: written one by
+    one (:func:`_write_json`), a class's files are never copied whole in memory."""
+    yield "{\n"
+    for i, name in enumerate(sorted(document)):
         value = document[name]
+        if i:
+            yield ",\n"
         if name == "students" and value:
-            rows = ",\n".join(f"  {_compact(sid)}: {_entry_text(value[sid])}"
-                              for sid in sorted(value))
-            fields.append(f' "students": {{\n{rows}\n }}')
+            yield ' "students": {\n'
+            for j, sid in enumerate(sorted(value)):
+                if j:
+                    yield ",\n"
+                yield f"  {_compact(sid)}: "
+                yield _entry_text(value[sid])
+            yield "\n }"
         else:
-            fields.append(f" {_compact(name)}: {_compact(value)}")
-    return "{\n" + ",\n".join(fields) + "\n}\n"
+            yield f" {_compact(name)}: {_compact(value)}"
+    yield "\n}\n"
 
 
 def _entry_text(entry: Any) -> str:
@@ -541,8 +553,9 @@ def _parallel_jobs(jobs: int | None, students: int) -> int:
 
 
 def _write_json(folder: Path, manifest: dict, key: dict) -> None:
-    (folder / ASSIGNMENT).write_text(json_text(manifest), encoding="utf-8")
-    (folder / KEY).write_text(json_text(key), encoding="utf-8")
+    for name, document in ((ASSIGNMENT, manifest), (KEY, key)):
+        with open(folder / name, "w", encoding="utf-8") as file:
+            file.writelines(json_pieces(document))
     os.chmod(folder / KEY, 0o600)  # the key is the instructor's alone
 
 
