@@ -93,13 +93,7 @@ def child(students: int, questions: int, jobs: int | None, seed: int, out: str) 
 
 def breakdown(students: int, questions: int) -> dict[str, float]:
     """CPU seconds of each part of generation, in this process (no files written)."""
-    from problems.generate import (
-        CompactJSON,
-        key_entry,
-        manifest_entry,
-        prepare_families,
-        student_variants,
-    )
+    from problems.generate import prepare_families, student_entries, student_variants
     from problems.notebook import build_notebooks, notebook_text
 
     families, problems, roster = _setup(students, questions)
@@ -115,7 +109,7 @@ def breakdown(students: int, questions: int) -> dict[str, float]:
             notebook_text(notebook, validate=False, memo=memo)
     parts["building and encoding the notebooks"], start = clock() - start, clock()
     for variants in drawn:
-        CompactJSON.of(manifest_entry(variants, 0)), CompactJSON.of(key_entry(variants))
+        student_entries(variants, 0)
     parts["manifest and key entries"] = clock() - start
     return parts
 
@@ -140,12 +134,10 @@ def margin_parts(students: int, questions: int, rounds: int) -> dict[str, list]:
     import tempfile
 
     from problems.generate import (
-        CompactJSON,
         Question,
         class_variants,
-        key_entry,
-        manifest_entry,
         prepare_families,
+        student_entries,
         student_variants,
     )
     from problems.notebook import build_notebooks, notebook_text
@@ -175,7 +167,7 @@ def margin_parts(students: int, questions: int, rounds: int) -> dict[str, list]:
 
     def entries():
         for variants in drawn:
-            CompactJSON.of(manifest_entry(variants, 0)), CompactJSON.of(key_entry(variants))
+            student_entries(variants, 0)
 
     def question(k: int):
         return lambda: class_variants(families, [asked[k]], 0, ids, {})

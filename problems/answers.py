@@ -1261,9 +1261,14 @@ def _unchecked(answer: Answer, **changes: Any) -> Answer:
     tolerances, which can make no value unreadable or the key ungradable (it checks each
     mistake against the widened key itself)."""
     copy = object.__new__(Answer)
-    for f in fields(Answer):
-        object.__setattr__(copy, f.name, changes.get(f.name, getattr(answer, f.name)))
+    for name in _field_names_in_order(Answer):
+        object.__setattr__(copy, name, changes.get(name, getattr(answer, name)))
     return copy
+
+
+@cache
+def _field_names_in_order(cls: type) -> tuple[str, ...]:
+    return tuple(f.name for f in fields(cls))
 
 
 def distinguishable_answers(

@@ -114,6 +114,33 @@ def redrawn_until_well_posed(
     return None
 
 
+def remembered(work: Callable[[Mapping[str, Any]], Any]) -> Callable[[Mapping[str, Any]], Any]:
+    """``work(params)`` remembering its last result, given again for equal parameters: the
+    work a family's ``draw`` tests each try with (:func:`redrawn_until_well_posed`), which its
+    ``answers`` repeats on the accepted try, done once. ``work`` must be pure and its result
+    left unchanged by its callers; what it raises (:class:`IllPosed`) is not remembered."""
+    last: list = [None, None]  # (parameters, result)
+
+    def once(params: Mapping[str, Any]) -> Any:
+        key = tuple((name, _exact(value)) for name, value in params.items())
+        if last[0] != key:
+            last[:] = [key, work(params)]
+        return last[1]
+
+    once.__doc__, once.__name__ = work.__doc__, work.__name__
+    return once
+
+
+def _exact(value: Any) -> Any:
+    """``value`` as compared for :func:`remembered`: equal only to an equal value of the same
+    type (``1`` is not ``1.0``, nor ``0.0`` ``-0.0``; lists element by element)."""
+    if type(value) is float:
+        return value if value else (value, math.copysign(1.0, value))
+    if type(value) is list:
+        return (list, tuple(_exact(v) for v in value))
+    return (type(value), value)
+
+
 @dataclass(frozen=True)
 class Parameter:
     """One parameter of a family: a number (or an array of numbers) or a choice among labels.
@@ -404,7 +431,10 @@ class Family:
                 answers: tuple[Answer, ...] | None = None) -> Variant:
         """The variant of ``params`` (recorded or just drawn): their answers (unless given),
         statement and title; the parameter cell holds the numbers with ``cell=True``."""
-        params = self.recorded(params)
+        return self._variant(self.recorded(params), answers)
+
+    def _variant(self, params: dict[str, Any], answers: tuple[Answer, ...] | None) -> Variant:
+        """:meth:`variant` of parameters already as :meth:`recorded` gives them (a draw's)."""
         if answers is None:
             answers = self.answers(params)
         if not all(isinstance(a, Answer) for a in answers):
@@ -429,7 +459,9 @@ class Family:
             raise ValueError(f"{self.where}: parameters not declared in PARAMETERS: {unknown}")
         plain = {}
         for name, value in params.items():
-            if declared[name].is_choice:
+            if type(value) is float and math.isfinite(value) and not declared[name].choices:
+                plain[name] = value  # the common case, first
+            elif declared[name].is_choice:
                 if value not in declared[name].choices:
                     raise ValueError(f"{self.where}: parameter {name!r} must be one of "
                                      f"{declared[name].choices}, got {value!r}")
@@ -456,7 +488,7 @@ class Family:
                 params, answers = drawn
                 if settings is not None:
                     answers = settings.adjust_answers(answers)
-                return self.variant(params, answers)
+                return self._variant(params, answers)
         raise RuntimeError(f"{self.name}: no acceptable draw in {self.max_attempts} attempts")
 
     def generate_many(self, rngs: Sequence[np.random.Generator],
@@ -479,7 +511,7 @@ class Family:
                 found[i] = drawn
             pending = [i for i in pending if found[i] is None]
             if not pending:
-                return [self.variant(params, answers if settings is None
+                return [self._variant(params, answers if settings is None
                                      else settings.adjust_answers(answers))
                         for params, answers in found]
         raise RuntimeError(f"{self.name}: no acceptable draw in {self.max_attempts} attempts")

@@ -14,6 +14,7 @@ not one in binary: ``2.675`` is stored as ``2.67499999…`` and rounds to ``2.67
 
 from __future__ import annotations
 
+import math
 import numbers
 from decimal import Decimal
 
@@ -81,10 +82,12 @@ def round_sig(x: ArrayLike, sig: int) -> float | NDArray[np.float64]:
 def _parts(x: ArrayLike, sig: int, trailing_zeros: bool) -> tuple[str, int | None]:
     """(mantissa or positional digits, decimal exponent or None for positional notation)."""
     sig = _check_sig(sig)
-    value = as_real("x", x)
-    if value.ndim:
-        raise ParameterError("x", f"must be a single number, got shape {value.shape}")
-    text = _digits(float(value), sig)
+    if type(x) is not float or not math.isfinite(x):  # else x is what as_real would give
+        value = as_real("x", x)
+        if value.ndim:
+            raise ParameterError("x", f"must be a single number, got shape {value.shape}")
+        x = float(value)
+    text = _digits(x, sig)
     mantissa, exponent = text.split("e")
     magnitude = abs(float(text))
     if magnitude == 0 or PLAIN_RANGE[0] <= magnitude < PLAIN_RANGE[1]:

@@ -36,6 +36,8 @@ def plain_number_tree(value: Any, what: str) -> float | list:
     numpy scalars and arrays are converted; bools, strings, NaN and infinities are refused with
     a ``ValueError`` naming ``what`` (a template bug, reported before anything is written).
     """
+    if type(value) is float and math.isfinite(value):  # the common case, first
+        return value
     if isinstance(value, np.ndarray):
         value = value.tolist()
     if isinstance(value, list | tuple):
@@ -46,6 +48,14 @@ def plain_number_tree(value: Any, what: str) -> float | list:
     if not math.isfinite(number):
         raise ValueError(f"{what}: must be finite, got {number!r}")
     return number
+
+
+def _plain_parameter(value: Any, where: str, name: str) -> float | list:
+    """:func:`plain_number_tree` of parameter ``name`` of ``where`` (the message only built
+    for a value that is not already a finite float)."""
+    if type(value) is float and math.isfinite(value):
+        return value
+    return plain_number_tree(value, f"{where}, parameter {name!r}")
 
 
 def _python_name(name: str) -> bool:
@@ -102,12 +112,12 @@ class Variant:
         if unknown:
             raise ValueError(f"{where}: units given for unknown parameters {unknown}")
         params = self.params.items()
-        plain = {k: plain_number_tree(v, f"{where}, parameter {k!r}") for k, v in params}
+        plain = {k: _plain_parameter(v, where, k) for k, v in params}
         object.__setattr__(self, "params", plain)
         object.__setattr__(self, "param_units", dict(self.param_units))
         object.__setattr__(self, "answers", tuple(self.answers))
         object.__setattr__(self, "parameters", {
-            k: v if isinstance(v, str) else plain_number_tree(v, f"{where}, parameter {k!r}")
+            k: v if isinstance(v, str) else _plain_parameter(v, where, k)
             for k, v in self.parameters.items()})
         names = [a.name for a in self.answers]
         if not names:

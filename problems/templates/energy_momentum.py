@@ -30,7 +30,12 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from problems.answers import Answer, Mistake
-from problems.family import Parameter, redrawn_until_well_posed, reject_unless
+from problems.family import (
+    Parameter,
+    redrawn_until_well_posed,
+    reject_unless,
+    remembered,
+)
 from problems.genuine import SAME
 from problems.rounding import format_sig, latex_sig, round_sig
 from solver.inertia import angular_momentum, kinetic_energy, shape_tensor
@@ -240,6 +245,7 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     return _built(_specs(params))
 
 
+@remembered  # the draw's accepted try, then answers() of the same parameters
 def _specs(params: Mapping[str, Any]) -> tuple:
     """What :func:`answers` builds its answers from; IllPosed where it rejects them (the
     draw's test of each try, which builds none)."""

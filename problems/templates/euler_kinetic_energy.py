@@ -27,7 +27,7 @@ coefficient such as ``0.5``; any wrong term changes the values by far more at ge
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from functools import cache
 from typing import Any
 
@@ -35,7 +35,7 @@ import numpy as np
 import sympy as sp
 
 from problems.answers import Answer, Mistake
-from problems.family import Parameter, reject_unless
+from problems.family import IllPosed, Parameter, reject_unless
 from problems.rounding import latex_sig, round_sig
 from solver.euler_angles import kinetic_energy_euler
 from solver.inertia import parallel_axis, shape_tensor
@@ -123,20 +123,36 @@ def prepare() -> None:
     _expression_answer()
 
 
-def _energy_answer(moments, angles, rates, swap: tuple[int, int]) -> Answer | None:
-    """``T`` with its mistakes, or None if two of them are within SEPARATION tolerances."""
+def _energy_states(moments, angles, rates, swap: tuple[int, int]) -> list[tuple[float, ...]]:
+    """The states ``(I1, I2, I3, β, γ, α̇, β̇, γ̇)`` whose ``T`` :func:`_energy_answer` takes:
+    the key's, the angles read as degrees, the moments ``swap`` exchanged, and the state whose
+    ω3 = γ̇' + α̇ cos β equals the given γ̇ (R12: ω3 taken to be γ̇)."""
     beta, gamma = angles
-    T = float(kinetic_energy_euler(*moments, beta, gamma, *rates))
     swapped = list(moments)
     swapped[swap[0]], swapped[swap[1]] = swapped[swap[1]], swapped[swap[0]]
+    alpha_dot, beta_dot, gamma_dot = rates
+    return [(*moments, beta, gamma, *rates), (*moments, *np.radians(angles), *rates),
+            (*swapped, beta, gamma, *rates),
+            (*moments, beta, gamma, alpha_dot, beta_dot, gamma_dot - alpha_dot * np.cos(beta))]
+
+
+def _energies(states: Sequence[tuple[float, ...]]) -> list[float]:
+    """``T`` of each of ``states`` (R13), in one solver call."""
+    return kinetic_energy_euler(*np.array(states, dtype=float).T).tolist()
+
+
+def _energy_answer(moments, rates, swap: tuple[int, int], energies: Sequence[float]
+                   ) -> Answer | None:
+    """``T`` with its mistakes, from :func:`_energies` of :func:`_energy_states`, or None if
+    two of them are within SEPARATION tolerances."""
+    T, in_degrees, swapped, spin_only = energies
     names = ("I1", "I2", "I3")
     pair = f"{names[swap[0]]}_{names[swap[1]]}_swapped"
     mistakes = (
         ("missing_half", 2 * T, _HALF),
-        ("degree_mode", float(kinetic_energy_euler(*moments, *np.radians(angles), *rates)),
-         _DEGREE_MODE),
+        ("degree_mode", in_degrees, _DEGREE_MODE),
         ("rates_as_components", 0.5 * float(np.dot(moments, np.square(rates))), _RATES),
-        (pair, float(kinetic_energy_euler(*swapped, beta, gamma, *rates)),
+        (pair, swapped,
          f"{names[swap[0]]} and {names[swap[1]]} are swapped: I_i multiplies ω_i², the square "
          "of the component along the same principal axis ê_i."),
     )
@@ -144,11 +160,8 @@ def _energy_answer(moments, angles, rates, swap: tuple[int, int]) -> Answer | No
     gaps = np.abs(values[:, None] - values[None, :])
     if np.min(gaps[~np.eye(len(values), dtype=bool)]) <= SEPARATION * RTOL * abs(T):
         return None
-    # ω3 taken to be γ̇ (R12): the state whose ω3 = γ̇' + α̇ cos β equals the given γ̇. Kept
-    # where it is clear of the key and the other mistakes; the draw is not rejected for it.
-    alpha_dot, beta_dot, gamma_dot = rates
-    spin_only = float(kinetic_energy_euler(*moments, beta, gamma, alpha_dot, beta_dot,
-                                           gamma_dot - alpha_dot * np.cos(beta)))
+    # ω3 taken to be γ̇ (R12): kept where it is clear of the key and the other mistakes; the
+    # draw is not rejected for it.
     if np.min(np.abs(values - spin_only)) > SEPARATION * RTOL * abs(T):
         mistakes += (("omega3_is_gamma_dot", spin_only, _OMEGA3_IS_GAMMA_DOT),)
     return Answer("T", "scalar", T, unit="J", rtol=RTOL, description="kinetic energy",
@@ -230,12 +243,39 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
 
     Raises :class:`~problems.family.IllPosed` when two of ``T``'s mistakes are close.
     """
-    moments, swap = _moments(params)
-    angles = (params["beta"], params["gamma"])
-    rates = np.array([params[n] for n in _NAMES[2:]])
-    energy = _energy_answer(np.array(moments, dtype=float), angles, rates, swap)
+    moments, angles, rates, swap = _question(params)
+    return _answers(moments, rates, swap, _energies(_energy_states(moments, angles, rates, swap)))
+
+
+def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
+    """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
+    rejected) — the batch form (:mod:`problems.family`): the kinetic energies of every
+    student's key and mistaken states in one solver call."""
+    questions = [_question(p) for p in many]
+    states = [s for moments, angles, rates, swap in questions
+              for s in _energy_states(moments, angles, rates, swap)]
+    energies = _energies(states) if states else []
+    found: list[tuple[Answer, ...] | IllPosed] = []
+    for i, (moments, _, rates, swap) in enumerate(questions):
+        try:
+            found.append(_answers(moments, rates, swap, energies[4 * i:4 * i + 4]))
+        except IllPosed as e:
+            found.append(e)
+    return found
+
+
+def _answers(moments: np.ndarray, rates: np.ndarray, swap: tuple[int, int],
+             energies: Sequence[float]) -> tuple[Answer, ...]:
+    energy = _energy_answer(moments, rates, swap, energies)
     reject_unless(energy is not None, "two known mistakes of T are close")
     return (energy, _expression_answer())
+
+
+def _question(params: Mapping[str, Any]) -> tuple[np.ndarray, tuple, np.ndarray, tuple]:
+    """The shown moments, angles and rates, and the pair of moments a student may swap."""
+    moments, swap = _moments(params)
+    angles = (params["beta"], params["gamma"])
+    return np.array(moments, dtype=float), angles, np.array([params[n] for n in _NAMES[2:]]), swap
 
 
 def heading(params: Mapping[str, Any]) -> str:

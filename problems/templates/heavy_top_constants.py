@@ -47,7 +47,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import astuple, dataclass
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -172,6 +172,10 @@ class State:
     alpha_dot0: float
     beta_dot0: float
     gamma_dot0: float
+
+    def values(self) -> tuple[float, float, float, float]:
+        """``(β0, α̇0, β̇0, γ̇0)``: ``astuple`` without its deep copy (they are floats)."""
+        return (self.beta0, self.alpha_dot0, self.beta_dot0, self.gamma_dot0)
 
 
 PARAMETERS: dict[str, Parameter] = {
@@ -321,21 +325,21 @@ def state_from_params(params: Mapping[str, Any]) -> State:
 
 def state_args(top: Top, state: State) -> tuple[float, ...]:
     """``(I1, I3, Mgl, beta0, alpha_dot0, beta_dot0, gamma_dot0)`` for :mod:`solver.heavy_top`."""
-    return (top.I1, top.I3, top.Mgl, *astuple(state))
+    return (top.I1, top.I3, top.Mgl, *state.values())
 
 
 def state_text(state: State) -> str:
     """The sentence giving the initial state, naming each value's Python name."""
     shown = ", ".join(
         f"${s} = {latex_sig(v, SIG)}$ {STATE_UNITS[n]} (`{n}`)"
-        for s, n, v in zip(_STATE_SYMBOLS, STATE_NAMES, astuple(state), strict=True)
+        for s, n, v in zip(_STATE_SYMBOLS, STATE_NAMES, state.values(), strict=True)
     )
     return f"At $t = 0$: {shown}."
 
 
 def variant_params(top: Top, state: State, **extra: float) -> dict[str, Any]:
     """The recorded parameters: the scene and body's, the state's, then ``extra``."""
-    return {**top.params, **dict(zip(STATE_NAMES, astuple(state), strict=True)), **extra}
+    return {**top.params, **dict(zip(STATE_NAMES, state.values(), strict=True)), **extra}
 
 
 def mistaken_states(top: Top, state: State) -> dict[str, tuple[float, ...]]:
@@ -419,7 +423,7 @@ def _swapped_constants(top: Top, state: State) -> tuple[float, float, float]:
     ``I3 > 2 I1`` (no rigid body has it about its tip), which is what the swap gives for most
     tops, yet the student's formulas still return these numbers.
     """
-    beta0, alpha_dot0, beta_dot0, gamma_dot0 = astuple(state)
+    beta0, alpha_dot0, beta_dot0, gamma_dot0 = state.values()
     u, s2 = math.cos(beta0), math.sin(beta0) ** 2
     p_gamma = top.I1 * (alpha_dot0 * u + gamma_dot0)
     p_alpha = top.I3 * alpha_dot0 * s2 + p_gamma * u
@@ -433,7 +437,7 @@ def _answers(top: Top, state: State) -> tuple[Answer, ...] | None:
     stacked = np.array([state_args(top, state), *mistaken.values()])
     p_alpha, p_gamma, e_prime = (np.atleast_1d(x) for x in constants_of_motion(*stacked.T))
     pa, pg, e = float(p_alpha[0]), float(p_gamma[0]), float(e_prime[0])
-    beta0, alpha_dot0, beta_dot0, gamma_dot0 = astuple(state)
+    beta0, alpha_dot0, beta_dot0, gamma_dot0 = state.values()
     transverse = top.I1 * alpha_dot0 * math.sin(beta0) ** 2
     kinetic = 0.5 * top.I1 * (beta_dot0**2 + alpha_dot0**2 * math.sin(beta0) ** 2)
     if not (well_conditioned(pa, transverse, pg * math.cos(beta0))

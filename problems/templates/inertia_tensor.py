@@ -32,7 +32,12 @@ from typing import Any
 import numpy as np
 
 from problems.answers import Answer, Mistake
-from problems.family import Parameter, redrawn_until_well_posed, reject_unless
+from problems.family import (
+    Parameter,
+    redrawn_until_well_posed,
+    reject_unless,
+    remembered,
+)
 from problems.genuine import SAME
 from problems.rounding import format_sig, latex_sig, round_sig
 from solver.inertia import parallel_axis, point_mass_tensor, principal_axes, shape_tensor
@@ -98,12 +103,6 @@ def _apart(key, mistakes) -> bool:
     key = np.asarray(key, dtype=float)
     values = [key, *(np.asarray(v, dtype=float) for _, v, _ in mistakes)]
     return _separated(values, SEPARATION * RTOL * np.linalg.norm(key))
-
-
-def _tensor_answers(tensor: np.ndarray, mistaken: dict[str, np.ndarray]) -> list[Answer | None]:
-    """Diagonal, products of inertia, principal moments and largest axis, with their mistakes
-    (None for one whose mistakes are too close: :func:`_vector_answer`)."""
-    return [_vector_answer(*spec) for spec in _tensor_specs(tensor, mistaken)]
 
 
 def _tensor_specs(tensor: np.ndarray, mistaken: dict[str, np.ndarray]) -> list[tuple]:
@@ -270,7 +269,7 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     Raises :class:`~problems.family.IllPosed` for a nearly degenerate largest moment, an axis
     near the xy plane, or a known mistake close to the key.
     """
-    found = _tensor_answers(*_posed_tensor(params))
+    found = [_vector_answer(*spec) for spec in _posed_specs(params)]
     reject_unless(None not in found, "a known mistake close to the key")
     return tuple(found)
 
@@ -282,10 +281,16 @@ def _posed_tensor(params: Mapping[str, Any]) -> tuple[np.ndarray, dict]:
     return tensor, mistaken
 
 
+@remembered  # the draw's accepted try, then answers() of the same parameters
+def _posed_specs(params: Mapping[str, Any]) -> list[tuple]:
+    """:func:`_tensor_specs` of the scene's tensors; IllPosed unless :func:`_well_posed`."""
+    return _tensor_specs(*_posed_tensor(params))
+
+
 def _accepted(params: Mapping[str, Any]) -> None:
     """What :func:`answers` rejects, rejected alike (IllPosed), without building the answers:
     the draw's test of each try."""
-    specs = _tensor_specs(*_posed_tensor(params))
+    specs = _posed_specs(params)
     reject_unless(all(_apart(spec[1], spec[2]) for spec in specs),
                   "a known mistake close to the key")
 

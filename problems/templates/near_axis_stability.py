@@ -21,14 +21,14 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from problems.answers import Answer, Mistake
-from problems.family import Parameter, distinguishable, reject_unless
+from problems.family import IllPosed, Parameter, distinguishable, reject_unless
 from problems.rounding import latex_sig, round_sig
 from problems.written import Written
 from solver.asymmetric_top import asymmetric_top_period
@@ -237,17 +237,31 @@ def _draw(rng: np.random.Generator) -> Draw:
 
 def _well_posed(d: Draw) -> bool:
     """A rigid body's moments, far from degenerate; a stable wobble within R9's linear regime."""
-    moments = np.array(d.moments)
-    if 2 * moments.max() > moments.sum():  # triangle inequality crossed by the rounding
-        return False
-    gaps = np.abs(moments[:, None] - moments[None, :])[np.triu_indices(3, 1)]
-    if gaps.min() < MIN_GAP * moments.max():
-        return False
-    r9 = near_axis_stability(*d.moments, d.omega0[d.spin_axis - 1], axis=d.spin_axis)
-    if not r9["stable"]:
-        return True  # the growth rate describes the start of the flip, however it ends
-    exact = asymmetric_top_period(*d.moments, d.omega0)
-    return abs(float(exact) * float(r9["rate"]) / (2 * math.pi) - 1) < LINEAR_RTOL
+    return _well_posed_many([d])[0]
+
+
+def _well_posed_many(draws: Sequence[Draw]) -> list[bool]:
+    """:func:`_well_posed` of each draw, R10's exact period (against which R9's rate of a
+    stable wobble is checked) computed in one solver call for all of them (element by element
+    what one draw alone gives)."""
+    posed, stable_rates = [], {}
+    for i, d in enumerate(draws):
+        moments = np.array(d.moments)
+        gaps = np.abs(moments[:, None] - moments[None, :])[np.triu_indices(3, 1)]
+        # the triangle inequality crossed by the rounding, or nearly degenerate moments
+        posed.append(not (2 * moments.max() > moments.sum()
+                          or gaps.min() < MIN_GAP * moments.max()))
+        if posed[i]:  # an unstable spin's growth rate describes the flip's start, however it ends
+            r9 = near_axis_stability(*d.moments, d.omega0[d.spin_axis - 1], axis=d.spin_axis)
+            if r9["stable"]:
+                stable_rates[i] = float(r9["rate"])
+    if stable_rates:
+        I1, I2, I3 = np.array([draws[i].moments for i in stable_rates], dtype=float).T
+        omega0 = np.array([draws[i].omega0 for i in stable_rates], dtype=float)
+        exact = asymmetric_top_period(I1, I2, I3, omega0)
+        for (i, rate), period in zip(stable_rates.items(), exact.tolist(), strict=True):
+            posed[i] = abs(period * rate / (2 * math.pi) - 1) < LINEAR_RTOL
+    return posed
 
 
 def _stability_answers(d: Draw) -> list[Answer]:
@@ -344,8 +358,27 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     stable wobble beyond R9's linear regime, or a known mistake close to the key.
     """
     d = Draw.of(params)
-    reject_unless(_well_posed(d), "degenerate moments, or a wobble beyond the linear regime")
+    reject_unless(_well_posed(d), _ILL_POSED)
     return distinguishable(lambda: (*_stability_answers(d), _rate_answer(d)), MARGIN)
+
+
+_ILL_POSED = "degenerate moments, or a wobble beyond the linear regime"
+
+
+def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
+    """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
+    rejected) — the batch form (:mod:`problems.family`): R10's exact periods of the stable
+    wobbles in one solver call."""
+    draws = [Draw.of(p) for p in many]
+    found: list[tuple[Answer, ...] | IllPosed] = []
+    for d, posed in zip(draws, _well_posed_many(draws), strict=True):
+        try:
+            reject_unless(posed, _ILL_POSED)
+            found.append(distinguishable(
+                lambda d=d: (*_stability_answers(d), _rate_answer(d)), MARGIN))
+        except IllPosed as e:
+            found.append(e)
+    return found
 
 
 def statement(params: Mapping[str, Any]) -> str:

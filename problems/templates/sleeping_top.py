@@ -32,7 +32,7 @@ of order one.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Any
@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from problems.answers import Answer, Mistake
-from problems.family import Parameter, distinguishable, reject_unless
+from problems.family import IllPosed, Parameter, distinguishable, reject_unless
 from problems.genuine import statement_number
 from problems.rounding import latex_sig, round_sig
 from problems.written import Written
@@ -214,11 +214,23 @@ _FACTOR_2 = ("A factor 2 is missing: the condition is p_γ² ≥ 4 M g l I1, so 
              "ω3 ≥ 2 √(M g l I1)/I3 (R19).")
 
 
-def _spin_answer(top: Top) -> Answer:
-    w = float(critical_spin(top.I1, top.I3, top.Mgl))
+def _critical_inputs(top: Top) -> list[tuple[float, float, float]]:
+    """``(I1, I3, Mgl)`` of the key's critical spin (R19, I1 about the tip), then of its
+    mistakes: I1 about the centre of mass, I1 and I3 swapped."""
+    return [(top.I1, top.I3, top.Mgl), (top.I_cm, top.I3, top.Mgl), (top.I3, top.I1, top.Mgl)]
+
+
+def _critical_spins(inputs: Sequence[tuple[float, float, float]]) -> list[float]:
+    """:func:`~solver.heavy_top.critical_spin` of each ``(I1, I3, Mgl)``, in one call."""
+    return critical_spin(*np.array(inputs, dtype=float).T).tolist()
+
+
+def _spin_answer(critical: Sequence[float]) -> Answer:
+    """``omega3_c`` from :func:`_critical_spins` of :func:`_critical_inputs`."""
+    w, about_cm, swapped = critical
     mistakes = (
-        Mistake("I1_about_cm", float(critical_spin(top.I_cm, top.I3, top.Mgl)), _I1_CM),
-        Mistake("I1_I3_swapped", float(critical_spin(top.I3, top.I1, top.Mgl)), _SWAPPED),
+        Mistake("I1_about_cm", about_cm, _I1_CM),
+        Mistake("I1_I3_swapped", swapped, _SWAPPED),
         Mistake("missing_factor_2", w / 2, _FACTOR_2),
         Mistake("hz", w / (2 * math.pi), _HZ),
     )
@@ -276,11 +288,29 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     Raises :class:`~problems.family.IllPosed` when the given spin is within
     ``THRESHOLD_MARGIN`` of the critical one, or a known mistake is close to the key.
     """
-    top, omega3 = top_from_params(params), params["omega3"]
-    critical = float(critical_spin(top.I1, top.I3, top.Mgl))
-    reject_unless(abs(omega3 / critical - 1.0) >= THRESHOLD_MARGIN,
+    top = top_from_params(params)
+    return _answers(top, params["omega3"], _critical_spins(_critical_inputs(top)))
+
+
+def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
+    """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
+    rejected) — the batch form (:mod:`problems.family`): the critical spins (R19) of every
+    student's top and of its mistakes in one solver call."""
+    tops = [top_from_params(p) for p in many]
+    critical = _critical_spins([row for top in tops for row in _critical_inputs(top)])
+    found: list[tuple[Answer, ...] | IllPosed] = []
+    for i, (top, params) in enumerate(zip(tops, many, strict=True)):
+        try:
+            found.append(_answers(top, params["omega3"], critical[3 * i:3 * i + 3]))
+        except IllPosed as e:
+            found.append(e)
+    return found
+
+
+def _answers(top: Top, omega3: float, critical: Sequence[float]) -> tuple[Answer, ...]:
+    reject_unless(abs(omega3 / critical[0] - 1.0) >= THRESHOLD_MARGIN,
                   "the given spin is too close to the critical one")
-    return distinguishable(lambda: (_spin_answer(top), _stable_answer(top, omega3)), MARGIN)
+    return distinguishable(lambda: (_spin_answer(critical), _stable_answer(top, omega3)), MARGIN)
 
 
 def statement(params: Mapping[str, Any]) -> str:

@@ -37,13 +37,13 @@ absolute error is the student's relative error in ``slow`` (≲ 1e-13 in floatin
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from typing import Any
+from collections.abc import Mapping, Sequence
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from problems.answers import Answer, Mistake
-from problems.family import Parameter, distinguishable, reject_unless
+from problems.family import IllPosed, Parameter, distinguishable, reject_unless
 from problems.genuine import SAME
 from problems.rounding import latex_sig, round_sig
 from problems.templates.sleeping_top import TOP_KINDS, TOP_PARAMETERS, draw_top
@@ -78,27 +78,43 @@ _FACTOR_2 = ("The quadratic formula divides by 2a: α̇ = [p_γ ± √(p_γ² �
              "(2 I1 cos β0) (R21).")
 
 
-class _Rates:
+class _Rates(NamedTuple):
     """Exact and fast-top rates ``(slow, fast)`` for a (possibly mistaken) set of inputs."""
 
-    def __init__(self, I1: float, I3: float, Mgl: float, beta0: float, omega3: float):
-        p_gamma = I3 * omega3
-        self.exact = tuple(map(float, steady_precession_rates(I1, I3, Mgl, beta0, p_gamma)))
-        self.approx = tuple(map(float, fast_top_rates(I1, I3, Mgl, beta0, p_gamma)))
+    exact: tuple[float, float]
+    approx: tuple[float, float]
+
+
+def _rates_many(inputs: Sequence[tuple[float, ...]]) -> list[_Rates]:
+    """:class:`_Rates` of each ``(I1, I3, Mgl, β0, ω3)`` (R21, ``p_γ = I3 ω3``), the solver
+    called once for all of them (element by element what one set alone gives)."""
+    I1, I3, Mgl, beta0, omega3 = np.array(inputs, dtype=float).T
+    p_gamma = I3 * omega3
+    exact = np.stack(steady_precession_rates(I1, I3, Mgl, beta0, p_gamma), axis=-1).tolist()
+    approx = np.stack(fast_top_rates(I1, I3, Mgl, beta0, p_gamma), axis=-1).tolist()
+    return [_Rates(tuple(e), tuple(a)) for e, a in zip(exact, approx, strict=True)]
+
+
+_WRONG = {"I1_about_cm": _I1_CM, "I1_I3_swapped": _SWAPPED, "degrees": _DEGREES}
+"""The mistaken inputs of :func:`_inputs` after the key's, in order, and their feedback."""
+
+
+def _inputs(M, arm, Icm, I3, g, beta0, omega3) -> list[tuple[float, ...]]:
+    """The key's ``(I1, I3, Mgl, β0, ω3)`` (``I1 = Icm + M l²``, R2), then those of
+    :data:`_WRONG`: I1 about the centre of mass, I1 and I3 swapped, β0 read as degrees."""
+    Mgl, I1 = M * g * arm, Icm + M * arm**2
+    return [(I1, I3, Mgl, beta0, omega3), (Icm, I3, Mgl, beta0, omega3),
+            (I3, I1, Mgl, beta0, omega3), (I1, I3, Mgl, math.radians(beta0), omega3)]
 
 
 def _finite(mistakes: list[Mistake]) -> tuple[Mistake, ...]:
     return tuple(m for m in mistakes if math.isfinite(m.value))
 
 
-def _answers(M, arm, Icm, I3, g, beta0, omega3) -> tuple[Answer, ...]:
-    Mgl, I1 = M * g * arm, Icm + M * arm**2
-    key = _Rates(I1, I3, Mgl, beta0, omega3)
-    wrong = {
-        "I1_about_cm": (_Rates(Icm, I3, Mgl, beta0, omega3), _I1_CM),
-        "I1_I3_swapped": (_Rates(I3, I1, Mgl, beta0, omega3), _SWAPPED),
-        "degrees": (_Rates(I1, I3, Mgl, math.radians(beta0), omega3), _DEGREES),
-    }
+def _answers(rates: Sequence[_Rates]) -> tuple[Answer, ...]:
+    """The answers from :func:`_rates_many` of :func:`_inputs`."""
+    key = rates[0]
+    wrong = {name: (r, text) for (name, text), r in zip(_WRONG.items(), rates[1:], strict=True)}
     answers = []
     for i, which in enumerate(("slow", "fast")):
         exact, approx = key.exact[i], key.approx[i]
@@ -192,12 +208,43 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     Raises :class:`~problems.family.IllPosed` when the rounding moved the stiffness out of
     :data:`STIFFNESS`, or a known mistake is close to the key.
     """
+    inputs = _posed_inputs(params)
+    return distinguishable(lambda: _answers(_rates_many(inputs)), MARGIN)
+
+
+def _posed_inputs(params: Mapping[str, Any]) -> list[tuple[float, ...]]:
+    """:func:`_inputs` of the shown parameters; IllPosed when the rounding moved the stiffness
+    out of :data:`STIFFNESS`."""
     M, arm, Icm, I3, g, omega3, beta0 = (params[n] for n in ("M", "l", "Icm", "I3", "g",
                                                               "omega3", "beta0"))
     I1, Mgl = Icm + M * arm**2, M * g * arm
     stiffness = (I3 * omega3) ** 2 / (4 * I1 * Mgl * math.cos(beta0))
     reject_unless(STIFFNESS[0] <= stiffness <= STIFFNESS[1], "stiffness out of range")
-    return distinguishable(lambda: _answers(M, arm, Icm, I3, g, beta0, omega3), MARGIN)
+    return _inputs(M, arm, Icm, I3, g, beta0, omega3)
+
+
+def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
+    """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
+    rejected) — the batch form (:mod:`problems.family`): the exact and fast-top rates of every
+    student's key and mistaken inputs in one solver call each."""
+    posed: list[list[tuple[float, ...]] | IllPosed] = []
+    for params in many:
+        try:
+            posed.append(_posed_inputs(params))
+        except IllPosed as e:
+            posed.append(e)
+    inputs = [row for p in posed if not isinstance(p, IllPosed) for row in p]
+    rates = iter(_rates_many(inputs) if inputs else ())
+    found: list[tuple[Answer, ...] | IllPosed] = []
+    for p in posed:
+        try:
+            if isinstance(p, IllPosed):
+                raise p
+            mine = [next(rates) for _ in p]
+            found.append(distinguishable(lambda mine=mine: _answers(mine), MARGIN))
+        except IllPosed as e:
+            found.append(e)
+    return found
 
 
 def statement(params: Mapping[str, Any]) -> str:

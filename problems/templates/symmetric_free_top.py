@@ -17,15 +17,15 @@ mistake (e.g. ``sin Ωt ≈ 0``, where turning ω the wrong way round gives the 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from problems.answers import Answer, Mistake
-from problems.family import Parameter, distinguishable, reject_unless
+from problems.family import IllPosed, Parameter, distinguishable, reject_unless
 from problems.genuine import statement_number
 from problems.rounding import latex_sig, round_sig
 from problems.written import Written
@@ -148,10 +148,27 @@ def _swapped_rate(d: Draw) -> float | None:
         return None
 
 
-def _answers(d: Draw) -> tuple[Answer, ...]:
-    Omega = float(body_precession_rate(d.I1, d.I3, d.omega0[2]))
-    alpha_dot = float(space_precession_rate(d.I1, d.I3, d.omega0))
-    _, L2 = invariants(d.I1, d.I1, d.I3, d.omega0)
+class _Solved(NamedTuple):
+    """What the solver gives one throw (R8): Ω, α̇ = L/I1, L² (R7) and ω(t)."""
+
+    Omega: float
+    alpha_dot: float
+    L2: float
+    omega_t: list[float]
+
+
+def _solve_many(draws: Sequence[Draw]) -> list[_Solved]:
+    """:class:`_Solved` of each draw (rigid bodies: ``I3 ≤ 2 I1``), every solver function
+    called once for all of them (element by element what one draw alone gives)."""
+    I1, I3, t = (np.array([getattr(d, n) for d in draws], dtype=float) for n in ("I1", "I3", "t"))
+    omega0 = np.array([d.omega0 for d in draws], dtype=float)
+    columns = (body_precession_rate(I1, I3, omega0[:, 2]), space_precession_rate(I1, I3, omega0),
+               invariants(I1, I1, I3, omega0)[1], symmetric_top_omega(I1, I3, omega0, t))
+    return [_Solved(*row) for row in zip(*(c.tolist() for c in columns), strict=True)]
+
+
+def _answers(d: Draw, solved: _Solved) -> tuple[Answer, ...]:
+    Omega, alpha_dot, L2 = solved.Omega, solved.alpha_dot, solved.L2
     L_perp = d.I1 * math.hypot(d.omega0[0], d.omega0[1])
     theta = math.atan2(L_perp, d.I3 * d.omega0[2])  # cos θ = I3 ω3 / L
     omega_tilt = math.atan2(math.hypot(d.omega0[0], d.omega0[1]), d.omega0[2])
@@ -206,8 +223,8 @@ def _answers(d: Draw) -> tuple[Answer, ...]:
                description="Ω, body-frame precession rate of ω about ê3 (signed)"),
         Answer("T_body", "scalar", period, unit="s", rtol=RTOL, mistakes=tuple(period_m),
                description="period of the body-frame precession", depends_on=("Omega",)),
-        Answer("omega_t", "vector", symmetric_top_omega(d.I1, d.I3, d.omega0, d.t).tolist(),
-               unit="rad/s", rtol=RTOL, mistakes=tuple(vector_m),
+        Answer("omega_t", "vector", solved.omega_t, unit="rad/s", rtol=RTOL,
+               mistakes=tuple(vector_m),
                description="[ω1, ω2, ω3] at time t, body frame"),
         Answer("alpha_dot", "scalar", alpha_dot, unit="rad/s", rtol=RTOL,
                mistakes=tuple(alpha_m), description="precession rate of ê3 about L, space frame"),
@@ -249,8 +266,30 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     mistake close to the key (e.g. ``sin Ωt ≈ 0``).
     """
     d = _draw_of(params)
-    reject_unless(d.I3 <= 2 * d.I1, "no rigid body: I3 > 2 I1")
-    return distinguishable(lambda: _answers(d), MARGIN)
+    reject_unless(d.I3 <= 2 * d.I1, _NO_RIGID_BODY)
+    solved = _solve_many([d])[0]
+    return distinguishable(lambda: _answers(d, solved), MARGIN)
+
+
+_NO_RIGID_BODY = "no rigid body: I3 > 2 I1"
+
+
+def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
+    """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
+    rejected) — the batch form (:mod:`problems.family`): Ω, α̇, L² and ω(t) of every rigid
+    body's throw in one solver call each."""
+    draws = [_draw_of(p) for p in many]
+    rigid = [d for d in draws if d.I3 <= 2 * d.I1]
+    solved = iter(_solve_many(rigid) if rigid else ())
+    found: list[tuple[Answer, ...] | IllPosed] = []
+    for d in draws:
+        try:
+            reject_unless(d.I3 <= 2 * d.I1, _NO_RIGID_BODY)
+            mine = next(solved)
+            found.append(distinguishable(lambda d=d, mine=mine: _answers(d, mine), MARGIN))
+        except IllPosed as e:
+            found.append(e)
+    return found
 
 
 def statement(params: Mapping[str, Any]) -> str:

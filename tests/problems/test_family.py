@@ -19,6 +19,7 @@ from problems.family import (
     Parameter,
     distinguishable,
     draw_parameters,
+    remembered,
 )
 from problems.rounding import round_sig
 from problems.settings import AnswerSetting, ParameterSetting, QuestionSettings
@@ -345,3 +346,28 @@ def test_a_batch_drawn_question_keeps_the_written_parts_its_settings_ask_for():
     alone = [family.generate(np.random.default_rng(s), settings) for s in range(12)]
     assert [v.to_dict() for v in together] == [v.to_dict() for v in alone]
     assert all(any(a.kind == "written" for a in v.answers) for v in together)
+
+
+def test_remembered_works_again_for_other_parameters_only():
+    """A draw's accepted try and answers() share one computation (issue 34): equal parameters
+    get the remembered result; any other value, type or sign of zero is worked out again, and
+    a rejection (IllPosed) is not remembered."""
+    calls = []
+
+    def work(params):
+        calls.append(dict(params))
+        if params["x"] == 2.0:
+            raise IllPosed("rejected")
+        return [params["x"], params.get("v")]
+
+    once = remembered(work)
+    first = once({"x": 1.0, "v": [0.0, 1.0]})
+    assert once({"x": 1.0, "v": [0.0, 1.0]}) is first and len(calls) == 1
+    for other in ({"x": 1, "v": [0.0, 1.0]}, {"x": 1.0, "v": [-0.0, 1.0]},
+                  {"x": 1.0, "v": (0.0, 1.0)}, {"x": 1.0}):
+        assert once(other) == work(other) and once(other) is not first
+    assert len(calls) == 9
+    for _ in range(2):
+        with pytest.raises(IllPosed):
+            once({"x": 2.0})
+    assert len(calls) == 11
