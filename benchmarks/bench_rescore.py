@@ -154,26 +154,32 @@ def main() -> None:
 
 def one_student(hw: Path, runs: int) -> None:
     """An override of one student (set, then taken back: each a fresh process), against its
-    floor: a fresh process importing what the command imports and reading the assignment."""
+    floor: a fresh process importing what the command imports and reading the assignment —
+    and the same reading that student's key as well (``Assignment.expected``: what every
+    change of a student checks first, and its comparison needs; sympy for an expression
+    answer)."""
     from grader.assignment import load_assignment
 
     a = load_assignment(hw)
     sid = a.ids[len(a.ids) // 2]
     variable = a.expected(sid)[0].variable
     eulertop = [sys.executable, "-m", "eulertop", "override", str(hw), sid, variable]
-    floor = [sys.executable, "-c", "import sys; from grader.assignment import load_assignment; "
-             "import grader.amend, grader.rescore; load_assignment(sys.argv[1])", str(hw)]
-    setting, taking, starting = [], [], []
+    start = ("import sys; from grader.assignment import load_assignment; "
+             "import grader.amend, grader.rescore; a = load_assignment(sys.argv[1])")
+    floor = [sys.executable, "-c", start, str(hw)]
+    keyed = [sys.executable, "-c", start + "; a.expected(sys.argv[2])", str(hw), sid]
+    setting, taking, starting, reading = [], [], [], []
     for _ in range(runs):
         starting.append(timed(floor)[0])
+        reading.append(timed(keyed)[0])
         setting.append(timed([*eulertop, "--points", "0", "--reason", "bench"])[0])
         taking.append(timed([*eulertop, "--remove"])[0])
     med = statistics.median
     print(f"eulertop override of one student (fresh process, median of {runs}): set "
           f"{med(setting):.2f} s, taken back {med(taking):.2f} s; its floor — the command's "
           f"imports and reading the assignment — {med(starting):.2f} s; ratio "
-          f"{med(setting) / med(starting):.2f}")
-
+          f"{med(setting) / med(starting):.2f}; with that student's key read as well "
+          f"{med(reading):.2f} s, ratio {med(setting) / med(reading):.2f}")
 
 if __name__ == "__main__":
     main()

@@ -19,20 +19,13 @@ from typing import Any
 
 from grader.assignment import Assignment
 from grader.follow_through import FollowThrough
-from grader.gradebook import (
-    ANSWER_COLUMNS,
-    WRITTEN_STATUSES,
-    answers_rows,
-    feedback_html,
-    gradebook_csv,
-    gradebook_rows,
-    ran_code,
-)
+from grader.gradebook import feedback_html
 from grader.graded_folder import ANSWERS, FEEDBACK, GRADES, REPORT, RESULTS
 from grader.late import policy_of
 from grader.overrides import Override, apply_overrides
-from grader.results import StudentResult, result_json
+from grader.results import StudentResult, read_result, result_json
 from grader.reviews import Reviews, apply_reviews
+from grader.table_rows import answers_lines, grades_line, headers, spliced, table_columns
 from grader.transaction import Transaction
 
 NO_REVIEWS = Reviews()
@@ -122,32 +115,18 @@ class RowCache:
         _tables(a, {sid: r for sid, r in results.items() if r is not None}, self)
 
 
-def _gradebook_columns(a: Assignment, present: Mapping[str, StudentResult]) -> dict:
-    """The optional columns of ``grades.csv`` (:func:`grader.gradebook.gradebook_rows`), as
-    the whole class decides them."""
-    return {"sandbox_column": any(ran_code(r) and not r.sandboxed for r in present.values()),
-            "override_column": any(r.overridden for r in present.values()),
-            "late_columns": "late" in a.manifest or any(r.late for r in present.values()),
-            "pending_column": bool(a.written()) or any(
-                x.verdict.status in WRITTEN_STATUSES for r in present.values()
-                for x in r.answers)}
-
-
 def _tables(a: Assignment, present: Mapping[str, StudentResult],
             cache: RowCache) -> tuple[str, str]:
     """The text of ``grades.csv`` and ``answers.csv``, row by row through ``cache``."""
-    columns = _gradebook_columns(a, present)
+    columns = table_columns(a, present)
     key = tuple(sorted(columns.items()))
-    grades = [gradebook_csv(gradebook_rows(a.columns, [], a.questions, {}, **columns))]
-    answers = [gradebook_csv([list(ANSWER_COLUMNS)])]
+    grades, answers = ([head] for head in headers(a, columns))
     for row in a.rows:
         sid, r = row["id"], present.get(row["id"])
-        mine = {sid: r} if r is not None else {}
         grades.append(cache.text("grades", sid, r, (key, a.columns),
-                                 lambda row=row, mine=mine: gradebook_csv(gradebook_rows(
-                                     a.columns, [row], a.questions, mine, **columns)[1:])))
-        answers.append(cache.text("answers", sid, r, None, lambda row=row, mine=mine:
-                                  gradebook_csv(answers_rows([row], mine)[1:])))
+                                 lambda row=row, r=r: grades_line(a, row, r, columns)))
+        answers.append(cache.text("answers", sid, r, None,
+                                  lambda row=row, r=r: answers_lines(row, r)))
     return "".join(grades), "".join(answers)
 
 
@@ -198,6 +177,25 @@ def stage_views(tx: Transaction, a: Assignment, out: Path,
             tx.write(out / FEEDBACK / f"{sid}.html", _page(a, r, reveal), durable=False)
 
 
+def stage_scoped_views(tx: Transaction, a: Assignment, out: Path,
+                       before: Mapping[str, StudentResult | None],
+                       after: Mapping[str, StudentResult | None], reveal: bool,
+                       published: Set[str] = frozenset()) -> None:
+    """Stage the gradebook and the answers table of a change that read only the records of
+    the students it reached (``before``: as they were, ``after``: as they are now): their
+    lines made again and every other line's bytes kept (:func:`grader.table_rows.spliced`);
+    where the files cannot tell that, the other records are read and the tables made whole
+    (:func:`stage_views`), as a change of the whole class makes them. Either way the same
+    text. No page but those of ``published`` (staged with their records)."""
+    tables = spliced(a, out, before, after)
+    if tables is None:
+        others = records(a, out, frozenset(a.ids) - frozenset(after))
+        stage_views(tx, a, out, {**others, **after}, reveal, published, pages=frozenset())
+        return
+    tx.write(out / GRADES, tables[0], durable=False)
+    tx.write(out / ANSWERS, tables[1], durable=False)
+
+
 def report_notebooks(out: Path) -> dict[str, Path]:
     """The notebooks the last grading run of ``out`` graded (from its audit trail), those still
     there: what a rescore's class report compares, as that run's did."""
@@ -209,8 +207,9 @@ def report_notebooks(out: Path) -> dict[str, Path]:
     return {}
 
 
-def records(a: Assignment, out: Path) -> dict[str, StudentResult | None]:
-    """Every roster student's record in ``out`` (None: none yet)."""
-    from grader.results import read_result
-
-    return {sid: read_result(out / RESULTS / f"{sid}.json") for sid in a.ids}
+def records(a: Assignment, out: Path,
+            only: Set[str] | None = None) -> dict[str, StudentResult | None]:
+    """Every roster student's record in ``out`` (None: none yet); ``only``: those of the
+    students it names, alone."""
+    return {sid: read_result(out / RESULTS / f"{sid}.json") for sid in a.ids
+            if only is None or sid in only}

@@ -54,6 +54,7 @@ from grader.publish import (
     settled,
     stage_record,
     stage_report,
+    stage_scoped_views,
     stage_stale_report,
     stage_views,
 )
@@ -230,14 +231,17 @@ def amended_class(state: Loaded, amendment: Amendment, *, dry_run: bool = False,
     what a review desk that keeps the class in memory calls, :mod:`grader.review`). The report
     and every record as it now is. ``follow``: the class's follow-through, kept open by the
     caller (default: one for this change, closed after it); ``rows``: the gradebook's rows of
-    the records met before (:class:`grader.publish.RowCache`)."""
+    the records met before (:class:`grader.publish.RowCache`). A class not loaded
+    (``state.records`` None) has only the records of the students the change reaches read,
+    and those alone returned (:func:`grader.publish.stage_scoped_views`)."""
     scope = _reached(state.a, amendment)
     a, overrides, reviews = _amended(state.a, state.overrides, state.reviews, amendment, scope)
-    old = records(a, state.out) if state.records is None else state.records
+    old = records(a, state.out, scope) if state.records is None else state.records
     report, new = _rescored_class(a, old, overrides, amendment, scope, reviews, follow)
     report = replace(report, dry_run=dry_run)
     if not dry_run:
-        _commit(a, state.hw, state.out, old, new, report, reveal, command, scope, rows)
+        _commit(a, state.hw, state.out, old, new, report, reveal, command, scope, rows,
+                whole=state.records is not None or scope is None)
     return report, new
 
 
@@ -318,9 +322,10 @@ def _rescored_class(a: Assignment, old: Mapping[str, StudentResult | None],
 def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult | None],
             new: Mapping[str, StudentResult | None], report: Rescore, reveal: bool,
             command: str, scope: frozenset[str] | None = None,
-            rows: RowCache | None = None) -> None:
+            rows: RowCache | None = None, whole: bool = True) -> None:
     """The change, its records and their views, and its line of the trail, as one
-    transaction."""
+    transaction. ``whole``: ``old`` holds every record of the class (else those of
+    ``scope``)."""
     amendment, details = report.amendment, dict(report.amendment.details)
     tx = Transaction(out)
     if amendment.key is not None:
@@ -336,8 +341,11 @@ def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult 
     changed = {sid for sid, r in new.items() if r is not None and r is not old[sid]}
     for sid in changed:
         stage_record(tx, a, out, new[sid], reveal)
-    stage_views(tx, a, out, new, reveal, published=changed,
-                pages=None if scope is None else frozenset(), cache=rows)
+    if whole:
+        stage_views(tx, a, out, new, reveal, published=changed,
+                    pages=None if scope is None else frozenset(), cache=rows)
+    else:
+        stage_scoped_views(tx, a, out, old, new, reveal, published=changed)
     if amendment.report:
         stage_report(tx, a, out, new, report_notebooks(out), command)
     elif report.changes:

@@ -47,6 +47,7 @@ FLOORS = {
     "grader.run_file": 24,
     # 5: views of records, and file formats
     "grader.gradebook": 25, "grader.progress": 25, "grader.lms": 25, "grader.report": 25,
+    "grader.table_rows": 25,
     # 6: where grade_one runs; where submissions come from
     "grader.executors": 26, "grader.discover": 26, "grader.publish": 26,
     # 7: the class run
