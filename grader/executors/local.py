@@ -20,17 +20,26 @@ from grader.results import StudentResult
 
 @contextmanager
 def warm_kernels(warm: bool, slots: int, sandbox: Any = None,
-                 preload: Sequence[str] | None = None) -> Iterator[Callable | None]:
+                 preload: Sequence[str] | None = None,
+                 early: Any = None) -> Iterator[Callable | None]:
     """The kernel factory of the run: a warm pool's (closed at the end), or None (default);
-    its zygotes import ``preload`` (:func:`grader.kernels.preload.preload_for`)."""
+    its zygotes import ``preload`` (:func:`grader.kernels.preload.preload_for`). ``early``:
+    a pool started before the class was read (:func:`grader.kernels.early.early_pool`), used
+    (and closed) when it is in the run's sandbox, else left to its owner to close."""
     if not warm:
         yield None
         return
     from grader.kernels.pool import KernelPool
     from grader.sandbox import run_folder
 
-    with run_folder(), KernelPool(slots, sandbox=sandbox, preload=preload) as pool:
-        yield pool.kernel
+    with run_folder():
+        if early is not None and early.sandbox is sandbox and not early.cold:
+            with early as pool:
+                pool.plan(slots, preload)
+                yield pool.kernel
+            return
+        with KernelPool(slots, sandbox=sandbox, preload=preload) as pool:
+            yield pool.kernel
 
 
 Task = tuple  # (Submission, expected key answers, key hash, submission's SHA-256)

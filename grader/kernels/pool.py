@@ -137,6 +137,12 @@ PROCESSES = 64
 """Processes/threads a kernel may add to those its user has (``RLIMIT_NPROC``)."""
 
 
+EARLY_PRELOAD = ("IPython", "numpy")
+"""What the zygote of a pool started ``early`` imports before the class is known: what every
+class's kernels have (:func:`grader.kernels.preload.preload_for` always gives numpy; IPython
+is every kernel's shell)."""
+
+
 class ZygoteError(RuntimeError):
     """A zygote could not be started, died, or did not answer."""
 
@@ -161,7 +167,7 @@ def child_limits(limits: Limits) -> dict[str, int]:
 
 def zygote_command(die_with_parent: bool = False,
                    preload: Sequence[str] | None = None, marker: str | None = None,
-                   remove_own_folder: bool = True) -> list[str]:
+                   remove_own_folder: bool = True, more: bool = False) -> list[str]:
     """The zygote's argv — the seam issue 5's sandbox wraps (module docstring).
 
     ``preload``: the modules to import before forking (default
@@ -170,11 +176,14 @@ def zygote_command(die_with_parent: bool = False,
     (the run folder's name) that the zygote ignores, so that the zygote and every kernel forked
     from it (same command line) can be found from outside. ``remove_own_folder``: the zygote
     removes its working folder when it ends (not where that folder is the sandbox's tmpfs).
+    ``more``: after ``preload`` it waits for the rest of its modules on stdin
+    (:meth:`Zygote.preload_more`), before it makes its shell and says it is ready.
     """
     return [sys.executable, str(ZYGOTE_SCRIPT),
             *(["--remove-own-folder"] if remove_own_folder else []),
             *(["--die-with-parent"] if die_with_parent else []),
             *([f"--preload={','.join(preload)}"] if preload is not None else []),
+            *(["--preload-more"] if more else []),
             *([f"--run={marker}"] if marker else [])]
 
 
@@ -198,6 +207,9 @@ class Zygote:
         kernel's control folder) is bound read-only, and the zygote's working folder, ``HOME``
         and ``TMPDIR`` are the sandbox's own tmpfs (``folder`` on this machine then only holds
         its log).
+    more : bool
+        Started before the grader knows what the class imports: after ``preload`` it waits
+        for the rest (:meth:`preload_more`).
 
     Started from :func:`grader.sandbox.spawn`'s long-lived thread, so that its parent-death
     signal (and ``bwrap --die-with-parent``) fires when the grader ends, not when the thread
@@ -207,7 +219,7 @@ class Zygote:
     def __init__(self, folder: Path, preload: Sequence[str] | None = None,
                  sandbox: Sandbox | None = None, bind: Path | None = None,
                  marker: str | None = None, uid: int | None = None,
-                 alone: bool = False) -> None:
+                 alone: bool = False, more: bool = False) -> None:
         self.folder = Path(folder)
         self.folder.mkdir(mode=0o700, parents=True, exist_ok=True)
         if uid is not None and not alone:  # its working folder is its own
@@ -217,7 +229,7 @@ class Zygote:
         if marker:
             env["EULERTOP_RUN"] = marker
         argv = zygote_command(die_with_parent=True, preload=preload, marker=marker,
-                              remove_own_folder=not alone)
+                              remove_own_folder=not alone, more=more)
         outer = env
         if sandbox is not None:  # with the per-kernel world beside it (grader/sandbox/world.py)
             inside = f"{TOOLS}/{ZYGOTE_SCRIPT.name}"
@@ -285,6 +297,13 @@ class Zygote:
             why = (ready or {}).get("error") or (
                 "it ended" if self.dead else f"no answer in {timeout:g} s")
             raise ZygoteError(f"the kernel zygote could not start: {why}{tail}")
+
+    def preload_more(self, modules: Sequence[str]) -> None:
+        """The rest of what a zygote started with ``more`` imports before it is ready (one
+        line on its stdin; a zygote already gone is replaced when a kernel is asked of it)."""
+        with self._lock, contextlib.suppress(OSError, ValueError):
+            self.process.stdin.write((json.dumps({"preload": list(modules)}) + "\n").encode())
+            self.process.stdin.flush()
 
     def _log_tail(self) -> str:
         with contextlib.suppress(OSError):
@@ -447,7 +466,7 @@ class Slot:
 
     def __init__(self, folder: Path, preload: Sequence[str] | None = None,
                  sandbox: Sandbox | None = None, marker: str | None = None,
-                 start: bool = True) -> None:
+                 start: bool = True, more: bool = False) -> None:
         self.folder = Path(folder)
         self.sandbox, self.marker = sandbox, marker
         self.mode = 0o711 if sandbox is not None else 0o700
@@ -456,6 +475,7 @@ class Slot:
         self.folder.mkdir(mode=0o700, parents=True, exist_ok=True)
         os.chmod(self.folder, self.mode)
         self.preload = preload
+        self.more = more  # its first zygote waits for the rest of its preload (Zygote)
         self.zygote: Zygote | None = None
         self.waiting: _Forked | None = None
         self._prewarming: threading.Thread | None = None
@@ -476,7 +496,8 @@ class Slot:
             self.zygote.close()
         self.starts += 1
         self.zygote = Zygote(self.folder / f"z{self.starts}", self.preload, self.sandbox,
-                             self.folder, self.marker, self.uid)
+                             self.folder, self.marker, self.uid, more=self.more)
+        self.more = False  # a zygote started again imports all of its preload at once
 
     def fork(self, limits: Limits) -> _Forked:
         """Fork a new kernel (restarting a dead zygote first); :class:`ZygoteError`."""
@@ -665,6 +686,11 @@ class KernelPool:
         :mod:`grader.sandbox`). None: no sandbox (the caller decided so). Sandboxed, the pool
         never falls back to unsandboxed cold kernels: a zygote that cannot start makes that
         submission's run fail ("error", retried by the grader).
+    early : bool
+        Started before the grader has read its class (issue 34: the zygote imports while
+        the grader does): one slot, whose zygote imports :data:`EARLY_PRELOAD` and then
+        waits; :meth:`plan` gives it the rest of ``preload`` and adds the other slots. No
+        kernel is asked for before that.
 
     Use as a context manager (or call :meth:`close`): ending it kills every zygote, kernel and
     leftover process, and removes the pool's folder. The pool's folder is in the process's
@@ -672,7 +698,8 @@ class KernelPool:
     """
 
     def __init__(self, slots: int, *, prewarm: bool = True, cold: bool = False,
-                 preload: Sequence[str] | None = None, sandbox: Sandbox | None = None) -> None:
+                 preload: Sequence[str] | None = None, sandbox: Sandbox | None = None,
+                 early: bool = False) -> None:
         if sandbox is not None and (cold or not fork_available()):
             raise ValueError("a sandboxed pool forks its kernels: not cold, and on Linux")
         self.sandbox = sandbox
@@ -690,19 +717,39 @@ class KernelPool:
             if sandbox is not None:
                 os.chmod(self.folder, 0o711)
             try:
-                for i in range(max(1, slots)):
-                    self.slots.append(Slot(self.folder / str(i), preload, sandbox, run.name,
-                                           start=i == 0))
+                first = Slot(self.folder / "0", EARLY_PRELOAD if early else preload, sandbox,
+                             run.name, more=early)
+                self.slots.append(first)
+                self._free.put(first)
+                if not early:
+                    self._add_slots(slots, preload)
             except BaseException:
                 self.close()
                 raise
-            later = [] if self.slots[0].alone else self.slots[1:]
-            for slot in self.slots:
-                if slot not in later:
-                    self._free.put(slot)
-            if later:
-                threading.Thread(target=self._start_later, args=(later,), daemon=True,
-                                 name="eulertop-zygotes").start()
+
+    def plan(self, slots: int, preload: Sequence[str]) -> None:
+        """An ``early`` pool's class: ``slots`` kernels at once, each zygote importing
+        ``preload`` (the first one the rest of it, :meth:`Zygote.preload_more`)."""
+        if self.cold:
+            return
+        first = self.slots[0]
+        if first.zygote is not None:
+            first.zygote.preload_more([m for m in preload if m not in EARLY_PRELOAD])
+        first.preload = tuple(dict.fromkeys((*EARLY_PRELOAD, *preload)))  # if started again
+        self._add_slots(slots, preload)
+
+    def _add_slots(self, slots: int, preload: Sequence[str] | None) -> None:
+        """The slots after the first, their zygotes started once the first's is ready."""
+        for i in range(1, max(1, slots)):
+            self.slots.append(Slot(self.folder / str(i), preload, self.sandbox,
+                                   self.slots[0].marker, start=False))
+        later = [] if self.slots[0].alone else self.slots[1:]
+        for slot in self.slots[1:]:
+            if slot not in later:
+                self._free.put(slot)
+        if later:
+            threading.Thread(target=self._start_later, args=(later,), daemon=True,
+                             name="eulertop-zygotes").start()
 
     def _start_later(self, later: list[Slot]) -> None:
         """Start the zygotes of ``later`` once the first slot's is ready, and lend out each
