@@ -332,7 +332,8 @@ def grade_assignment(
         jobs = jobs or os.cpu_count() or 1
         # the kernels' zygotes start first: they import while this process writes
         with warm_kernels(warm and bool(to_run) and cluster is None, min(jobs, len(to_run)),
-                          isolation, preload_for(packages), early=early) as f:
+                          isolation, preload_for(packages), early=early,
+                          work=len(to_run) + 1) as f:  # + the preflight's kernel
             if to_run and cluster is None:
                 prepare_report()  # while the zygotes import: the preflight waits for them
             run = execute if f is None else partial(execute, kernel_factory=f)

@@ -20,12 +20,13 @@ from grader.results import StudentResult
 
 @contextmanager
 def warm_kernels(warm: bool, slots: int, sandbox: Any = None,
-                 preload: Sequence[str] | None = None,
-                 early: Any = None) -> Iterator[Callable | None]:
+                 preload: Sequence[str] | None = None, early: Any = None,
+                 work: int | None = None) -> Iterator[Callable | None]:
     """The kernel factory of the run: a warm pool's (closed at the end), or None (default);
     its zygotes import ``preload`` (:func:`grader.kernels.preload.preload_for`). ``early``:
     a pool started before the class was read (:func:`grader.kernels.early.early_pool`), used
-    (and closed) when it is in the run's sandbox, else left to its owner to close."""
+    (and closed) when it is in the run's sandbox, else left to its owner to close. ``work``:
+    the kernels the run will ask for, if known (:meth:`KernelPool.expect`)."""
     if not warm:
         yield None
         return
@@ -35,10 +36,11 @@ def warm_kernels(warm: bool, slots: int, sandbox: Any = None,
     with run_folder():
         if early is not None and early.sandbox is sandbox and not early.cold:
             with early as pool:
-                pool.plan(slots, preload)
+                pool.plan(slots, preload, work)
                 yield pool.kernel
             return
         with KernelPool(slots, sandbox=sandbox, preload=preload) as pool:
+            pool.expect(work)
             yield pool.kernel
 
 

@@ -81,6 +81,7 @@ import socket
 import subprocess
 import sys
 import threading
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -711,6 +712,9 @@ class KernelPool:
         self._free: queue.Queue[Slot] = queue.Queue()
         self._run = contextlib.ExitStack()
         self._closing, self._closed = threading.Lock(), False
+        self._progress = threading.Condition()  # kernels given back (done), of work
+        self.work: int | None = None
+        self.done = 0
         if not self.cold:
             run = self._run.enter_context(run_folder())
             self.folder = fresh_folder(run, "p")
@@ -727,9 +731,11 @@ class KernelPool:
                 self.close()
                 raise
 
-    def plan(self, slots: int, preload: Sequence[str]) -> None:
+    def plan(self, slots: int, preload: Sequence[str], work: int | None = None) -> None:
         """An ``early`` pool's class: ``slots`` kernels at once, each zygote importing
-        ``preload`` (the first one the rest of it, :meth:`Zygote.preload_more`)."""
+        ``preload`` (the first one the rest of it, :meth:`Zygote.preload_more`); ``work``:
+        :meth:`expect`."""
+        self.expect(work)
         if self.cold:
             return
         first = self.slots[0]
@@ -751,11 +757,52 @@ class KernelPool:
             threading.Thread(target=self._start_later, args=(later,), daemon=True,
                              name="eulertop-zygotes").start()
 
+    def expect(self, work: int | None) -> None:
+        """The run will ask for ``work`` kernels (None: unknown): the other slots' zygotes
+        are then started only while what is left of it would keep them busy
+        (:meth:`_worth_more_slots`)."""
+        with self._progress:
+            self.work = work
+            self._progress.notify_all()
+
+    def _worth_more_slots(self) -> bool:
+        """Wait until the work left would outlast another zygote's start: True; False once
+        the pool is closed or the work is done first (the first slot did it all).
+
+        At a time ``t`` after the first zygote was ready, with ``done`` of ``work`` kernels
+        given back: the first slot alone needs about ``(work - done) * (t / done)`` more
+        seconds (the time so far over what it finished, at least the kernel in hand's own);
+        another zygote takes its start's ``cpu`` seconds (the first's, from its ready line)
+        to be of use. A class of ten quick notebooks is done before a second zygote could
+        fork one (issue 34: its import only took the cores from the kernels and the report);
+        one of slow or many notebooks starts it after the first kernel or two."""
+        start = self._start_cost()
+        began = time.monotonic()
+        with self._progress:
+            while not self._closed:
+                if self.work is None:
+                    return True
+                left, done = self.work - self.done, self.done
+                if left <= 0:
+                    return False
+                if left * (time.monotonic() - began) / max(done, 1) > start:
+                    return True
+                self._progress.wait(0.02)
+        return False
+
+    def _start_cost(self) -> float:
+        """CPU seconds the first slot's zygote took to start (its ready line), or 0."""
+        first = self.slots[0].zygote
+        return float((first.ready or {}).get("cpu", 0.0)) if first is not None else 0.0
+
     def _start_later(self, later: list[Slot]) -> None:
-        """Start the zygotes of ``later`` once the first slot's is ready, and lend out each
-        slot once its own is (never after :meth:`close`)."""
+        """Start the zygotes of ``later`` once the first slot's is ready and the work left
+        is worth it (:meth:`_worth_more_slots`), and lend out each slot once its own is
+        ready (never after :meth:`close`)."""
         with contextlib.suppress(ZygoteError):
             self.slots[0].zygote.wait_ready()
+        if not self._worth_more_slots():
+            return
         for slot in later:
             with self._closing:
                 if self._closed:
@@ -781,6 +828,9 @@ class KernelPool:
         return self._free.get()
 
     def give_back(self, slot: Slot) -> None:
+        with self._progress:
+            self.done += 1
+            self._progress.notify_all()
         self._free.put(slot)
 
     def fail(self, err: Exception) -> None:
@@ -795,8 +845,9 @@ class KernelPool:
 
     def close(self) -> None:
         """Kill every zygote, kernel and leftover; remove the pool's folder."""
-        with self._closing:  # no zygote is started after this
+        with self._closing, self._progress:  # no zygote is started after this
             self._closed = True
+            self._progress.notify_all()
         for slot in self.slots:  # all of them end at once; then each is waited for
             if slot.zygote is not None:
                 if slot.zygote.ready is None:  # still importing (started late): no kernels

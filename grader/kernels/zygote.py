@@ -17,7 +17,8 @@ environment of :func:`grader.kernels.base.kernel_environment`, never the grader'
    (With ``--preload-more``, started before the grader has read its class, it imports
    ``--preload``'s modules and then reads the rest from one line of its input,
    ``{"preload": [...]}``, before it makes the shell; the end of its input then ends it.)
-3. writes ``{"ready": ...}`` and then serves requests, one JSON object per line on stdin,
+3. writes ``{"ready": true, "pid", "preloaded", "cpu"}`` (``cpu``: the CPU seconds its start
+   took) and then serves requests, one JSON object per line on stdin,
    answering on stdout; it reaps its children and reports each exit as an event.
 
 Requests (``seq`` is echoed in the reply)::
@@ -86,6 +87,7 @@ import select
 import signal
 import socket
 import sys
+import time
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS"):
     os.environ[_var] = "1"  # before numpy is imported: a single-threaded zygote forks safely
@@ -559,7 +561,8 @@ def main() -> None:
     gc.freeze()
     gc.enable()
     zygote = Zygote()
-    _send({"ready": True, "pid": zygote.pid, "preloaded": list(preload)})
+    _send({"ready": True, "pid": zygote.pid, "preloaded": list(preload),
+           "cpu": round(time.process_time(), 3)})  # what a start costs (another slot's)
     try:
         zygote.serve()
     finally:

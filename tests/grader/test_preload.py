@@ -84,7 +84,7 @@ def preloads(monkeypatch):
     asked = []
 
     @contextlib.contextmanager
-    def kernels(warm, slots, sandbox=None, preload=None, early=None):
+    def kernels(warm, slots, sandbox=None, preload=None, early=None, work=None):
         asked.append(preload)
         yield None
 
