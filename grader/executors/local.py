@@ -25,7 +25,8 @@ def warm_kernels(warm: bool, slots: int, sandbox: Any = None,
     """The kernel factory of the run: a warm pool's (closed at the end), or None (default);
     its zygotes import ``preload`` (:func:`grader.kernels.preload.preload_for`). ``early``:
     a pool started before the class was read (:func:`grader.kernels.early.early_pool`), used
-    (and closed) when it is in the run's sandbox, else left to its owner to close. ``work``:
+    when it is in the run's sandbox and closed in the background at the end (its owner's
+    close waits for that), else left to its owner to close. ``work``:
     the kernels the run will ask for, if known (:meth:`KernelPool.expect`)."""
     if not warm:
         yield None
@@ -35,9 +36,13 @@ def warm_kernels(warm: bool, slots: int, sandbox: Any = None,
 
     with run_folder():
         if early is not None and early.sandbox is sandbox and not early.cold:
-            with early as pool:
-                pool.plan(slots, preload, work)
-                yield pool.kernel
+            early.plan(slots, preload, work)
+            try:
+                yield early.kernel
+            except BaseException:
+                early.close()
+                raise
+            early.close_soon()  # while the run writes its report; its owner waits for it
             return
         with KernelPool(slots, sandbox=sandbox, preload=preload) as pool:
             pool.expect(work)

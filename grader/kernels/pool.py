@@ -713,6 +713,7 @@ class KernelPool:
         self._run = contextlib.ExitStack()
         self._closing, self._closed = threading.Lock(), False
         self._progress = threading.Condition()  # kernels given back (done), of work
+        self._ending: threading.Thread | None = None  # close_soon's
         self.work: int | None = None
         self.done = 0
         if not self.cold:
@@ -843,8 +844,21 @@ class KernelPool:
             sys.stderr.write(f"eulertop grade: {err}; kernels start cold from now on "
                              "(slower, equally isolated)\n")
 
+    def close_soon(self) -> None:
+        """:meth:`close` in a thread of its own: the zygotes end (their kernels and
+        leftovers killed, their folders removed: tens of milliseconds) while the caller goes
+        on — the class report, at the end of a run; :meth:`close` waits for it."""
+        if self._ending is None:
+            self._ending = threading.Thread(target=self._close, name="eulertop-pool-close")
+            self._ending.start()
+
     def close(self) -> None:
         """Kill every zygote, kernel and leftover; remove the pool's folder."""
+        if self._ending is not None:
+            self._ending.join()
+        self._close()
+
+    def _close(self) -> None:
         with self._closing, self._progress:  # no zygote is started after this
             self._closed = True
             self._progress.notify_all()

@@ -191,7 +191,9 @@ def test_a_grading_run_forks_its_kernels_from_the_early_zygote(assignment, tmp_p
         zygote = early.slots[0].zygote
         assert early.forks >= 2  # the preflight's kernel and alice's, at least
         assert zygote.ready["preloaded"] == ["IPython", "numpy", "sympy"]
-        assert zygote.process.poll() is not None  # closed by the run, with its kernels
+        assert len(early.slots) == 1  # two jobs, one submission: one slot
+    assert zygote.process.poll() is not None  # ended (by the run, waited for by its owner)
+    assert not early.folder.exists()
     alice = next(r for r in report.results if r.student_id == "alice")
     assert alice.status == "graded" and alice.points == alice.max_points, alice.message
     assert alice.sandboxed
