@@ -1,3 +1,3 @@
-from eulertop.cli import main
+from eulertop.cli import script
 
-raise SystemExit(main())
+raise SystemExit(script())

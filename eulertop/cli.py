@@ -6,10 +6,11 @@ Subcommand modules are imported lazily so that `eulertop --help` stays fast.
 from __future__ import annotations
 
 import argparse
+import atexit
+import contextlib
 import importlib
 import os
 import sys
-from importlib import metadata
 
 # subcommand -> (module, one-line help). The module defines `add_<name>_arguments(parser)` and
 # `run_<name>(args) -> int` (exit status), so one module may serve several subcommands.
@@ -55,8 +56,17 @@ its default threads, under 2 ms with one."""
 BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 
 
+QUICK_EXIT = ("grade",)
+"""Subcommands whose process ends without tearing its interpreter down (:func:`script`):
+every file they write is written whole and closed by then (atomically, by the one writer of
+records), and what the interpreter's teardown would do — free each module of numpy, scipy and
+matplotlib one by one — took 0.15 s of every ``eulertop grade`` (issue 34)."""
+
+
 def version() -> str:
     """The installed eulertop version (``0+unknown`` when run from a source tree not installed)."""
+    from importlib import metadata
+
     try:
         return metadata.version("eulertop")
     except metadata.PackageNotFoundError:
@@ -93,6 +103,29 @@ def main(argv: list[str] | None = None) -> int:
         os.dup2(devnull, sys.stdout.fileno())
         os.close(devnull)
         return 141
+
+
+def script() -> int:
+    """The console script and ``python -m eulertop``: :func:`main`; for a subcommand of
+    :data:`QUICK_EXIT`, once every thread is joined and every other exit handler has run
+    (this one, registered first, runs last), the streams are flushed and the process ends
+    with its status at once, without the interpreter's teardown."""
+    status: list[int] = []
+    command = next((a for a in sys.argv[1:] if a in SUBCOMMANDS), None)
+    if command in QUICK_EXIT:
+        atexit.register(_leave, status)
+    status.append(main())
+    return status[0]
+
+
+def _leave(status: list[int]) -> None:
+    """At exit, after every other handler: flush the streams and end with ``status``."""
+    if not status:
+        return  # main() raised: the interpreter reports it and ends as usual
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError):
+            stream.flush()
+    os._exit(status[0])
 
 
 def _dispatch(argv: list[str]) -> int:

@@ -16,6 +16,7 @@ import argparse
 import os
 import sys
 import threading
+from contextlib import nullcontext
 from pathlib import Path
 
 # the one --max-size of grade and check (and eulertop-check), in the module both read with
@@ -127,7 +128,20 @@ def _limits(args: argparse.Namespace):
 
 
 def run_grade(args: argparse.Namespace, execute=None) -> int:
-    """Run ``eulertop grade``; ``execute`` replaces the execution stage (tests, benchmarks)."""
+    """Run ``eulertop grade``; ``execute`` replaces the execution stage (tests, benchmarks).
+
+    The run's first zygote is started before anything else is imported or read
+    (:func:`grader.kernels.early.early_pool`): it imports while this process does."""
+    from grader.kernels.early import early_pool
+
+    warm = execute is None and not getattr(args, "cold_kernels", False) and \
+        getattr(args, "cluster", None) is None
+    with early_pool(not getattr(args, "no_sandbox", False)) if warm else nullcontext() as early:
+        return _grade(args, execute, early)
+
+
+def _grade(args: argparse.Namespace, execute, early) -> int:
+    """``eulertop grade`` with ``early``, the run's first zygote if it has one."""
     from grader.assignment import UsageError
     from grader.gradebook import summary_table
     from grader.graded_folder import graded_folder
@@ -147,6 +161,7 @@ def run_grade(args: argparse.Namespace, execute=None) -> int:
             sandbox=not getattr(args, "no_sandbox", False), class_list=class_list,
             cluster=getattr(args, "cluster", None), wait=args.wait,
             yes=getattr(args, "yes", False), times=getattr(args, "times", None),
+            early=early,
         )
     except (UsageError, RosterError) as e:
         print(f"eulertop grade: {e}", file=sys.stderr)

@@ -233,6 +233,7 @@ def grade_assignment(
     wait: float = LOCK_WAIT,
     yes: bool = False,
     times: Path | None = None,
+    early: Any = None,
 ) -> RunReport:
     """Grade every submission in ``submissions`` against the assignment ``hw``.
 
@@ -273,6 +274,10 @@ def grade_assignment(
     times : Path, optional
         ``--times FILE``: when each submission came in (CSV ``id,submitted_at``), for those
         an LMS download does not say (:mod:`grader.late`).
+    early : grader.kernels.pool.KernelPool, optional
+        The run's first zygote, started before anything was read
+        (:func:`grader.kernels.early.early_pool`): the warm pool, when the run has one in
+        that sandbox (its owner closes it otherwise).
     cluster : str, optional
         Grade on a Dask cluster (:mod:`grader.executors.dask`): a scheduler address
         (``tcp://HOST:PORT``) or ``local:N`` (a LocalCluster of N workers); ``jobs`` is then
@@ -327,7 +332,8 @@ def grade_assignment(
         jobs = jobs or os.cpu_count() or 1
         # the kernels' zygotes start first: they import while this process writes
         with warm_kernels(warm and bool(to_run) and cluster is None, min(jobs, len(to_run)),
-                          isolation, preload_for(packages)) as f:
+                          isolation, preload_for(packages), early=early,
+                          work=len(to_run) + 1) as f:  # + the preflight's kernel
             if to_run and cluster is None:
                 prepare_report()  # while the zygotes import: the preflight waits for them
             run = execute if f is None else partial(execute, kernel_factory=f)

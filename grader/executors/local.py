@@ -20,17 +20,33 @@ from grader.results import StudentResult
 
 @contextmanager
 def warm_kernels(warm: bool, slots: int, sandbox: Any = None,
-                 preload: Sequence[str] | None = None) -> Iterator[Callable | None]:
+                 preload: Sequence[str] | None = None, early: Any = None,
+                 work: int | None = None) -> Iterator[Callable | None]:
     """The kernel factory of the run: a warm pool's (closed at the end), or None (default);
-    its zygotes import ``preload`` (:func:`grader.kernels.preload.preload_for`)."""
+    its zygotes import ``preload`` (:func:`grader.kernels.preload.preload_for`). ``early``:
+    a pool started before the class was read (:func:`grader.kernels.early.early_pool`), used
+    when it is in the run's sandbox and closed in the background at the end (its owner's
+    close waits for that), else left to its owner to close. ``work``:
+    the kernels the run will ask for, if known (:meth:`KernelPool.expect`)."""
     if not warm:
         yield None
         return
     from grader.kernels.pool import KernelPool
     from grader.sandbox import run_folder
 
-    with run_folder(), KernelPool(slots, sandbox=sandbox, preload=preload) as pool:
-        yield pool.kernel
+    with run_folder():
+        if early is not None and early.sandbox is sandbox and not early.cold:
+            early.plan(slots, preload, work)
+            try:
+                yield early.kernel
+            except BaseException:
+                early.close()
+                raise
+            early.close_soon()  # while the run writes its report; its owner waits for it
+            return
+        with KernelPool(slots, sandbox=sandbox, preload=preload) as pool:
+            pool.expect(work)
+            yield pool.kernel
 
 
 Task = tuple  # (Submission, expected key answers, key hash, submission's SHA-256)

@@ -81,6 +81,7 @@ import socket
 import subprocess
 import sys
 import threading
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -137,6 +138,12 @@ PROCESSES = 64
 """Processes/threads a kernel may add to those its user has (``RLIMIT_NPROC``)."""
 
 
+EARLY_PRELOAD = ("IPython", "numpy")
+"""What the zygote of a pool started ``early`` imports before the class is known: what every
+class's kernels have (:func:`grader.kernels.preload.preload_for` always gives numpy; IPython
+is every kernel's shell)."""
+
+
 class ZygoteError(RuntimeError):
     """A zygote could not be started, died, or did not answer."""
 
@@ -161,7 +168,7 @@ def child_limits(limits: Limits) -> dict[str, int]:
 
 def zygote_command(die_with_parent: bool = False,
                    preload: Sequence[str] | None = None, marker: str | None = None,
-                   remove_own_folder: bool = True) -> list[str]:
+                   remove_own_folder: bool = True, more: bool = False) -> list[str]:
     """The zygote's argv — the seam issue 5's sandbox wraps (module docstring).
 
     ``preload``: the modules to import before forking (default
@@ -170,11 +177,14 @@ def zygote_command(die_with_parent: bool = False,
     (the run folder's name) that the zygote ignores, so that the zygote and every kernel forked
     from it (same command line) can be found from outside. ``remove_own_folder``: the zygote
     removes its working folder when it ends (not where that folder is the sandbox's tmpfs).
+    ``more``: after ``preload`` it waits for the rest of its modules on stdin
+    (:meth:`Zygote.preload_more`), before it makes its shell and says it is ready.
     """
     return [sys.executable, str(ZYGOTE_SCRIPT),
             *(["--remove-own-folder"] if remove_own_folder else []),
             *(["--die-with-parent"] if die_with_parent else []),
             *([f"--preload={','.join(preload)}"] if preload is not None else []),
+            *(["--preload-more"] if more else []),
             *([f"--run={marker}"] if marker else [])]
 
 
@@ -198,6 +208,9 @@ class Zygote:
         kernel's control folder) is bound read-only, and the zygote's working folder, ``HOME``
         and ``TMPDIR`` are the sandbox's own tmpfs (``folder`` on this machine then only holds
         its log).
+    more : bool
+        Started before the grader knows what the class imports: after ``preload`` it waits
+        for the rest (:meth:`preload_more`).
 
     Started from :func:`grader.sandbox.spawn`'s long-lived thread, so that its parent-death
     signal (and ``bwrap --die-with-parent``) fires when the grader ends, not when the thread
@@ -207,7 +220,7 @@ class Zygote:
     def __init__(self, folder: Path, preload: Sequence[str] | None = None,
                  sandbox: Sandbox | None = None, bind: Path | None = None,
                  marker: str | None = None, uid: int | None = None,
-                 alone: bool = False) -> None:
+                 alone: bool = False, more: bool = False) -> None:
         self.folder = Path(folder)
         self.folder.mkdir(mode=0o700, parents=True, exist_ok=True)
         if uid is not None and not alone:  # its working folder is its own
@@ -217,7 +230,7 @@ class Zygote:
         if marker:
             env["EULERTOP_RUN"] = marker
         argv = zygote_command(die_with_parent=True, preload=preload, marker=marker,
-                              remove_own_folder=not alone)
+                              remove_own_folder=not alone, more=more)
         outer = env
         if sandbox is not None:  # with the per-kernel world beside it (grader/sandbox/world.py)
             inside = f"{TOOLS}/{ZYGOTE_SCRIPT.name}"
@@ -285,6 +298,13 @@ class Zygote:
             why = (ready or {}).get("error") or (
                 "it ended" if self.dead else f"no answer in {timeout:g} s")
             raise ZygoteError(f"the kernel zygote could not start: {why}{tail}")
+
+    def preload_more(self, modules: Sequence[str]) -> None:
+        """The rest of what a zygote started with ``more`` imports before it is ready (one
+        line on its stdin; a zygote already gone is replaced when a kernel is asked of it)."""
+        with self._lock, contextlib.suppress(OSError, ValueError):
+            self.process.stdin.write((json.dumps({"preload": list(modules)}) + "\n").encode())
+            self.process.stdin.flush()
 
     def _log_tail(self) -> str:
         with contextlib.suppress(OSError):
@@ -447,7 +467,7 @@ class Slot:
 
     def __init__(self, folder: Path, preload: Sequence[str] | None = None,
                  sandbox: Sandbox | None = None, marker: str | None = None,
-                 start: bool = True) -> None:
+                 start: bool = True, more: bool = False) -> None:
         self.folder = Path(folder)
         self.sandbox, self.marker = sandbox, marker
         self.mode = 0o711 if sandbox is not None else 0o700
@@ -456,6 +476,7 @@ class Slot:
         self.folder.mkdir(mode=0o700, parents=True, exist_ok=True)
         os.chmod(self.folder, self.mode)
         self.preload = preload
+        self.more = more  # its first zygote waits for the rest of its preload (Zygote)
         self.zygote: Zygote | None = None
         self.waiting: _Forked | None = None
         self._prewarming: threading.Thread | None = None
@@ -476,7 +497,8 @@ class Slot:
             self.zygote.close()
         self.starts += 1
         self.zygote = Zygote(self.folder / f"z{self.starts}", self.preload, self.sandbox,
-                             self.folder, self.marker, self.uid)
+                             self.folder, self.marker, self.uid, more=self.more)
+        self.more = False  # a zygote started again imports all of its preload at once
 
     def fork(self, limits: Limits) -> _Forked:
         """Fork a new kernel (restarting a dead zygote first); :class:`ZygoteError`."""
@@ -665,6 +687,11 @@ class KernelPool:
         :mod:`grader.sandbox`). None: no sandbox (the caller decided so). Sandboxed, the pool
         never falls back to unsandboxed cold kernels: a zygote that cannot start makes that
         submission's run fail ("error", retried by the grader).
+    early : bool
+        Started before the grader has read its class (issue 34: the zygote imports while
+        the grader does): one slot, whose zygote imports :data:`EARLY_PRELOAD` and then
+        waits; :meth:`plan` gives it the rest of ``preload`` and adds the other slots. No
+        kernel is asked for before that.
 
     Use as a context manager (or call :meth:`close`): ending it kills every zygote, kernel and
     leftover process, and removes the pool's folder. The pool's folder is in the process's
@@ -672,7 +699,8 @@ class KernelPool:
     """
 
     def __init__(self, slots: int, *, prewarm: bool = True, cold: bool = False,
-                 preload: Sequence[str] | None = None, sandbox: Sandbox | None = None) -> None:
+                 preload: Sequence[str] | None = None, sandbox: Sandbox | None = None,
+                 early: bool = False) -> None:
         if sandbox is not None and (cold or not fork_available()):
             raise ValueError("a sandboxed pool forks its kernels: not cold, and on Linux")
         self.sandbox = sandbox
@@ -684,31 +712,98 @@ class KernelPool:
         self._free: queue.Queue[Slot] = queue.Queue()
         self._run = contextlib.ExitStack()
         self._closing, self._closed = threading.Lock(), False
+        self._progress = threading.Condition()  # kernels given back (done), of work
+        self._ending: threading.Thread | None = None  # close_soon's
+        self.work: int | None = None
+        self.done = 0
         if not self.cold:
             run = self._run.enter_context(run_folder())
             self.folder = fresh_folder(run, "p")
             if sandbox is not None:
                 os.chmod(self.folder, 0o711)
             try:
-                for i in range(max(1, slots)):
-                    self.slots.append(Slot(self.folder / str(i), preload, sandbox, run.name,
-                                           start=i == 0))
+                first = Slot(self.folder / "0", EARLY_PRELOAD if early else preload, sandbox,
+                             run.name, more=early)
+                self.slots.append(first)
+                self._free.put(first)
+                if not early:
+                    self._add_slots(slots, preload)
             except BaseException:
                 self.close()
                 raise
-            later = [] if self.slots[0].alone else self.slots[1:]
-            for slot in self.slots:
-                if slot not in later:
-                    self._free.put(slot)
-            if later:
-                threading.Thread(target=self._start_later, args=(later,), daemon=True,
-                                 name="eulertop-zygotes").start()
+
+    def plan(self, slots: int, preload: Sequence[str], work: int | None = None) -> None:
+        """An ``early`` pool's class: ``slots`` kernels at once, each zygote importing
+        ``preload`` (the first one the rest of it, :meth:`Zygote.preload_more`); ``work``:
+        :meth:`expect`."""
+        self.expect(work)
+        if self.cold:
+            return
+        first = self.slots[0]
+        if first.zygote is not None:
+            first.zygote.preload_more([m for m in preload if m not in EARLY_PRELOAD])
+        first.preload = tuple(dict.fromkeys((*EARLY_PRELOAD, *preload)))  # if started again
+        self._add_slots(slots, preload)
+
+    def _add_slots(self, slots: int, preload: Sequence[str] | None) -> None:
+        """The slots after the first, their zygotes started once the first's is ready."""
+        for i in range(1, max(1, slots)):
+            self.slots.append(Slot(self.folder / str(i), preload, self.sandbox,
+                                   self.slots[0].marker, start=False))
+        later = [] if self.slots[0].alone else self.slots[1:]
+        for slot in self.slots[1:]:
+            if slot not in later:
+                self._free.put(slot)
+        if later:
+            threading.Thread(target=self._start_later, args=(later,), daemon=True,
+                             name="eulertop-zygotes").start()
+
+    def expect(self, work: int | None) -> None:
+        """The run will ask for ``work`` kernels (None: unknown): the other slots' zygotes
+        are then started only while what is left of it would keep them busy
+        (:meth:`_worth_more_slots`)."""
+        with self._progress:
+            self.work = work
+            self._progress.notify_all()
+
+    def _worth_more_slots(self) -> bool:
+        """Wait until the work left would outlast another zygote's start: True; False once
+        the pool is closed or the work is done first (the first slot did it all).
+
+        At a time ``t`` after the first zygote was ready, with ``done`` of ``work`` kernels
+        given back: the first slot alone needs about ``(work - done) * (t / done)`` more
+        seconds (the time so far over what it finished, at least the kernel in hand's own);
+        another zygote takes its start's ``cpu`` seconds (the first's, from its ready line)
+        to be of use. A class of ten quick notebooks is done before a second zygote could
+        fork one (issue 34: its import only took the cores from the kernels and the report);
+        one of slow or many notebooks starts it after the first kernel or two."""
+        start = self._start_cost()
+        began = time.monotonic()
+        with self._progress:
+            while not self._closed:
+                if self.work is None:
+                    return True
+                left, done = self.work - self.done, self.done
+                if left <= 0:
+                    return False
+                if left * (time.monotonic() - began) / max(done, 1) > start:
+                    return True
+                self._progress.wait(0.02)
+        return False
+
+    def _start_cost(self) -> float:
+        """CPU seconds the first slot's zygote took to start (its ready line), or 0."""
+        first = self.slots[0].zygote
+        return float((first.ready or {}).get("cpu", 0.0)) if first is not None else 0.0
 
     def _start_later(self, later: list[Slot]) -> None:
-        """Start the zygotes of ``later`` once the first slot's is ready, and lend out each
-        slot once its own is (never after :meth:`close`)."""
+        """Start the zygotes of ``later`` once the first slot's is ready and the work left
+        is worth it (:meth:`_worth_more_slots`), and lend out each slot once its own is
+        ready (never after :meth:`close`)."""
         with contextlib.suppress(ZygoteError):
             self.slots[0].zygote.wait_ready()
+        if not self._worth_more_slots():
+            return
         for slot in later:
             with self._closing:
                 if self._closed:
@@ -734,6 +829,9 @@ class KernelPool:
         return self._free.get()
 
     def give_back(self, slot: Slot) -> None:
+        with self._progress:
+            self.done += 1
+            self._progress.notify_all()
         self._free.put(slot)
 
     def fail(self, err: Exception) -> None:
@@ -746,10 +844,24 @@ class KernelPool:
             sys.stderr.write(f"eulertop grade: {err}; kernels start cold from now on "
                              "(slower, equally isolated)\n")
 
+    def close_soon(self) -> None:
+        """:meth:`close` in a thread of its own: the zygotes end (their kernels and
+        leftovers killed, their folders removed: tens of milliseconds) while the caller goes
+        on — the class report, at the end of a run; :meth:`close` waits for it."""
+        if self._ending is None:
+            self._ending = threading.Thread(target=self._close, name="eulertop-pool-close")
+            self._ending.start()
+
     def close(self) -> None:
         """Kill every zygote, kernel and leftover; remove the pool's folder."""
-        with self._closing:  # no zygote is started after this
+        if self._ending is not None:
+            self._ending.join()
+        self._close()
+
+    def _close(self) -> None:
+        with self._closing, self._progress:  # no zygote is started after this
             self._closed = True
+            self._progress.notify_all()
         for slot in self.slots:  # all of them end at once; then each is waited for
             if slot.zygote is not None:
                 if slot.zygote.ready is None:  # still importing (started late): no kernels

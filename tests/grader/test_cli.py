@@ -18,6 +18,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from contextlib import redirect_stderr, redirect_stdout
 from dataclasses import replace
@@ -356,3 +357,26 @@ def test_progress_is_plain_lines_off_a_terminal_and_a_bar_on_one(tmp_path):
         stream.seek(0)
         text = stream.read()
     assert text.count("\r") == 2 and text.endswith("2/2, 1 failed  bob: failed\n")
+
+
+def test_the_console_script_leaves_at_once_with_all_said_and_written(graded, tmp_path):
+    """``python -m eulertop grade`` ends without the interpreter's teardown
+    (``eulertop.cli.QUICK_EXIT``): the same status, output and records as the reference run
+    in this process, every file written, no run folder left behind."""
+    hw0, subs, code, stdout, _, reference = graded
+    hw = Path(shutil.copytree(hw0, tmp_path / "HW", ignore=shutil.ignore_patterns("graded")))
+    with tempfile.TemporaryDirectory(dir="/tmp") as short:  # short: its sockets' paths fit
+        scratch = Path(short)
+        done = subprocess.run(
+            [sys.executable, "-m", "eulertop", "grade", str(hw), str(subs), "--jobs", "2",
+             "--timeout", "60"], cwd=ROOT, capture_output=True, text=True, timeout=300,
+            env={**os.environ, "TMPDIR": str(scratch)})
+        left = list(scratch.iterdir())
+    assert done.returncode == code, done.stderr[-2000:]
+    assert done.stdout.replace(str(hw), str(hw0)) == stdout
+    results = {s: read_result(hw / "graded" / "results" / f"{s}.json") for s in ROSTER}
+    assert {s: _stable(r) for s, r in results.items()} == \
+        {s: _stable(r) for s, r in reference.items()}
+    for name in ("grades.csv", "answers.csv", "report.html"):
+        assert (hw / "graded" / name).stat().st_size > 0, name
+    assert not left  # the run folder, its zygotes' and kernels': removed

@@ -320,3 +320,24 @@ def test_the_other_slots_zygotes_start_once_the_first_is_ready(monkeypatch):
         time.sleep(0.005)
     late.close()
     assert killed == [None]  # slot 1's, still importing sympy
+
+
+@pytest.mark.parametrize(("start_cost", "second"), [(1e6, False), (0.0, True)])
+def test_a_second_zygote_starts_only_for_work_that_outlasts_its_start(run, monkeypatch,
+                                                                      start_cost, second):
+    """Three quick notebooks, two slots: a second zygote that would take longer to start than
+    the first slot takes for all three is never started (issue 34); one that costs nothing to
+    start is started at once. (The cost a start takes is the first zygote's, patched here.)"""
+    monkeypatch.setattr(KernelPool, "_start_cost", lambda pool: start_cost)
+    own = KernelPool(2, preload=LIGHT)
+    try:
+        own.expect(3)
+        for _ in range(3):
+            assert run("x = 1", variables=("x",), using=own).status == "ok"
+        deadline = time.monotonic() + 60
+        while second and own.slots[1].zygote is None and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert own.done == 3
+        assert (own.slots[1].zygote is not None) is second
+    finally:
+        own.close()

@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import json
 import shutil
+import time
 from pathlib import Path
 
 import nbformat
@@ -21,6 +22,7 @@ from grader.execute import execute_submission
 from grader.kernels.pool import KernelPool
 from grader.kernels.preload import packages_imported, preload_for
 from grader.limits import Limits
+from grader.sandbox import probe
 from tests.grader.test_pipeline import FakeExecute, _notebook
 
 
@@ -82,7 +84,7 @@ def preloads(monkeypatch):
     asked = []
 
     @contextlib.contextmanager
-    def kernels(warm, slots, sandbox=None, preload=None):
+    def kernels(warm, slots, sandbox=None, preload=None, early=None, work=None):
         asked.append(preload)
         yield None
 
@@ -138,3 +140,60 @@ def test_a_dask_worker_rebuilds_the_preload_from_the_plugins_name(settings):
     plugin = WorkerKernels(**settings)
     assert _settings(plugin.name) == settings
     assert plugin.name != WorkerKernels(settings["sandbox"], settings["cold"], ("scipy",)).name
+
+
+# --------------------------------------------------------------------------------------------
+# the zygote started before the class is read (grader/kernels/early.py, issue 34)
+
+
+def _had(pool: KernelPool, tmp_path: Path) -> list[str]:
+    """What a kernel of ``pool`` had imported before its submission ran (read inside it)."""
+    probe = ("import sys\n"
+             "had = sorted(m for m in ('numpy', 'scipy', 'sympy', 'matplotlib') "
+             "if m in sys.modules)")
+    path = tmp_path / "alice.ipynb"
+    nbformat.write(new_notebook(cells=[new_code_cell(probe)]), path)
+    done = execute_submission(path, ("had",), Limits(total_timeout=30),
+                              kernel_factory=pool.kernel)
+    assert done.status == "ok", done.message
+    return done.answers["had"]
+
+
+def test_an_early_zygote_imports_the_rest_of_the_preload_once_told(tmp_path):
+    with KernelPool(1, sandbox=probe(), early=True) as pool:
+        zygote = pool.slots[0].zygote
+        assert zygote is not None and zygote.ready is None  # started at once, waiting
+        pool.plan(2, preload_for({"sympy"}))
+        assert _had(pool, tmp_path) == ["numpy", "sympy"]  # told after its start: in too
+        assert zygote.ready["preloaded"] == ["IPython", "numpy", "sympy"]
+        assert len(pool.slots) == 2 and pool.slots[1].preload == ("numpy", "sympy")
+        assert pool.slots[0].preload == ("IPython", "numpy", "sympy")  # if started again
+
+
+def test_an_early_zygote_never_told_ends_with_the_pool(tmp_path):
+    pool = KernelPool(1, sandbox=probe(), early=True)
+    zygote = pool.slots[0].zygote
+    time.sleep(3)  # its first imports done: waiting on its input for the rest
+    began = time.monotonic()
+    pool.close()
+    assert time.monotonic() - began < 2  # end of input ends it: no timeout, no kill needed
+    assert zygote.process.poll() is not None and zygote.ready is None
+    assert not pool.folder.exists()
+
+
+def test_a_grading_run_forks_its_kernels_from_the_early_zygote(assignment, tmp_path):
+    hw = Path(shutil.copytree(assignment, tmp_path / "HW"))
+    subs = tmp_path / "subs"
+    subs.mkdir()
+    (subs / "alice.ipynb").write_text(_notebook(hw, "alice", "import sympy as sp"))
+    with KernelPool(1, sandbox=probe(), early=True) as early:
+        report = pipeline.grade_assignment(hw, subs, jobs=2, early=early)
+        zygote = early.slots[0].zygote
+        assert early.forks >= 2  # the preflight's kernel and alice's, at least
+        assert zygote.ready["preloaded"] == ["IPython", "numpy", "sympy"]
+        assert len(early.slots) == 1  # two jobs, one submission: one slot
+    assert zygote.process.poll() is not None  # ended (by the run, waited for by its owner)
+    assert not early.folder.exists()
+    alice = next(r for r in report.results if r.student_id == "alice")
+    assert alice.status == "graded" and alice.points == alice.max_points, alice.message
+    assert alice.sandboxed
