@@ -12,6 +12,9 @@ from functools import cached_property
 from pathlib import Path
 
 from grader.compare import KeyAnswer, key_answers
+from problems.answers import WRITTEN, Answer
+from problems.generate import key_hash
+from problems.variant import variable_name
 
 
 class UsageError(Exception):
@@ -51,6 +54,39 @@ class Assignment:
                 raise UsageError(f"{self.folder / 'key.json'}: {student_id}'s entry cannot be "
                                  f"read: {e}") from None
         return self._expected[student_id]
+
+    def verified(self, student_id: str) -> bool:
+        """Whether ``student_id``'s key entry is the one its hash names (as ``generate`` and
+        ``key set`` write it): its hash recomputed from its questions, not trusted (a hand edit
+        leaves the old hash)."""
+        entry = self.key["students"].get(student_id)
+        try:
+            return isinstance(entry, dict) and entry.get("hash") == key_hash(entry["questions"])
+        except (KeyError, TypeError, ValueError):
+            return False
+
+    def answer_points(self, student_id: str) -> dict[str, float]:
+        """``student_id``'s key answers' points by variable, in question order — read from a
+        :meth:`verified` entry without building its answers (an expression answer is parsed
+        with sympy), else from :meth:`expected`."""
+        if student_id in self._expected or not self.verified(student_id):
+            return {k.variable: k.answer.points for k in self.expected(student_id)}
+        return {variable_name(q["question"], x["name"]): float(x.get("points", 1.0))
+                for q in self.key["students"][student_id]["questions"] for x in q["answers"]}
+
+    def written_expected(self, student_id: str) -> tuple[KeyAnswer, ...]:
+        """``student_id``'s written answers of :meth:`expected`, building no other answer of a
+        :meth:`verified` entry (what reviews need, without parsing an expression answer)."""
+        if student_id in self._expected or not self.verified(student_id):
+            return tuple(k for k in self.expected(student_id) if k.answer.kind == WRITTEN)
+        try:
+            return tuple(KeyAnswer(variable_name(q["question"], x["name"]), int(q["question"]),
+                                   Answer.from_dict(x))
+                         for q in self.key["students"][student_id]["questions"]
+                         for x in q["answers"] if x.get("kind") == WRITTEN)
+        except (KeyError, TypeError, ValueError) as e:  # as expected() says it
+            raise UsageError(f"{self.folder / 'key.json'}: {student_id}'s entry cannot be "
+                             f"read: {e}") from None
 
     def check_key(self) -> None:
         """Every student's key can be read (:class:`UsageError` naming the first that cannot):

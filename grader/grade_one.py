@@ -15,7 +15,7 @@ from typing import Any
 
 from grader.compare import KeyAnswer, compare, variable_names, written_names
 from grader.notebook_metadata import identity
-from grader.results import StudentResult
+from grader.results import AnswerResult, StudentResult
 
 # run_one and what it needs live in grader.run_file, which the student package ships too
 # (issue 33); named here as well, where every way of grading has always imported them
@@ -71,16 +71,20 @@ def _execution_record(execution: Any, foreign: str = "") -> dict:
 
 def scored(student_id: str, expected: Sequence[KeyAnswer], key_sha256: str, *, status: str,
            message: str, extracted: Mapping[str, Any] | None, execution: dict,
-           sandboxed: bool, submission_sha256: str | None) -> StudentResult:
+           sandboxed: bool, submission_sha256: str | None,
+           compared: Sequence[AnswerResult] | None = None) -> StudentResult:
     """The record of ``student_id``: ``extracted`` (the answers read from their notebook; None
     or empty: none) compared with ``expected`` — the one way a record is built, by a grading
     run (:func:`record`, :func:`ungraded_result`) and by a rescore
-    (:func:`grader.rescore.rescored`) alike."""
-    answers = compare(expected, extracted)
+    (:func:`grader.rescore.rescored`) alike; or, given ``compared`` (``expected`` and
+    ``extracted`` unused), from answers compared with the key ``key_sha256`` before: a record's
+    own, when a change leaves its key as it was (:func:`grader.rescore.restored`). Each
+    answer's verdict carries its key points: the record's are their sum."""
+    answers = compare(expected, extracted) if compared is None else tuple(compared)
     return StudentResult(
         student_id=student_id, status=status, message=message, answers=answers,
         points=sum(a.verdict.points for a in answers) if status == "graded" else 0.0,
-        max_points=sum(k.answer.points for k in expected),
+        max_points=sum(a.verdict.max_points for a in answers),
         submission_sha256=submission_sha256, key_sha256=key_sha256, execution=execution,
         sandboxed=sandboxed, graded_at=now())
 

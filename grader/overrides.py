@@ -161,7 +161,7 @@ def check_overrides(a: Assignment, overrides: Iterable[Override],
         where = f"{source}: override {n}" if source else f"override of {o.student}'s {o.target}"
         if o.student not in a.ids:
             raise UsageError(f"{where}: no student {o.student!r} in the assignment's roster")
-        expected = {k.variable: k.answer.points for k in a.expected(o.student)}
+        expected = a.answer_points(o.student)
         if o.answer is not None and o.answer not in expected:
             raise UsageError(f"{where}: {o.student} has no such answer {o.answer!r} in the "
                              f"key ({', '.join(expected)})")

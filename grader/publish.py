@@ -40,7 +40,7 @@ def settled(a: Assignment, result: StudentResult, follow: FollowThrough | None,
     of a rescore is finished."""
     if follow is not None:
         result = follow.apply(result, a.expected(result.student_id))
-    result = apply_reviews(result, reviews, a.expected(result.student_id))
+    result = apply_reviews(result, reviews, a.written_expected(result.student_id))
     return apply_overrides(result, overrides, policy_of(a.manifest))
 
 

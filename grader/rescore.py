@@ -45,6 +45,7 @@ from grader.overrides import (
     check_overrides,
     overrides_toml,
     read_overrides,
+    without_overrides,
 )
 from grader.publish import (
     NO_REVIEWS,
@@ -63,6 +64,7 @@ from grader.reviews import REVIEWS, Reviews, check_reviews, read_reviews, review
 from grader.transaction import LOCK_WAIT, Transaction, class_lock
 from problems.answers import Verdict
 from problems.generate import json_text
+from problems.variant import variable_name
 
 NUMERIC = ("scalar", "angle", "vector")
 UNREAD = "unread"
@@ -156,6 +158,58 @@ def rescored(a: Assignment, old: StudentResult) -> StudentResult:
     return replace(new, answers=answers, points=sum(x.verdict.points for x in answers))
 
 
+def restored(old: StudentResult) -> StudentResult:
+    """``old`` as its comparison with the key left it — its answers' verdicts and
+    follow-through credit as recorded, its overrides and late penalty taken back (the reviews
+    are, by :func:`grader.publish.settled`) — built as :func:`rescored` builds it, reading no
+    key answer: what a change that leaves its key entry and the families as they were
+    (:func:`keeps_comparisons`, :func:`compared_as_stored`) settles again."""
+    base = without_overrides(old)
+    return replace(scored(old.student_id, (), old.key_sha256, status=old.status,
+                          message=old.message, extracted=None, execution=dict(old.execution),
+                          sandboxed=old.sandboxed, submission_sha256=old.submission_sha256,
+                          compared=base.answers), submitted=old.submitted)
+
+
+def keeps_comparisons(a: Assignment, amendment: Amendment) -> bool:
+    """Whether ``amendment`` changes only what settles a record — overrides, reviews, the late
+    policy — not the key, the families or follow-through (a plain rescore compares again)."""
+    if amendment.key is not None:
+        return False
+    if amendment.manifest is not None and \
+            _but_late(amendment.manifest) != _but_late(a.manifest):
+        return False
+    return amendment.overrides is not None or amendment.reviews is not None or \
+        amendment.manifest is not None
+
+
+def _but_late(manifest: Mapping) -> dict:
+    return {k: v for k, v in manifest.items() if k != "late"}
+
+
+def compared_as_stored(a: Assignment, old: StudentResult) -> bool:
+    """Whether ``old`` was compared with ``a``'s key entry as it is: the hash the record names
+    is the entry's, recomputed from its questions (:meth:`Assignment.verified`), every answer
+    of the entry was read (none *unread*), and the record holds them all, in order."""
+    sid = old.student_id
+    if old.execution.get(UNREAD) or not a.verified(sid) or old.key_sha256 != a.key_hash(sid):
+        return False
+    variables = [variable_name(q["question"], x["name"])
+                 for q in a.key["students"][sid]["questions"] for x in q["answers"]]
+    return [x.variable for x in old.answers] == variables
+
+
+def _proven(a: Assignment, old: Mapping[str, StudentResult | None], amendment: Amendment,
+            scope: frozenset[str] | None) -> frozenset[str]:
+    """The students of ``scope`` whose records a change settles again from their stored
+    comparisons (:func:`restored`): none unless it :func:`keeps_comparisons`."""
+    if not keeps_comparisons(a, amendment):
+        return frozenset()
+    return frozenset(sid for sid, r in old.items()
+                     if r is not None and (scope is None or sid in scope)
+                     and compared_as_stored(a, r))
+
+
 def changes_between(old: StudentResult, new: StudentResult, why: str) -> list[Change]:
     """Every answer whose points differ between the two records, then the total's."""
     before = {x.variable: x.verdict.points for x in old.answers}
@@ -235,9 +289,11 @@ def amended_class(state: Loaded, amendment: Amendment, *, dry_run: bool = False,
     (``state.records`` None) has only the records of the students the change reaches read,
     and those alone returned (:func:`grader.publish.stage_scoped_views`)."""
     scope = _reached(state.a, amendment)
-    a, overrides, reviews = _amended(state.a, state.overrides, state.reviews, amendment, scope)
-    old = records(a, state.out, scope) if state.records is None else state.records
-    report, new = _rescored_class(a, old, overrides, amendment, scope, reviews, follow)
+    old = records(state.a, state.out, scope) if state.records is None else state.records
+    proven = _proven(state.a, old, amendment, scope)
+    a, overrides, reviews = _amended(state.a, state.overrides, state.reviews, amendment, scope,
+                                     proven)
+    report, new = _rescored_class(a, old, overrides, amendment, scope, reviews, follow, proven)
     report = replace(report, dry_run=dry_run)
     if not dry_run:
         _commit(a, state.hw, state.out, old, new, report, reveal, command, scope, rows,
@@ -259,9 +315,11 @@ def _reached(a: Assignment, amendment: Amendment) -> frozenset[str] | None:
 
 def _amended(a: Assignment, overrides: tuple[Override, ...], reviews: Reviews,
              amendment: Amendment, scope: frozenset[str] | None,
+             proven: frozenset[str] = frozenset(),
              ) -> tuple[Assignment, tuple[Override, ...], Reviews]:
     """The assignment, overrides and reviews as ``amendment`` makes them, checked together
-    (the key of every student in ``scope``: None, all)."""
+    (the key of every student in ``scope``: None, all — but those ``proven`` read by their
+    records, :func:`compared_as_stored`)."""
     if amendment.key is not None:
         a = replace(a, key=amendment.key)
     if amendment.manifest is not None:
@@ -271,7 +329,8 @@ def _amended(a: Assignment, overrides: tuple[Override, ...], reviews: Reviews,
     if amendment.reviews is not None:
         reviews = amendment.reviews
     for sid in a.ids if scope is None else sorted(scope):
-        a.expected(sid)  # UsageError naming a student whose key entry cannot be read
+        if sid not in proven:
+            a.expected(sid)  # UsageError naming a student whose key entry cannot be read
     check_overrides(a, overrides, None if amendment.overrides is not None else OVERRIDES)
     check_reviews(a, _to_check(reviews, amendment, scope),
                   "the reviews" if amendment.reviews is not None else REVIEWS)
@@ -292,10 +351,13 @@ def _rescored_class(a: Assignment, old: Mapping[str, StudentResult | None],
                     overrides: Sequence[Override], amendment: Amendment,
                     scope: frozenset[str] | None = None, reviews: Reviews = NO_REVIEWS,
                     follow: FollowThrough | None = None,
+                    proven: frozenset[str] = frozenset(),
                     ) -> tuple[Rescore, dict[str, StudentResult | None]]:
     """Every record of ``scope`` (None: all) rescored and settled (nothing written): the
     report, and the new records (an unchanged one is the old one, its bytes kept).
-    ``follow``: the caller's (kept open), else one made and closed here."""
+    ``follow``: the caller's (kept open), else one made and closed here. The records of
+    ``proven`` are settled again from their stored comparisons (:func:`restored`: their
+    follow-through credit with them), the others compared again."""
     own = follow is None
     follow = FollowThrough.of(a) if own else follow
     new: dict[str, StudentResult | None] = dict(old)
@@ -304,7 +366,9 @@ def _rescored_class(a: Assignment, old: Mapping[str, StudentResult | None],
         for sid, record in old.items():
             if record is None or (scope is not None and sid not in scope):
                 continue
-            result = settled(a, rescored(a, record), follow, overrides, reviews)
+            again = sid in proven
+            result = settled(a, restored(record) if again else rescored(a, record),
+                             None if again else follow, overrides, reviews)
             new[sid] = record if same_record(record, result) else result
             changes += changes_between(record, result, amendment.why)
     finally:

@@ -171,8 +171,7 @@ def reviews_json(reviews: Reviews) -> str:
 
 def written_key(a: Assignment, student: str, answer: str) -> KeyAnswer | None:
     """``student``'s key entry of the written answer ``answer``, or None."""
-    return next((k for k in a.expected(student)
-                 if k.variable == answer and k.answer.kind == WRITTEN), None)
+    return next((k for k in a.written_expected(student) if k.variable == answer), None)
 
 
 def check_review(a: Assignment, review: Review, where: str) -> None:
@@ -209,8 +208,9 @@ def review_points(key: KeyAnswer, review: Review) -> float:
 
 
 def _pending(a: AnswerResult) -> AnswerResult:
-    """A written answer as the comparison left it: pending (a review taken back first)."""
-    if a.verdict.status != "reviewed":
+    """A written answer as the comparison left it: pending (a review taken back first, or a
+    note that it is stale: a record settled before, :func:`grader.rescore.restored`)."""
+    if a.verdict.status not in ("reviewed", "pending"):
         return a
     return replace(a, verdict=Verdict("pending", 0.0, a.verdict.max_points, PENDING))
 

@@ -12,23 +12,33 @@ stamps are fixed (``graded_at``) so that records compare byte for byte.
 
 from __future__ import annotations
 
+import json
 import shutil
+import subprocess
+import sys
 from collections.abc import Callable
 from pathlib import Path
 
+import nbformat
 import pytest
 
+import grader.assignment
 import grader.grade_one
 import grader.publish
 from eulertop.cli import main
 from grader.assignment import load_assignment
 from grader.graded_folder import GRADES, RESULTS
 from grader.overrides import OVERRIDES, read_overrides
+from grader.pipeline import grade_assignment
 from grader.publish import stale_page
 from grader.rescore import Amendment, Loaded, amended_class, rescore
 from grader.results import read_result
 from grader.reviews import REVIEWS, Review, read_reviews
 from grader.written import text_sha256
+from problems.generate import generate_assignment
+from problems.roster import Roster
+from problems.templates import FAMILIES
+from tests.grader.report.synthetic_class import LiteralExecute
 from tests.grader.test_written import OWN, Graded, _class
 
 STAMP = "2026-03-01T12:00:00+00:00"
@@ -37,6 +47,8 @@ INPUTS = ("key.json", "assignment.json", f"graded/{OVERRIDES}", f"graded/{REVIEW
 REPORT = ("graded/report.html", "graded/report.csv", "graded/report_items.csv")
 TRAIL = "graded/audit.jsonl"
 GRADES_PATH = f"graded/{GRADES}"
+KEYED = ("one student's key",)
+"""The steps that change the key: the others settle the stored comparisons again."""
 
 
 @pytest.fixture(scope="module")
@@ -123,6 +135,25 @@ def _reads(monkeypatch) -> list[str]:
     return read
 
 
+def _comparisons(monkeypatch) -> list[str]:
+    """The students whose answers are compared with the key, or whose whole key entry is
+    read (its answers built: an expression answer parses with sympy), from now on."""
+    met: list[str] = []
+    compare, key_answers = grader.grade_one.compare, grader.assignment.key_answers
+
+    def comparing(expected, extracted):
+        met.append(f"compared {expected[0].variable if expected else ''}")
+        return compare(expected, extracted)
+
+    def reading(key, student_id):
+        met.append(f"key of {student_id}")
+        return key_answers(key, student_id)
+
+    monkeypatch.setattr(grader.grade_one, "compare", comparing)
+    monkeypatch.setattr(grader.assignment, "key_answers", reading)
+    return met
+
+
 def _full_rescore_of(scoped: Path, full: Path) -> None:
     """``full`` given the inputs ``scoped`` has now, then rescored whole."""
     for name in INPUTS:
@@ -146,11 +177,19 @@ def test_a_scoped_change_leaves_the_class_as_a_full_rescore_makes_it(copies, cap
     scoped, full = copies
     for what, student, step in _steps(scoped):
         before = _files(scoped)
-        read = _reads(monkeypatch)
+        read, met = _reads(monkeypatch), _comparisons(monkeypatch)
         assert step() == 0, (what, capsys.readouterr())
         if student is not None:
             assert read == [student], what  # that student's record alone
+        if what in KEYED:  # the key changed: that student's answers compared with it again
+            assert met and "key of " + str(student) in met, (what, met)
+        elif student is not None:  # its stored comparisons settled again: no key read
+            assert met == [], (what, met)
+        else:  # the whole class: compared with nothing (its report reads every key)
+            assert not [m for m in met if m.startswith("compared")], (what, met)
         read.clear()
+        monkeypatch.undo()
+        monkeypatch.setattr(grader.grade_one, "now", lambda: STAMP)
         now = _same_as_full(scoped, full)
         if student is not None:  # the report left to a later command, marked so
             page = before[REPORT[0]].decode()
@@ -178,3 +217,54 @@ def test_tables_not_as_the_records_made_them_are_made_from_every_record(copies, 
     assert main(["override", str(scoped), "ada", variable, "--remove"]) == 0
     assert read == ["ada", "bob", "cyd", "dee"]
     _same_as_full(scoped, full)
+
+
+PROBE = ("import sys; from eulertop.cli import main; code = main(sys.argv[1:]); "
+         "print('sympy imported:', 'sympy' in sys.modules); sys.exit(code)")
+"""A command run in a fresh process, saying whether it imported sympy (which parsing an
+expression answer of the key needs)."""
+
+
+def _sympy_imported(*args: str) -> bool:
+    done = subprocess.run([sys.executable, "-c", PROBE, *args], capture_output=True,
+                          text=True, check=False, cwd=Path(__file__).resolve().parents[2])
+    assert done.returncode == 0, done.stdout + done.stderr
+    return done.stdout.strip().splitlines()[-1] == "sympy imported: True"
+
+
+def _every_family_class(folder: Path) -> Path:
+    """A class of three given every built-in family (expression answers among them), each
+    handing in the key's own values as literals, graded with the fake execution stage."""
+    roster = Roster(("id", "name"), tuple({"id": s, "name": s} for s in ("s1", "s2", "s3")))
+    hw = folder / "HW"
+    generate_assignment(roster, hw, FAMILIES, seed=34)
+    key = json.loads((hw / "key.json").read_text())
+    (folder / "subs").mkdir()
+    for sid, entry in key["students"].items():
+        code = "\n".join(f"q{q['question']}_{x['name']} = {x['value']!r}"
+                         for q in entry["questions"] for x in q["answers"])
+        nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(code)])
+        (folder / "subs" / f"{sid}.ipynb").write_text(nbformat.writes(nb))
+    grade_assignment(hw, folder / "subs", limits="literal", execute=LiteralExecute())
+    return hw
+
+
+def test_a_change_of_one_student_parses_no_expression_unless_their_key_changes(tmp_path):
+    """In a class of every built-in family (expression answers among them), an override, its
+    removal and an extension settle the stored comparisons in a fresh process that never
+    imports sympy; a change of that student's key compares again, and does."""
+    folder = _every_family_class(tmp_path)
+    hw, sid, results = str(folder), "s2", folder / "graded" / RESULTS
+    kinds = {k.answer.kind for k in load_assignment(folder).expected(sid)}
+    assert "expression" in kinds
+    variable = read_result(results / f"{sid}.json").answers[0].variable
+    assert not _sympy_imported("override", hw, sid, variable, "--points", "0",
+                               "--reason", "copied")
+    assert read_result(results / f"{sid}.json").overridden[variable]["points"] == 0
+    assert not _sympy_imported("override", hw, sid, "--points", "1", "--reason", "total")
+    assert not _sympy_imported("override", hw, sid, variable, "--remove")
+    _sympy_imported("late", "set", hw, "--due", "2020-01-01T00:00:00+00:00",  # the class's:
+                    "--penalty", "10%/day")  # its report reads every key
+    assert not _sympy_imported("late", "extend", hw, sid, "--due", "2030-01-01T00:00:00+00:00",
+                               "--reason", "ill")
+    assert _sympy_imported("key", "set", hw, f"{sid}:{variable}", "--points", "7")
