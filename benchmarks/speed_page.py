@@ -24,7 +24,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from solver.bench.summary import current_block, markers_of, replace_block  # noqa: E402
+from solver.bench.summary import cpu_model, current_block, markers_of, replace_block  # noqa: E402
 
 
 def machine() -> dict:
@@ -32,13 +32,7 @@ def machine() -> dict:
     import numpy
     import scipy
 
-    cpu = platform.processor() or platform.machine()
-    try:
-        cpu = next(line.split(":", 1)[1].strip() for line in
-                   Path("/proc/cpuinfo").read_text().splitlines() if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
-    return {"cpu": cpu, "cpu_count": os.cpu_count(), "python": platform.python_version(),
+    return {"cpu": cpu_model(), "cpu_count": os.cpu_count(), "python": platform.python_version(),
             "numpy": numpy.__version__, "scipy": scipy.__version__,
             "load": [round(x, 2) for x in os.getloadavg()]}
 
