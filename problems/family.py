@@ -114,6 +114,31 @@ def redrawn_until_well_posed(
     return None
 
 
+def redrawn_many_until_well_posed(
+    draws_once: Sequence[Callable[[np.random.Generator], dict | None]],
+    posed_many: Callable[[list[dict]], list[Any]],
+    rngs: Sequence[np.random.Generator], tries: int,
+) -> list[dict | None]:
+    """:func:`redrawn_until_well_posed` of each student, ``draws_once[i]`` from ``rngs[i]``:
+    round by round, one try of every student still without an accepted one, all of them
+    tested by one call of ``posed_many`` (an :class:`IllPosed` element: rejected) — a batch
+    ``draw`` (:meth:`Family.draw_many`). Each generator is used as the student's alone
+    would be: the same tries, in the same order."""
+    found: list[dict | None] = [None] * len(rngs)
+    pending = list(range(len(rngs)))
+    for _ in range(tries):
+        tried = [(i, draws_once[i](rngs[i])) for i in pending]
+        drawn = [(i, params) for i, params in tried if params is not None]
+        verdicts = posed_many([params for _, params in drawn]) if drawn else []
+        for (i, params), verdict in zip(drawn, verdicts, strict=True):
+            if not isinstance(verdict, IllPosed):
+                found[i] = params
+        pending = [i for i in pending if found[i] is None]
+        if not pending:
+            break
+    return found
+
+
 def remembered(work: Callable[[Mapping[str, Any]], Any]) -> Callable[[Mapping[str, Any]], Any]:
     """``work(params)`` remembering its last result, given again for equal parameters: the
     work a family's ``draw`` tests each try with (:func:`redrawn_until_well_posed`), which its

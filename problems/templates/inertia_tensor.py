@@ -26,16 +26,17 @@ one who rounds intermediate results to 3 figures may not, and the statement says
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
 
 from problems.answers import Answer, Mistake
 from problems.family import (
+    IllPosed,
     Parameter,
+    redrawn_many_until_well_posed,
     redrawn_until_well_posed,
-    reject_unless,
     remembered,
 )
 from problems.genuine import SAME
@@ -72,24 +73,46 @@ _ASK = (
 
 
 def _positive_z(v: np.ndarray) -> np.ndarray:
-    """The sign convention of the question: the unit vector ``±v`` with a positive z component."""
-    return v if v[2] > 0 else -v
+    """The sign convention of the question: the unit vectors ``±v`` (..., 3) with a positive
+    z component."""
+    return np.where(v[..., 2:] > 0, v, -v)
 
 
-def _separated(values: list[np.ndarray], tol: float) -> bool:
-    """Every pair of ``values`` (key first, then mistakes) further apart than ``tol``."""
-    return all(
-        np.linalg.norm(np.subtract(a, b)) > tol
-        for i, a in enumerate(values)
-        for b in values[i + 1:]
-    )
+def _diagonal(tensors: np.ndarray) -> np.ndarray:
+    """The diagonals (..., 3) of tensors (..., 3, 3)."""
+    return np.diagonal(tensors, axis1=-2, axis2=-1)
 
 
-def _vector_answer(name, key, mistakes, unit, description, depends=()) -> Answer | None:
-    """A vector answer, or None when a mistake is within SEPARATION tolerances of the key or of
-    another mistake (the draw is then rejected: every listed mistake must be recognisable)."""
-    if not _apart(key, mistakes):
-        return None
+def _diagonal_tensor(diagonal: np.ndarray) -> np.ndarray:
+    """Tensors (..., 3, 3) with the given diagonals (..., 3) and +0.0 elsewhere (as
+    ``numpy.diag`` makes them: a product of ``-0.0`` would print as such)."""
+    tensors = np.zeros((*diagonal.shape, 3))
+    tensors[..., _AXES, _AXES] = diagonal
+    return tensors
+
+
+_AXES = np.arange(3)
+_PRODUCTS = (np.array([0, 0, 1]), np.array([1, 2, 2]))  # (xy, xz, yz)
+
+
+def _norms(v: np.ndarray) -> np.ndarray:
+    """Euclidean norms of the vectors (..., 3), bit for bit ``numpy.linalg.norm`` of each (the
+    same dot product: a sum in another order would change the last bits)."""
+    return np.sqrt((v[..., None, :] @ v[..., :, None])[..., 0, 0])
+
+
+def _apart(values: np.ndarray) -> np.ndarray:
+    """Whether, for each student, the key ``values[..., 0, :]`` and the mistakes after it lie
+    SEPARATION tolerances from one another (every pair; vectors by norm, as graded)."""
+    tol = SEPARATION * RTOL * _norms(values[..., 0, :])
+    n = values.shape[-2]
+    first, second = np.triu_indices(n, 1)
+    gaps = _norms(values[..., first, :] - values[..., second, :])
+    return np.all(gaps > tol[..., None], axis=-1)
+
+
+def _vector_answer(name, key, mistakes, unit, description, depends=()) -> Answer:
+    """A vector answer (kg m² or a unit vector) with its mistakes ``(name, value, feedback)``."""
     answer = Answer(
         name, "vector", np.asarray(key, dtype=float).tolist(), unit=unit, rtol=RTOL,
         description=description,
@@ -98,61 +121,83 @@ def _vector_answer(name, key, mistakes, unit, description, depends=()) -> Answer
     return answer.following(*depends) if depends else answer
 
 
-def _apart(key, mistakes) -> bool:
-    """Whether the key and every mistake lie SEPARATION tolerances apart."""
-    key = np.asarray(key, dtype=float)
-    values = [key, *(np.asarray(v, dtype=float) for _, v, _ in mistakes)]
-    return _separated(values, SEPARATION * RTOL * np.linalg.norm(key))
-
-
-def _tensor_specs(tensor: np.ndarray, mistaken: dict[str, np.ndarray]) -> list[tuple]:
-    """The arguments of :func:`_vector_answer` for each of the four answers.
-
-    ``mistaken`` maps a mistake name to the tensor a student with that mistake gets; the
-    mistakes of each answer are derived from it by the same (correct) later steps.
-    """
-    iu = (np.array([0, 0, 1]), np.array([1, 2, 2]))  # (xy, xz, yz)
-    moments, axes = principal_axes(tensor)
-    diag_mistakes = [(n, np.diag(t), f) for n, (t, f) in mistaken.items() if n != "product_sign"]
-    off_mistakes = [(n, t[iu], f) for n, (t, f) in mistaken.items() if n != "axis_distance"]
-    moment_mistakes = [(n, principal_axes(t)[0], f) for n, (t, f) in mistaken.items()
-                       if n != "product_sign"]
-    moment_mistakes.append((
-        "diagonal_entries", np.sort(np.diag(tensor)),
-        "These are the diagonal entries of the tensor. The principal moments are its "
-        "eigenvalues (R4); they equal the diagonal entries only when the products of inertia "
-        "vanish.",
-    ))
-    axis = _positive_z(axes[:, 2])
-    axis_mistakes = [
-        ("sign_convention", -axis, "Right axis, wrong sign: the question asks for the unit "
-         "vector with a positive z component."),
-        ("smallest_axis", _positive_z(axes[:, 0]), "This is the axis of the *smallest* principal "
-         "moment. numpy.linalg.eigh returns the eigenvalues in ascending order, so the largest "
-         "moment's axis is the *last column* of the eigenvector matrix."),
-    ]
-    return [
-        ("I_diag", np.diag(tensor), diag_mistakes, "kg m^2",
-         "diagonal (I_xx, I_yy, I_zz) of the inertia tensor about O"),
-        ("I_offdiag", tensor[iu], off_mistakes, "kg m^2",
-         "products of inertia (I_xy, I_xz, I_yz) about O"),
-        ("moments", moments, moment_mistakes, "kg m^2", "principal moments about O, ascending",
-         ("I_diag", "I_offdiag")),
-        ("axis_max", axis, axis_mistakes, "",
-         "unit principal axis of the largest moment, z component > 0", ("I_diag", "I_offdiag")),
-    ]
-
-
-def _well_posed(tensor: np.ndarray) -> bool:
-    moments, axes = principal_axes(tensor)
-    gap = (moments[2] - moments[1]) / moments[2]
-    return moments[0] > 0 and gap > MIN_GAP and abs(axes[2, 2]) > MIN_AXIS_Z
-
-
 _PRODUCT_SIGN = (
     "Check the sign of the products of inertia: I_ij = −Σ m x_i x_j for i ≠ j (R2), with a "
     "minus sign."
 )
+
+_FEEDBACK = {
+    "product_sign": _PRODUCT_SIGN,
+    "axis_distance":
+        "I_xx is Σ m (y² + z²), the squared distance *from* the x axis (R2), not Σ m x².",
+    "parallel_axis_forgotten":
+        "This is the tensor about the centre of mass. About the corner, add the "
+        "parallel-axis term M (d² δ_ij − d_i d_j), d = (a/2, b/2, c/2) (R2).",
+    "diagonal_entries":
+        "These are the diagonal entries of the tensor. The principal moments are its "
+        "eigenvalues (R4); they equal the diagonal entries only when the products of inertia "
+        "vanish.",
+    "sign_convention":
+        "Right axis, wrong sign: the question asks for the unit vector with a positive z "
+        "component.",
+    "smallest_axis":
+        "This is the axis of the *smallest* principal moment. numpy.linalg.eigh returns the "
+        "eigenvalues in ascending order, so the largest moment's axis is the *last column* of "
+        "the eigenvector matrix.",
+}
+"""Each known mistake's feedback."""
+
+_ILL_POSED = "a nearly degenerate moment, or an axis near the xy plane"
+_CLOSE = "a known mistake close to the key"
+
+
+def _tensor_answers(tensor: np.ndarray, mistaken: dict[str, np.ndarray]
+                    ) -> tuple[list[tuple], np.ndarray, np.ndarray]:
+    """The four answers of a stack of tensors (..., 3, 3), kg m², as ``(name, key, {mistake:
+    values}, unit, description, depends)``, values stacked like ``tensor``; ``mistaken`` maps
+    a mistake to the tensors a student with it gets, the answers' mistakes derived from them
+    by the same (correct) later steps. Also the principal moments and axes (R4)."""
+    moments, axes = principal_axes(tensor)
+    diag = _diagonal(tensor)
+    axis = _positive_z(axes[..., 2])
+    wrong_moments = {n: principal_axes(t)[0] for n, t in mistaken.items() if n != "product_sign"}
+    return [
+        ("I_diag", diag, {n: _diagonal(t) for n, t in mistaken.items() if n != "product_sign"},
+         "kg m^2", "diagonal (I_xx, I_yy, I_zz) of the inertia tensor about O", ()),
+        ("I_offdiag", tensor[..., _PRODUCTS[0], _PRODUCTS[1]],
+         {n: t[..., _PRODUCTS[0], _PRODUCTS[1]] for n, t in mistaken.items()
+          if n != "axis_distance"},
+         "kg m^2", "products of inertia (I_xy, I_xz, I_yz) about O", ()),
+        ("moments", moments, {**wrong_moments, "diagonal_entries": np.sort(diag, axis=-1)},
+         "kg m^2", "principal moments about O, ascending", ("I_diag", "I_offdiag")),
+        ("axis_max", axis, {"sign_convention": -axis, "smallest_axis": _positive_z(axes[..., 0])},
+         "", "unit principal axis of the largest moment, z component > 0",
+         ("I_diag", "I_offdiag")),
+    ], moments, axes
+
+
+def _well_posed(moments: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    """Principal moments (..., 3) and axes (..., 3, 3) of a real body, the largest moment
+    well apart from the next, its axis well out of the xy plane."""
+    gap = (moments[..., 2] - moments[..., 1]) / moments[..., 2]
+    return (moments[..., 0] > 0) & (gap > MIN_GAP) & (np.abs(axes[..., 2, 2]) > MIN_AXIS_Z)
+
+
+def _posed_specs(tensor: np.ndarray, mistaken: dict[str, np.ndarray]) -> list[list | IllPosed]:
+    """For each of a stack of tensors (n, 3, 3), the arguments of :func:`_vector_answer` for
+    its four answers, or the :class:`IllPosed` that rejects it: a nearly degenerate largest
+    moment, an axis near the xy plane, or a known mistake within SEPARATION tolerances of the
+    key or of another (every listed mistake must be recognisable)."""
+    found, moments, axes = _tensor_answers(tensor, mistaken)
+    posed = _well_posed(moments, axes)
+    apart = np.logical_and.reduce([_apart(np.stack([key, *wrong.values()], axis=-2))
+                                   for _, key, wrong, *_ in found])
+    return [
+        IllPosed(_ILL_POSED) if not posed[i] else IllPosed(_CLOSE) if not apart[i] else
+        [(name, key[i], [(n, v[i], _FEEDBACK[n]) for n, v in wrong.items()], *rest)
+         for name, key, wrong, *rest in found]
+        for i in range(len(tensor))
+    ]
 
 
 def _point_masses(rng: np.random.Generator) -> dict[str, Any] | None:
@@ -168,24 +213,27 @@ def _point_masses(rng: np.random.Generator) -> dict[str, Any] | None:
     return params | {f"r{k}": r.tolist() for k, r in enumerate(positions, 1)}
 
 
+def _count(params: Mapping[str, Any]) -> int:
+    """The number of weights of the point-mass scene (0 for the box)."""
+    return sum(1 for k in range(1, MAX_WEIGHTS + 1) if f"m{k}" in params)
+
+
 def _weights(params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
     """The masses and positions of the point-mass scene."""
-    n = sum(1 for k in range(1, MAX_WEIGHTS + 1) if f"m{k}" in params)
+    n = _count(params)
     masses = np.array([params[f"m{k}"] for k in range(1, n + 1)])
     return masses, np.array([params[f"r{k}"] for k in range(1, n + 1)])
 
 
-def _point_mass_tensor(params: Mapping[str, Any]) -> tuple[np.ndarray, dict]:
-    masses, positions = _weights(params)
+def _point_mass_tensor(many: list[Mapping[str, Any]]) -> tuple[np.ndarray, dict]:
+    """The tensors about O (n, 3, 3), kg m², of point-mass scenes with as many weights each
+    (R2), and the tensors each mistake gives."""
+    masses, positions = (np.array(x) for x in zip(*map(_weights, many), strict=True))
     tensor = point_mass_tensor(masses, positions)
-    mistaken = {
-        "product_sign": (2 * np.diag(np.diag(tensor)) - tensor, _PRODUCT_SIGN),
-        "axis_distance": (
-            np.diag(np.einsum("p,pi->i", masses, positions**2)) + tensor - np.diag(np.diag(tensor)),
-            "I_xx is Σ m (y² + z²), the squared distance *from* the x axis (R2), not Σ m x².",
-        ),
-    }
-    return tensor, mistaken
+    diagonal = _diagonal_tensor(_diagonal(tensor))
+    squares = _diagonal_tensor(np.einsum("...p,...pi->...i", masses, positions**2))
+    return tensor, {"product_sign": 2 * diagonal - tensor,
+                    "axis_distance": squares + tensor - diagonal}
 
 
 def _point_mass_statement(params: Mapping[str, Any]) -> str:
@@ -212,19 +260,14 @@ def _box_corner(rng: np.random.Generator) -> dict[str, Any]:
     return {"scene": "box_corner", "box": kind, "M": M, "a": a, "b": b, "c": c}
 
 
-def _box_tensor(params: Mapping[str, Any]) -> tuple[np.ndarray, dict]:
-    M, a, b, c = (params[n] for n in ("M", "a", "b", "c"))
+def _box_tensor(many: list[Mapping[str, Any]]) -> tuple[np.ndarray, dict]:
+    """The tensors about the corner (n, 3, 3), kg m², of box scenes: the box's about its
+    centre shifted by the parallel-axis theorem (R2); and the tensors each mistake gives."""
+    M, a, b, c = (np.array([params[n] for params in many]) for n in ("M", "a", "b", "c"))
     tensor_cm = shape_tensor("box", M, a=a, b=b, c=c)
-    tensor = parallel_axis(tensor_cm, M, [a / 2, b / 2, c / 2])
-    mistaken = {
-        "parallel_axis_forgotten": (
-            tensor_cm,
-            "This is the tensor about the centre of mass. About the corner, add the "
-            "parallel-axis term M (d² δ_ij − d_i d_j), d = (a/2, b/2, c/2) (R2).",
-        ),
-        "product_sign": (2 * np.diag(np.diag(tensor)) - tensor, _PRODUCT_SIGN),
-    }
-    return tensor, mistaken
+    tensor = parallel_axis(tensor_cm, M, np.stack([a / 2, b / 2, c / 2], axis=-1))
+    return tensor, {"parallel_axis_forgotten": tensor_cm,
+                    "product_sign": 2 * _diagonal_tensor(_diagonal(tensor)) - tensor}
 
 
 def _box_statement(params: Mapping[str, Any]) -> str:
@@ -259,8 +302,19 @@ PARAMETERS: dict[str, Parameter] = {
 def draw(rng: np.random.Generator) -> dict[str, Any] | None:
     """A scene of :data:`SCENES`, then draws of it until one is well posed (at most
     ``MAX_TRIES``)."""
-    scene = SCENES[list(SCENES)[int(rng.integers(len(SCENES)))]][0]
-    return redrawn_until_well_posed(scene, _accepted, rng, MAX_TRIES)
+    return redrawn_until_well_posed(_scene(rng), _posed, rng, MAX_TRIES)
+
+
+def draw_many(rngs: list[np.random.Generator]) -> list[dict[str, Any] | None]:
+    """:func:`draw` of each generator, each round's tries tested together (the batch form,
+    :mod:`problems.family`)."""
+    return redrawn_many_until_well_posed([_scene(rng) for rng in rngs], _posed_many, rngs,
+                                         MAX_TRIES)
+
+
+def _scene(rng: np.random.Generator) -> Callable[[np.random.Generator], dict[str, Any] | None]:
+    """A scene drawn at random: its draw."""
+    return SCENES[list(SCENES)[int(rng.integers(len(SCENES)))]][0]
 
 
 def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
@@ -269,30 +323,38 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     Raises :class:`~problems.family.IllPosed` for a nearly degenerate largest moment, an axis
     near the xy plane, or a known mistake close to the key.
     """
-    found = [_vector_answer(*spec) for spec in _posed_specs(params)]
-    reject_unless(None not in found, "a known mistake close to the key")
-    return tuple(found)
+    return tuple(_vector_answer(*spec) for spec in _posed(params))
 
 
-def _posed_tensor(params: Mapping[str, Any]) -> tuple[np.ndarray, dict]:
-    """The scene's tensor and mistaken tensors; IllPosed unless :func:`_well_posed`."""
-    tensor, mistaken = SCENES[params["scene"]][1](params)
-    reject_unless(_well_posed(tensor), "a nearly degenerate moment, or an axis near the xy plane")
-    return tensor, mistaken
+def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
+    """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
+    rejected) — the batch form: the tensors and their principal axes of all at once."""
+    return [found if isinstance(found, IllPosed)
+            else tuple(_vector_answer(*spec) for spec in found) for found in _posed_many(many)]
 
 
 @remembered  # the draw's accepted try, then answers() of the same parameters
-def _posed_specs(params: Mapping[str, Any]) -> list[tuple]:
-    """:func:`_tensor_specs` of the scene's tensors; IllPosed unless :func:`_well_posed`."""
-    return _tensor_specs(*_posed_tensor(params))
+def _posed(params: Mapping[str, Any]) -> list[tuple]:
+    """:func:`_posed_specs` of one scene; IllPosed where it rejects it (the draw's test of
+    each try, which builds no answers)."""
+    found = _posed_many([params])[0]
+    if isinstance(found, IllPosed):
+        raise found
+    return found
 
 
-def _accepted(params: Mapping[str, Any]) -> None:
-    """What :func:`answers` rejects, rejected alike (IllPosed), without building the answers:
-    the draw's test of each try."""
-    specs = _posed_specs(params)
-    reject_unless(all(_apart(spec[1], spec[2]) for spec in specs),
-                  "a known mistake close to the key")
+def _posed_many(many: list[Mapping[str, Any]]) -> list[list[tuple] | IllPosed]:
+    """:func:`_posed_specs` of each parameter set: the scenes alike (a box, or as many point
+    masses) stacked, their tensors and principal axes worked out together."""
+    alike: dict[tuple[str, int], list[int]] = {}
+    for i, params in enumerate(many):
+        alike.setdefault((params["scene"], _count(params)), []).append(i)
+    found: list = [None] * len(many)
+    for (scene, _), rows in alike.items():
+        tensor, mistaken = SCENES[scene][1]([many[i] for i in rows])
+        for i, specs in zip(rows, _posed_specs(tensor, mistaken), strict=True):
+            found[i] = specs
+    return found
 
 
 def heading(params: Mapping[str, Any]) -> str:
@@ -331,7 +393,7 @@ def degenerate(name: str, params: Mapping[str, Any], earlier: Mapping[str, Any])
     if name not in _READ_OFF:
         raise LookupError(name)
     diag, products = (np.asarray(earlier[n], dtype=float) for n in ("I_diag", "I_offdiag"))
-    tensor, _ = SCENES[params["scene"]][1](params)
+    tensor = SCENES[params["scene"]][1]([params])[0][0]
     key = np.array([tensor[0, 1], tensor[0, 2], tensor[1, 2]])
     if np.any(key) and np.linalg.norm(products) <= SAME * np.linalg.norm(key):
         return f"your {{I_offdiag}} is zero, which makes {_READ_OFF[name]} (R4)"
