@@ -139,6 +139,19 @@ def redrawn_many_until_well_posed(
     return found
 
 
+def stacked_dots(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Dot products of stacked vectors ``u``, ``v`` (..., n), bit for bit ``numpy.dot`` of each
+    pair: the same BLAS dot, one per pair (a sum in another order, as ``einsum``'s, changes the
+    last bits), for a batch form to give exactly what one student alone gets."""
+    return (u[..., None, :] @ v[..., :, None])[..., 0, 0]
+
+
+def stacked_norms(v: np.ndarray) -> np.ndarray:
+    """Euclidean norms of stacked vectors (..., n), bit for bit ``numpy.linalg.norm`` of each
+    (:func:`stacked_dots`)."""
+    return np.sqrt(stacked_dots(v, v))
+
+
 def remembered(work: Callable[[Mapping[str, Any]], Any]) -> Callable[[Mapping[str, Any]], Any]:
     """``work(params)`` remembering its last result, given again for equal parameters: the
     work a family's ``draw`` tests each try with (:func:`redrawn_until_well_posed`), which its

@@ -23,7 +23,7 @@ of a hand computation of a small angle from nearly parallel vectors would grow).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -31,10 +31,13 @@ from scipy.spatial.transform import Rotation
 
 from problems.answers import Answer, Mistake
 from problems.family import (
+    IllPosed,
     Parameter,
+    redrawn_many_until_well_posed,
     redrawn_until_well_posed,
-    reject_unless,
     remembered,
+    stacked_dots,
+    stacked_norms,
 )
 from problems.genuine import SAME
 from problems.rounding import format_sig, latex_sig, round_sig
@@ -65,7 +68,12 @@ _DEGREES = "The angle is asked in radians; this is the angle in degrees."
 
 def _angle(u: np.ndarray, v: np.ndarray) -> float:
     """The angle between two vectors, in rad (atan2 form: accurate for small angles too)."""
-    return float(np.arctan2(np.linalg.norm(np.cross(u, v)), np.dot(u, v)))
+    return float(_angles(u, v))
+
+
+def _angles(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """The angles between stacked vectors (..., 3), in rad: :func:`_angle` of each pair."""
+    return np.arctan2(stacked_norms(np.cross(u, v)), stacked_dots(u, v))
 
 
 def _apart(key, mistakes) -> bool:
@@ -89,14 +97,19 @@ def _built(specs: tuple) -> tuple[Answer, ...]:
     return T, L, angle.following("L")
 
 
-def _answers(tensor, omega, T_naive, L_naive, naive, extra_angle=()) -> tuple | None:
-    """The arguments of :func:`_answer` for T, L and the angle, with their mistakes (None: an
-    angle below ``MIN_ANGLE``, or a mistake within SEPARATION tolerances of its key or another);
-    ``naive = (name, feedback on T, feedback on L)`` is the simplification that gave
-    ``T_naive`` and ``L_naive``."""
-    T = float(kinetic_energy(tensor, omega))
+def _keys(tensor: np.ndarray, omega: np.ndarray) -> tuple[np.ndarray, ...]:
+    """``T = ½ ω·I·ω`` (J, R3), ``L = I·ω`` (kg m²/s, R5) and the angle between L and ω (rad)
+    of stacked tensors (n, 3, 3) and angular velocities (n, 3)."""
     L = angular_momentum(tensor, omega)
-    angle = _angle(L, omega)
+    return kinetic_energy(tensor, omega), L, _angles(L, omega)
+
+
+def _answers(T, L, angle, T_naive, L_naive, naive, extra_angle=()) -> tuple | None:
+    """The arguments of :func:`_answer` for the keys ``T``, ``L`` and ``angle`` (of
+    :func:`_keys`), with their mistakes (None: an angle below ``MIN_ANGLE``, or a mistake
+    within SEPARATION tolerances of its key or another); ``naive = (name, feedback on T,
+    feedback on L)`` is the simplification that gave ``T_naive`` and ``L_naive``."""
+    T, angle = float(T), float(angle)
     if angle < MIN_ANGLE:
         return None
     name, T_feedback, L_feedback = naive
@@ -111,13 +124,45 @@ def _answers(tensor, omega, T_naive, L_naive, naive, extra_angle=()) -> tuple | 
     return specs if all(_apart(spec[2], spec[3]) for spec in specs) else None
 
 
-def _physical(tensor: np.ndarray) -> bool:
-    """Still a physical inertia tensor after the rounding (R4)."""
+def _physical_moments(moments: np.ndarray) -> bool:
+    """Principal moments (3,) a rigid body can have (R4)."""
     try:
-        principal_moments(*np.linalg.eigvalsh(tensor))
+        principal_moments(*moments)
     except ValueError:
         return False
     return True
+
+
+def _physical(tensor: np.ndarray) -> bool:
+    """Still a physical inertia tensor after the rounding (R4)."""
+    return _physical_moments(np.linalg.eigvalsh(tensor))
+
+
+def _satellite_answers(many: list[Mapping[str, Any]]) -> list[tuple | IllPosed | None]:
+    """:func:`_answers` of satellites (stacked), or the IllPosed of a tensor that is not a
+    body's or of too slow a tumble."""
+    tensor, omega = (np.array([params[n] for params in many]) for n in ("I", "omega"))
+    kept = np.array([_physical_moments(m) for m in np.linalg.eigvalsh(tensor)], dtype=bool)
+    rows = np.flatnonzero(kept & (stacked_norms(omega) >= 0.1))
+    tensor, omega = tensor[rows], omega[rows]
+    diag = np.zeros_like(tensor)  # products of inertia left out
+    diag[:, _AXES, _AXES] = tensor[:, _AXES, _AXES]
+    found: list = [IllPosed("no physical tensor, or too slow a tumble") for _ in many]
+    for i, T, L, angle, T_naive, L_naive in zip(
+            rows, *_keys(tensor, omega), kinetic_energy(diag, omega),
+            angular_momentum(diag, omega), strict=True):
+        found[i] = _answers(T, L, angle, float(T_naive), L_naive, _PRODUCTS_IGNORED)
+    return found
+
+
+_AXES = np.arange(3)
+_PRODUCTS_IGNORED = (
+    "products_ignored",
+    "The products of inertia (off-diagonal entries) matter: the body axes are not principal "
+    "axes, so T = ½ ω·I·ω with the full tensor (R3).",
+    "The products of inertia (off-diagonal entries) matter: the body axes are not principal "
+    "axes, so L = I·ω with the full tensor (R5).",
+)
 
 
 def _tumbling_satellite(rng: np.random.Generator) -> dict[str, Any] | None:
@@ -134,21 +179,6 @@ def _tumbling_satellite(rng: np.random.Generator) -> dict[str, Any] | None:
     if np.linalg.norm(omega) < 0.1:
         return None
     return {"scene": "tumbling_satellite", "I": tensor.tolist(), "omega": omega.tolist()}
-
-
-def _satellite_answers(params: Mapping[str, Any]) -> tuple | None:
-    tensor, omega = np.array(params["I"]), np.array(params["omega"])
-    reject_unless(_physical(tensor) and np.linalg.norm(omega) >= 0.1,
-                  "no physical tensor, or too slow a tumble")
-    diag = np.diag(np.diag(tensor))
-    return _answers(
-        tensor, omega, float(kinetic_energy(diag, omega)), angular_momentum(diag, omega),
-        ("products_ignored",
-         "The products of inertia (off-diagonal entries) matter: the body axes are not principal "
-         "axes, so T = ½ ω·I·ω with the full tensor (R3).",
-         "The products of inertia (off-diagonal entries) matter: the body axes are not principal "
-         "axes, so L = I·ω with the full tensor (R5)."),
-    )
 
 
 _ASK = ("Find the kinetic energy $T$, the angular momentum $\\mathbf L$ about the centre of "
@@ -179,23 +209,34 @@ def _askew_disc(rng: np.random.Generator) -> dict[str, Any]:
     return {"scene": "askew_disc", "disc": kind, "M": M, "R": R, "theta": theta, "omega": w}
 
 
-def _disc_answers(params: Mapping[str, Any]) -> tuple | None:
-    M, R, theta, w = (params[n] for n in ("M", "R", "theta", "omega"))
+def _disc_answers(many: list[Mapping[str, Any]]) -> list[tuple | None]:
+    """:func:`_answers` of discs askew (stacked)."""
+    M, R, theta, w = (np.array([params[n] for params in many])
+                      for n in ("M", "R", "theta", "omega"))
     disc = shape_tensor("disc", M, radius=R)  # principal: symmetry axis along z
-    tilt = Rotation.from_euler("y", theta).as_matrix()  # the disc's axis (sin θ, 0, cos θ)
-    tensor = tilt @ disc @ tilt.T
-    omega = np.array([0.0, 0.0, w])
-    I3 = disc[2, 2]
-    return _answers(
-        tensor, omega, 0.5 * I3 * w**2, I3 * omega,
-        ("untilted",
-         "½ I3 ω² would hold for an untilted disc. Tilted, its moment about the axle is "
-         "I_zz = I1 sin²θ + I3 cos²θ, with I1 = MR²/4 the moment about a diameter (R3).",
-         "The disc's axis is tilted from the axle, so L = I·ω is not along ω: in the axle frame "
-         "the tensor has a product of inertia I_xz ≠ 0 (R5)."),
-        extra_angle=[("tilt_angle", theta, "θ is the angle between the disc's axis and ω; the "
-                      "question asks for the angle between L and ω, which is smaller.")],
-    )
+    tilt = Rotation.from_euler("y", theta[:, None]).as_matrix()  # axes (sin θ, 0, cos θ)
+    tensor = tilt @ disc @ np.swapaxes(tilt, -1, -2)
+    omega = np.zeros((len(many), 3))
+    omega[:, 2] = w
+    found = []
+    for params, I3, omega_i, keys in zip(many, disc[:, 2, 2], omega,
+                                         zip(*_keys(tensor, omega), strict=True), strict=True):
+        w, theta = params["omega"], params["theta"]
+        found.append(_answers(
+            *keys, 0.5 * I3 * w**2, I3 * omega_i, _UNTILTED,
+            extra_angle=[("tilt_angle", theta, "θ is the angle between the disc's axis and ω; "
+                          "the question asks for the angle between L and ω, which is smaller.")],
+        ))
+    return found
+
+
+_UNTILTED = (
+    "untilted",
+    "½ I3 ω² would hold for an untilted disc. Tilted, its moment about the axle is "
+    "I_zz = I1 sin²θ + I3 cos²θ, with I1 = MR²/4 the moment about a diameter (R3).",
+    "The disc's axis is tilted from the axle, so L = I·ω is not along ω: in the axle frame "
+    "the tensor has a product of inertia I_xz ≠ 0 (R5).",
+)
 
 
 def _disc_statement(params: Mapping[str, Any]) -> str:
@@ -232,8 +273,19 @@ PARAMETERS: dict[str, Parameter] = {
 def draw(rng: np.random.Generator) -> dict[str, Any] | None:
     """A scene of :data:`SCENES`, then draws of it until one is well posed (at most
     ``MAX_TRIES``)."""
-    scene = SCENES[list(SCENES)[int(rng.integers(len(SCENES)))]][0]
-    return redrawn_until_well_posed(scene, _specs, rng, MAX_TRIES)
+    return redrawn_until_well_posed(_scene(rng), _specs, rng, MAX_TRIES)
+
+
+def draw_many(rngs: list[np.random.Generator]) -> list[dict[str, Any] | None]:
+    """:func:`draw` of each generator, each round's tries tested together (the batch form,
+    :mod:`problems.family`)."""
+    return redrawn_many_until_well_posed([_scene(rng) for rng in rngs], _specs_many, rngs,
+                                         MAX_TRIES)
+
+
+def _scene(rng: np.random.Generator) -> Callable[[np.random.Generator], dict[str, Any] | None]:
+    """A scene drawn at random: its draw."""
+    return SCENES[list(SCENES)[int(rng.integers(len(SCENES)))]][0]
 
 
 def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
@@ -245,12 +297,34 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     return _built(_specs(params))
 
 
+def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
+    """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
+    rejected) — the batch form: the tensors, T, L and the angles of all at once."""
+    return [found if isinstance(found, IllPosed) else _built(found)
+            for found in _specs_many(many)]
+
+
 @remembered  # the draw's accepted try, then answers() of the same parameters
 def _specs(params: Mapping[str, Any]) -> tuple:
     """What :func:`answers` builds its answers from; IllPosed where it rejects them (the
     draw's test of each try, which builds none)."""
-    found = SCENES[params["scene"]][1](params)
-    reject_unless(found is not None, "too small an angle, or a mistake close to the key")
+    found = _specs_many([params])[0]
+    if isinstance(found, IllPosed):
+        raise found
+    return found
+
+
+def _specs_many(many: list[Mapping[str, Any]]) -> list[tuple | IllPosed]:
+    """:func:`_specs` of each parameter set (an IllPosed where rejected), the scenes alike
+    stacked and worked out together."""
+    alike: dict[str, list[int]] = {}
+    for i, params in enumerate(many):
+        alike.setdefault(params["scene"], []).append(i)
+    found: list = [None] * len(many)
+    for scene, rows in alike.items():
+        for i, specs in zip(rows, SCENES[scene][1]([many[i] for i in rows]), strict=True):
+            found[i] = (IllPosed("too small an angle, or a mistake close to the key")
+                        if specs is None else specs)
     return found
 
 

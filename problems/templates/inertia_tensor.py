@@ -38,6 +38,7 @@ from problems.family import (
     redrawn_many_until_well_posed,
     redrawn_until_well_posed,
     remembered,
+    stacked_norms,
 )
 from problems.genuine import SAME
 from problems.rounding import format_sig, latex_sig, round_sig
@@ -95,19 +96,13 @@ _AXES = np.arange(3)
 _PRODUCTS = (np.array([0, 0, 1]), np.array([1, 2, 2]))  # (xy, xz, yz)
 
 
-def _norms(v: np.ndarray) -> np.ndarray:
-    """Euclidean norms of the vectors (..., 3), bit for bit ``numpy.linalg.norm`` of each (the
-    same dot product: a sum in another order would change the last bits)."""
-    return np.sqrt((v[..., None, :] @ v[..., :, None])[..., 0, 0])
-
-
 def _apart(values: np.ndarray) -> np.ndarray:
     """Whether, for each student, the key ``values[..., 0, :]`` and the mistakes after it lie
     SEPARATION tolerances from one another (every pair; vectors by norm, as graded)."""
-    tol = SEPARATION * RTOL * _norms(values[..., 0, :])
+    tol = SEPARATION * RTOL * stacked_norms(values[..., 0, :])
     n = values.shape[-2]
     first, second = np.triu_indices(n, 1)
-    gaps = _norms(values[..., first, :] - values[..., second, :])
+    gaps = stacked_norms(values[..., first, :] - values[..., second, :])
     return np.all(gaps > tol[..., None], axis=-1)
 
 
