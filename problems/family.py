@@ -152,6 +152,15 @@ def stacked_norms(v: np.ndarray) -> np.ndarray:
     return np.sqrt(stacked_dots(v, v))
 
 
+def stacked_apart(values: np.ndarray, tol: np.ndarray) -> np.ndarray:
+    """Whether, stack by stack, the vectors ``values[..., k, :]`` (a key, then its known
+    mistakes) lie further than ``tol`` (...) from one another, every pair by the norm of
+    their difference (:func:`stacked_norms`): a family's test that each can be told apart."""
+    first, second = np.triu_indices(values.shape[-2], 1)
+    gaps = stacked_norms(values[..., first, :] - values[..., second, :])
+    return ~np.any(gaps <= tol[..., None], axis=-1)
+
+
 def remembered(work: Callable[[Mapping[str, Any]], Any]) -> Callable[[Mapping[str, Any]], Any]:
     """``work(params)`` remembering its last result, given again for equal parameters: the
     work a family's ``draw`` tests each try with (:func:`redrawn_until_well_posed`), which its

@@ -36,6 +36,7 @@ from problems.family import (
     redrawn_many_until_well_posed,
     redrawn_until_well_posed,
     remembered,
+    stacked_apart,
     stacked_dots,
     stacked_norms,
 )
@@ -76,14 +77,6 @@ def _angles(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.arctan2(stacked_norms(np.cross(u, v)), stacked_dots(u, v))
 
 
-def _apart(key, mistakes) -> bool:
-    """Whether the key and every mistake lie SEPARATION tolerances apart."""
-    values = [np.atleast_1d(np.asarray(v, float)) for v in (key, *(m[1] for m in mistakes))]
-    tol = SEPARATION * RTOL * np.linalg.norm(values[0])
-    return not any(np.linalg.norm(a - b) <= tol
-                   for i, a in enumerate(values) for b in values[i + 1:])
-
-
 def _answer(name, kind, key, mistakes, unit, description) -> Answer:
     return Answer(  # Answer converts numpy values to plain JSON
         name, kind, key, unit=unit, rtol=RTOL, description=description,
@@ -97,31 +90,40 @@ def _built(specs: tuple) -> tuple[Answer, ...]:
     return T, L, angle.following("L")
 
 
-def _keys(tensor: np.ndarray, omega: np.ndarray) -> tuple[np.ndarray, ...]:
-    """``T = ½ ω·I·ω`` (J, R3), ``L = I·ω`` (kg m²/s, R5) and the angle between L and ω (rad)
-    of stacked tensors (n, 3, 3) and angular velocities (n, 3)."""
+def _answers(tensor: np.ndarray, omega: np.ndarray, T_naive: np.ndarray, L_naive: np.ndarray,
+             naive: tuple[str, str, str], extra_angle: dict[str, tuple] | None = None
+             ) -> list[tuple | None]:
+    """For stacked tensors (n, 3, 3) and angular velocities (n, 3), the arguments of
+    :func:`_answer` for T (J, R3), L (kg m²/s, R5) and the angle between them (rad), with
+    their mistakes (None: an angle below ``MIN_ANGLE``, or a mistake within SEPARATION
+    tolerances of its key or another); ``naive = (name, feedback on T, feedback on L)`` is
+    the simplification that gave ``T_naive`` (n,) and ``L_naive`` (n, 3), ``extra_angle``
+    maps another mistaken angle to its values (n,) and feedback."""
+    T = kinetic_energy(tensor, omega)
     L = angular_momentum(tensor, omega)
-    return kinetic_energy(tensor, omega), L, _angles(L, omega)
-
-
-def _answers(T, L, angle, T_naive, L_naive, naive, extra_angle=()) -> tuple | None:
-    """The arguments of :func:`_answer` for the keys ``T``, ``L`` and ``angle`` (of
-    :func:`_keys`), with their mistakes (None: an angle below ``MIN_ANGLE``, or a mistake
-    within SEPARATION tolerances of its key or another); ``naive = (name, feedback on T,
-    feedback on L)`` is the simplification that gave ``T_naive`` and ``L_naive``."""
-    T, angle = float(T), float(angle)
-    if angle < MIN_ANGLE:
-        return None
+    angle = _angles(L, omega)
+    wrong_angle = {"degrees": (np.degrees(angle), _DEGREES), **(extra_angle or {})}
     name, T_feedback, L_feedback = naive
-    specs = (
-        ("T", "scalar", T, [("missing_half", 2 * T, _HALF), (name, T_naive, T_feedback)],
+    kept = ~(angle < MIN_ANGLE) & _apart(np.stack([T, 2 * T, T_naive], axis=-1)) \
+        & _apart(np.stack([L, L_naive], axis=-2)) \
+        & _apart(np.stack([angle, *(v for v, _ in wrong_angle.values())], axis=-1))
+    return [(
+        ("T", "scalar", float(T[i]), [("missing_half", 2 * float(T[i]), _HALF),
+                                      (name, float(T_naive[i]), T_feedback)],
          "J", "kinetic energy"),
-        ("L", "vector", L, [(name, L_naive, L_feedback)], "kg m^2/s",
+        ("L", "vector", L[i], [(name, L_naive[i], L_feedback)], "kg m^2/s",
          "angular momentum (same axes as ω)"),
-        ("angle", "angle", angle, [("degrees", np.degrees(angle), _DEGREES), *extra_angle],
+        ("angle", "angle", float(angle[i]),
+         [(n, v[i], feedback) for n, (v, feedback) in wrong_angle.items()],
          "rad", "angle between L and ω"),
-    )
-    return specs if all(_apart(spec[2], spec[3]) for spec in specs) else None
+    ) if kept[i] else None for i in range(len(kept))]
+
+
+def _apart(values: np.ndarray) -> np.ndarray:
+    """Whether, for each student, the key ``values[..., 0, :]`` (or ``values[..., 0]``, a
+    number) and the mistakes after it lie SEPARATION tolerances apart (vectors by norm)."""
+    values = values[..., None] if values.ndim == 2 else values  # numbers: vectors of one
+    return stacked_apart(values, SEPARATION * RTOL * stacked_norms(values[..., 0, :]))
 
 
 def _physical_moments(moments: np.ndarray) -> bool:
@@ -133,6 +135,16 @@ def _physical_moments(moments: np.ndarray) -> bool:
     return True
 
 
+def _physical_many(moments: np.ndarray) -> np.ndarray:
+    """:func:`_physical_moments` of each row of ``moments`` (n, 3): all checked at once when
+    all are a body's (the drawn tensors), else row by row."""
+    try:
+        principal_moments(*moments.T)
+    except ValueError:
+        return np.array([_physical_moments(m) for m in moments], dtype=bool)
+    return np.ones(len(moments), dtype=bool)
+
+
 def _physical(tensor: np.ndarray) -> bool:
     """Still a physical inertia tensor after the rounding (R4)."""
     return _physical_moments(np.linalg.eigvalsh(tensor))
@@ -142,16 +154,16 @@ def _satellite_answers(many: list[Mapping[str, Any]]) -> list[tuple | IllPosed |
     """:func:`_answers` of satellites (stacked), or the IllPosed of a tensor that is not a
     body's or of too slow a tumble."""
     tensor, omega = (np.array([params[n] for params in many]) for n in ("I", "omega"))
-    kept = np.array([_physical_moments(m) for m in np.linalg.eigvalsh(tensor)], dtype=bool)
-    rows = np.flatnonzero(kept & (stacked_norms(omega) >= 0.1))
+    kept = _physical_many(np.linalg.eigvalsh(tensor)) & (stacked_norms(omega) >= 0.1)
+    rows = np.flatnonzero(kept)
     tensor, omega = tensor[rows], omega[rows]
     diag = np.zeros_like(tensor)  # products of inertia left out
     diag[:, _AXES, _AXES] = tensor[:, _AXES, _AXES]
     found: list = [IllPosed("no physical tensor, or too slow a tumble") for _ in many]
-    for i, T, L, angle, T_naive, L_naive in zip(
-            rows, *_keys(tensor, omega), kinetic_energy(diag, omega),
-            angular_momentum(diag, omega), strict=True):
-        found[i] = _answers(T, L, angle, float(T_naive), L_naive, _PRODUCTS_IGNORED)
+    for i, specs in zip(rows, _answers(tensor, omega, kinetic_energy(diag, omega),
+                                       angular_momentum(diag, omega), _PRODUCTS_IGNORED),
+                        strict=True):
+        found[i] = specs
     return found
 
 
@@ -218,16 +230,13 @@ def _disc_answers(many: list[Mapping[str, Any]]) -> list[tuple | None]:
     tensor = tilt @ disc @ np.swapaxes(tilt, -1, -2)
     omega = np.zeros((len(many), 3))
     omega[:, 2] = w
-    found = []
-    for params, I3, omega_i, keys in zip(many, disc[:, 2, 2], omega,
-                                         zip(*_keys(tensor, omega), strict=True), strict=True):
-        w, theta = params["omega"], params["theta"]
-        found.append(_answers(
-            *keys, 0.5 * I3 * w**2, I3 * omega_i, _UNTILTED,
-            extra_angle=[("tilt_angle", theta, "θ is the angle between the disc's axis and ω; "
-                          "the question asks for the angle between L and ω, which is smaller.")],
-        ))
-    return found
+    I3 = disc[:, 2, 2]
+    # ½ I3 ω² as one student's scalars give it (a float's ** is not numpy's square)
+    T_naive = np.array([0.5 * i3 * params["omega"] ** 2 for i3, params in zip(I3, many,
+                                                                              strict=True)])
+    return _answers(tensor, omega, T_naive, I3[:, None] * omega, _UNTILTED, extra_angle={
+        "tilt_angle": (theta, "θ is the angle between the disc's axis and ω; the question "
+                       "asks for the angle between L and ω, which is smaller.")})
 
 
 _UNTILTED = (

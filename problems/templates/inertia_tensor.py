@@ -38,6 +38,7 @@ from problems.family import (
     redrawn_many_until_well_posed,
     redrawn_until_well_posed,
     remembered,
+    stacked_apart,
     stacked_norms,
 )
 from problems.genuine import SAME
@@ -98,12 +99,8 @@ _PRODUCTS = (np.array([0, 0, 1]), np.array([1, 2, 2]))  # (xy, xz, yz)
 
 def _apart(values: np.ndarray) -> np.ndarray:
     """Whether, for each student, the key ``values[..., 0, :]`` and the mistakes after it lie
-    SEPARATION tolerances from one another (every pair; vectors by norm, as graded)."""
-    tol = SEPARATION * RTOL * stacked_norms(values[..., 0, :])
-    n = values.shape[-2]
-    first, second = np.triu_indices(n, 1)
-    gaps = stacked_norms(values[..., first, :] - values[..., second, :])
-    return np.all(gaps > tol[..., None], axis=-1)
+    SEPARATION tolerances from one another (vectors by norm, as graded)."""
+    return stacked_apart(values, SEPARATION * RTOL * stacked_norms(values[..., 0, :]))
 
 
 def _vector_answer(name, key, mistakes, unit, description, depends=()) -> Answer:
