@@ -36,7 +36,7 @@ each other are resampled.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
 from typing import Any
@@ -47,7 +47,7 @@ import sympy as sp
 from problems.answers import Answer, Mistake
 from problems.family import Parameter, distinguishable
 from problems.rounding import latex_sig, round_sig
-from problems.templates.sleeping_top import draw_top
+from problems.templates.sleeping_top import Top, draw_top, top_moments
 from solver.heavy_top import constants_of_motion, critical_spin
 from solver.symbolic import (
     SYMBOLS,
@@ -272,20 +272,51 @@ def prepare() -> None:
         _compiled(index)
 
 
-def _state(rng: np.random.Generator) -> dict[str, float]:
-    """Every parameter a quantity may need: a real top in a plausible state (rounded)."""
-    top = draw_top(rng)
-    I1, I3, Mgl = (round_sig(x, SIG) for x in (top.I1, top.I3, top.Mgl))
-    beta = round_sig(rng.uniform(*TILT), SIG)
-    gamma_dot = round_sig(float(critical_spin(I1, I3, Mgl)) * rng.uniform(1.5, 5.0), SIG)
+@dataclass(frozen=True)
+class _Draws:
+    """What one student's generator gives :func:`_states`, in the order it is drawn: a
+    quantity, a real top, then the state's random numbers (unrounded)."""
+
+    quantity: Quantity
+    top: Top
+    tilt: float  # β, rad
+    spin: float  # γ̇ in critical spins
+    precession: float  # |α̇| / γ̇
+    sense: float  # of α̇, ±1
+    nod: float  # |β̇|, rad/s
+    nod_sense: float  # of β̇, ±1
+
+    @classmethod
+    def of(cls, rng: np.random.Generator) -> _Draws:
+        q = QUANTITIES[int(rng.integers(len(QUANTITIES)))]
+        top = draw_top(rng)
+        tilt, spin = rng.uniform(*TILT), rng.uniform(1.5, 5.0)
+        precession, sense = rng.uniform(*PRECESSION), rng.choice([-1.0, 1.0])
+        return cls(q, top, tilt, spin, precession, sense, rng.uniform(0.3, 3.0),
+                   rng.choice([-1.0, 1.0]))
+
+
+def _states(draws: Sequence[_Draws]) -> list[dict[str, float]]:
+    """Every parameter a quantity may need, for each student: a real top in a plausible state
+    (rounded); the tops' moments (R2), critical spins (R19) and momenta (R15) of all at once."""
+    I1, I3 = (round_sig(x, SIG) for x in top_moments([d.top for d in draws]))
+    Mgl = round_sig(np.array([d.top.Mgl for d in draws]), SIG)
+    beta = round_sig(np.array([d.tilt for d in draws]), SIG)
+    critical = critical_spin(I1, I3, Mgl)
+    gamma_dot = round_sig(np.array([float(w) * d.spin for w, d in zip(critical, draws,
+                                                                     strict=True)]), SIG)
     # a knocked top: precessing at a good fraction of its spin (else α̇ cos β is lost beside γ̇
     # and p_γ ≈ I3 γ̇ hides the mistakes), either sense, and nodding
-    alpha_dot = round_sig(rng.uniform(*PRECESSION) * gamma_dot * rng.choice([-1.0, 1.0]), SIG)
-    beta_dot = round_sig(rng.uniform(0.3, 3.0) * rng.choice([-1.0, 1.0]), SIG)
-    p_alpha, p_gamma, _ = constants_of_motion(I1, I3, Mgl, beta, alpha_dot, beta_dot, gamma_dot)
-    return {"I1": I1, "I3": I3, "Mgl": Mgl, "beta": beta, "alpha_dot": alpha_dot,
-            "beta_dot": beta_dot, "gamma_dot": gamma_dot,
-            "p_alpha": round_sig(p_alpha, SIG), "p_gamma": round_sig(p_gamma, SIG)}
+    alpha_dot = round_sig(np.array([d.precession * float(w) * d.sense
+                                    for d, w in zip(draws, gamma_dot, strict=True)]), SIG)
+    beta_dot = round_sig(np.array([d.nod * d.nod_sense for d in draws]), SIG)
+    state = (I1, I3, Mgl, beta, alpha_dot, beta_dot, gamma_dot)
+    p_alpha, p_gamma, _ = constants_of_motion(*state)
+    names = ("I1", "I3", "Mgl", "beta", "alpha_dot", "beta_dot", "gamma_dot", "p_alpha",
+             "p_gamma")
+    columns = (*state, round_sig(p_alpha, SIG), round_sig(p_gamma, SIG))
+    return [dict(zip(names, values, strict=True))
+            for values in zip(*(c.tolist() for c in columns), strict=True)]
 
 
 def _number_answer(q: Quantity, c: _Compiled, values: list[float]) -> Answer:
@@ -327,10 +358,16 @@ PARAMETERS: dict[str, Parameter] = {
 
 def draw(rng: np.random.Generator) -> dict[str, Any]:
     """A quantity of :data:`QUANTITIES`, and the values of its symbols for a real top in a
-    plausible state (:func:`_state`)."""
-    q = QUANTITIES[int(rng.integers(len(QUANTITIES)))]
-    state = _state(rng)
-    return {"quantity": q.name, **{n: state[n] for n in q.symbols}}
+    plausible state (:func:`_states`)."""
+    return draw_many([rng])[0]
+
+
+def draw_many(rngs: list[np.random.Generator]) -> list[dict[str, Any]]:
+    """:func:`draw` of each generator, the states of all worked out together (the batch
+    form, :mod:`problems.family`)."""
+    draws = [_Draws.of(rng) for rng in rngs]
+    return [{"quantity": d.quantity.name, **{n: state[n] for n in d.quantity.symbols}}
+            for d, state in zip(draws, _states(draws), strict=True)]
 
 
 def _quantity(params: Mapping[str, Any]) -> tuple[Quantity, _Compiled]:
