@@ -19,7 +19,13 @@ from problems.family import (
     Parameter,
     distinguishable,
     draw_parameters,
+    redrawn_many_until_well_posed,
+    redrawn_until_well_posed,
+    reject_unless,
     remembered,
+    stacked_apart,
+    stacked_dots,
+    stacked_norms,
 )
 from problems.rounding import round_sig
 from problems.settings import AnswerSetting, ParameterSetting, QuestionSettings
@@ -346,6 +352,42 @@ def test_a_batch_drawn_question_keeps_the_written_parts_its_settings_ask_for():
     alone = [family.generate(np.random.default_rng(s), settings) for s in range(12)]
     assert [v.to_dict() for v in together] == [v.to_dict() for v in alone]
     assert all(any(a.kind == "written" for a in v.answers) for v in together)
+
+
+def test_redrawn_together_draws_what_each_student_draws_alone():
+    """A round of tries for the whole class (issue 34) gives each student the draw it gets
+    alone — a draw rejected at once (None), or by the test, or never accepted within the
+    tries (None) — and leaves each generator where drawing alone leaves it."""
+
+    def draw_once(rng):
+        x = float(rng.uniform())
+        return None if x < 0.3 else {"x": x}
+
+    def posed(params):
+        reject_unless(params["x"] > 0.8, "too small")
+
+    def posed_many(many):
+        return [IllPosed("too small") if p["x"] <= 0.8 else None for p in many]
+
+    alone_rngs = [np.random.default_rng([5, s]) for s in range(200)]
+    together_rngs = [np.random.default_rng([5, s]) for s in range(200)]
+    alone = [redrawn_until_well_posed(draw_once, posed, rng, 4) for rng in alone_rngs]
+    together = redrawn_many_until_well_posed([draw_once] * 200, posed_many, together_rngs, 4)
+    assert together == alone
+    assert None in alone and any(p is not None for p in alone)  # both ends exercised
+    assert [r.uniform() for r in together_rngs] == [r.uniform() for r in alone_rngs]
+
+
+def test_stacked_products_are_numpy_s_of_each_vector_bit_for_bit():
+    """stacked_dots and stacked_norms equal numpy.dot and numpy.linalg.norm of each vector
+    exactly (an einsum sum would not), and stacked_apart tests every pair."""
+    rng = np.random.default_rng(3)
+    u, v = rng.normal(size=(500, 3)) * 1e3, rng.normal(size=(500, 3))
+    assert stacked_dots(u, v).tolist() == [float(np.dot(a, b)) for a, b in zip(u, v, strict=True)]
+    assert stacked_norms(u).tolist() == [float(np.linalg.norm(a)) for a in u]
+    values = np.array([[[1.0, 0, 0], [2.0, 0, 0], [3.0, 0, 0]],
+                       [[1.0, 0, 0], [3.0, 0, 0], [1.5, 0, 0]]])
+    assert stacked_apart(values, np.array([0.9, 0.9])).tolist() == [True, False]
 
 
 def test_remembered_works_again_for_other_parameters_only():
