@@ -1,9 +1,13 @@
-"""The report's figures: matplotlib, drawn off-screen and inlined as base64 PNG.
+"""The report's figures: matplotlib, drawn off-screen and inlined as base64 SVG.
 
-Each function takes plain numbers and returns the PNG bytes base64-encoded, for an
-``<img src="data:image/png;base64,…">`` that works offline. A :class:`matplotlib.figure.Figure`
-is made directly (no ``pyplot``: no global state, safe in the grader's threads), and PNG metadata
-is left out so that the same class gives the same bytes.
+Each function takes plain numbers and returns the SVG base64-encoded, for an
+``<img src="data:image/svg+xml;base64,…">`` that works offline. A
+:class:`matplotlib.figure.Figure` is made directly (no ``pyplot``: no global state, safe in the
+grader's threads); the SVG has no date and fixed ids, so that the same class gives the same
+bytes. Its texts stay text (in DejaVu Sans, the font their room was measured in, or the next
+sans-serif the browser has), and bars are one collection per colour rather than a patch each:
+together about a third less drawing than a PNG of patches, at the end of every
+``eulertop grade`` (issue 34).
 
 Colours name what they show, the same in every figure and in the tables (:data:`COLOURS`).
 
@@ -19,9 +23,13 @@ from __future__ import annotations
 
 import base64
 import io
+import threading
 from collections.abc import Mapping, Sequence
 
 import numpy as np
+from matplotlib import rc_context
+from matplotlib.axes import Axes
+from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 
 COLOURS = {
@@ -84,19 +92,50 @@ def count_ticks(peak: float) -> list[str]:
     return [f"{peak:.0f}", "0.00"]
 
 
-def png_base64(fig: Figure) -> str:
-    """The figure as base64 PNG (no metadata: reproducible bytes)."""
+SVG = {"svg.fonttype": "none", "svg.hashsalt": "eulertop"}
+"""How the figures are written: texts as text, ids from a fixed salt (reproducible bytes)."""
+
+_SAVING = threading.Lock()  # rc_context changes matplotlib's global settings while it lasts
+
+
+def svg_base64(fig: Figure) -> str:
+    """The figure as base64 SVG (no date, fixed ids: reproducible bytes)."""
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=100, metadata={"Software": None})
+    with _SAVING, rc_context(SVG):
+        fig.savefig(buffer, format="svg", metadata={"Date": None, "Creator": None})
     return base64.b64encode(buffer.getvalue()).decode("ascii")
+
+
+def bars(ax: Axes, x: Sequence[float] | np.ndarray, width: Sequence[float] | np.ndarray,
+         y: Sequence[float] | np.ndarray, height: Sequence[float] | np.ndarray,
+         based: str = "y", **style) -> PolyCollection:
+    """The rectangles ``[x, x + width] × [y, y + height]`` (arrays, broadcast) as one collection
+    on ``ax``; the ``based`` axis's limits stuck at the bars' bases (``y``, or ``x`` with
+    ``based="x"``), as ``bar`` and ``barh`` leave them."""
+    x, width, y, height = np.broadcast_arrays(*(np.asarray(v, float)
+                                                for v in (x, width, y, height)))
+    corners = np.stack([np.stack([x, y], -1), np.stack([x, y + height], -1),
+                        np.stack([x + width, y + height], -1), np.stack([x + width, y], -1)],
+                       axis=-2)
+    collection = PolyCollection(corners, **style)
+    getattr(collection.sticky_edges, based).extend(np.unique(y if based == "y" else x))
+    ax.add_collection(collection)
+    return collection
+
+
+def histogram(ax: Axes, values: Sequence[float], edges: np.ndarray, colour: str) -> np.ndarray:
+    """``ax.hist(values, edges, color=colour, edgecolor="white")`` drawn as one collection; the
+    counts."""
+    counts, _ = np.histogram(np.asarray(values, float), edges)
+    bars(ax, edges[:-1], np.diff(edges), 0.0, counts, facecolor=colour, edgecolor="white")
+    return counts
 
 
 def score_histogram(percent: Sequence[float]) -> str:
     """Histogram of the graded students' scores, in percent of the maximum."""
     fig = Figure(figsize=(7, 2.8))
     ax = fig.add_subplot()
-    heights, _, _ = ax.hist(percent, bins=np.linspace(0, 100, 21), color=COLOURS["scores"],
-                            edgecolor="white")
+    heights = histogram(ax, percent, np.linspace(0, 100, 21), COLOURS["scores"])
     margins(fig, y_axis(count_ticks(max(heights, default=0) * 1.05)))
     if len(percent):
         ax.axvline(float(np.median(percent)), color="black", linestyle="--", linewidth=1,
@@ -105,7 +144,7 @@ def score_histogram(percent: Sequence[float]) -> str:
     ax.set_xlabel("score (% of the maximum)")
     ax.set_ylabel("students")
     ax.set_xlim(0, 100)
-    return png_base64(fig)
+    return svg_base64(fig)
 
 
 def outcomes(labels: Sequence[str], counts: Sequence[Mapping[str, int]]) -> str:
@@ -121,7 +160,8 @@ def outcomes(labels: Sequence[str], counts: Sequence[Mapping[str, int]]) -> str:
         width = np.array([c.get(name, 0) for c in counts], dtype=float)
         if name in ("follows", "pending", "reviewed") and not width.any():
             continue  # in the legend only where some answer has it
-        ax.barh(y, width, left=left, color=COLOURS[name], label=name, height=0.75)
+        bars(ax, left, width, y - 0.375, 0.75, based="x", facecolor=COLOURS[name],
+             edgecolor="none", label=name)
         left += width
     ax.set_yticks(y, labels)
     ax.set_xlabel("students")
@@ -131,7 +171,7 @@ def outcomes(labels: Sequence[str], counts: Sequence[Mapping[str, int]]) -> str:
                        bbox_transform=fig.transFigure)
     rows = -(-len(legend.get_texts()) // 5)
     margins(fig, y_axis(labels, label=False), top=EDGE + 0.05 + 0.22 * rows)
-    return png_base64(fig)
+    return svg_base64(fig)
 
 
 def written_scores(points: Sequence[float], maximum: float) -> str:
@@ -139,14 +179,14 @@ def written_scores(points: Sequence[float], maximum: float) -> str:
     fig = Figure(figsize=(7, 2.4))
     ax = fig.add_subplot()
     top = maximum if maximum > 0 else 1.0
-    heights, _, _ = ax.hist(points, bins=np.linspace(0, top, min(20, max(4, int(4 * top))) + 1),
-                            color=COLOURS["reviewed"], edgecolor="white")
+    heights = histogram(ax, points, np.linspace(0, top, min(20, max(4, int(4 * top))) + 1),
+                        COLOURS["reviewed"])
     margins(fig, y_axis(count_ticks(max(heights, default=0) * 1.05)),
             right=0.1 + text_width([f"{top:g}", f"{top:.1f}"]) / 2)
     ax.set_xlabel("points given by the reviews")
     ax.set_ylabel("students")
     ax.set_xlim(0, top)
-    return png_base64(fig)
+    return svg_base64(fig)
 
 
 def facility_discrimination(labels: Sequence[str], facility: Sequence[float],
@@ -159,17 +199,20 @@ def facility_discrimination(labels: Sequence[str], facility: Sequence[float],
             right=max(0.25, EDGE + 4 / 72 + text_width(shown, 7)))
     ax.axvspan(0, 0.4, color="#fbe3e3", zorder=0)
     ax.axhspan(-1, 0.1, color="#f0f0f0", zorder=0)
-    for label, f, d in zip(labels, facility, discrimination, strict=True):
-        if f is None:
-            continue
-        y = 0.0 if d is None else d
-        ax.scatter([f], [y], color=COLOURS["scores"] if d is not None else "#999999", zorder=2)
+    placed = [(label, f, 0.0 if d is None else d, COLOURS["scores"] if d is not None
+               else "#999999")
+              for label, f, d in zip(labels, facility, discrimination, strict=True)
+              if f is not None]
+    if placed:
+        ax.scatter([p[1] for p in placed], [p[2] for p in placed], c=[p[3] for p in placed],
+                   zorder=2)
+    for label, f, y, _ in placed:
         ax.annotate(label, (f, y), textcoords="offset points", xytext=(4, 3), fontsize=7)
     ax.set_xlim(-0.02, 1.02)
     ax.set_ylim(-1, 1)
     ax.set_xlabel("facility (mean fraction of the points)")
     ax.set_ylabel("discrimination (r with the rest)")
-    return png_base64(fig)
+    return svg_base64(fig)
 
 
 def wrong_ratios(rows: Sequence[tuple[str, Sequence[float]]]) -> str:
@@ -185,10 +228,12 @@ def wrong_ratios(rows: Sequence[tuple[str, Sequence[float]]]) -> str:
         ax.annotate(name, (value, 1.0), xycoords=("data", "axes fraction"), fontsize=7,
                     ha="center", va="bottom", color="#777777")
     rng = np.random.default_rng(0)  # vertical jitter only, the same every time
-    for k, (_, ratios) in enumerate(rows):
-        y = len(rows) - 1 - k + rng.uniform(-0.25, 0.25, len(ratios))
-        ax.scatter(np.log10(np.abs(ratios)), y, s=8, color=COLOURS["wrong"], alpha=0.6)
+    y = [len(rows) - 1 - k + rng.uniform(-0.25, 0.25, len(ratios))
+         for k, (_, ratios) in enumerate(rows)]
+    if rows:
+        ax.scatter(np.log10(np.abs(np.concatenate([r for _, r in rows], dtype=float))),
+                   np.concatenate(y), s=8, color=COLOURS["wrong"], alpha=0.6)
     ax.set_yticks(np.arange(len(rows))[::-1], [r[0] for r in rows])
     ax.set_xlim(-3, 3)
     ax.set_xlabel("log₁₀ |wrong value / the student's own key|")
-    return png_base64(fig)
+    return svg_base64(fig)

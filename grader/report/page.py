@@ -1,6 +1,6 @@
 """``report.html``: one self-contained page, for the instructor.
 
-Self-contained and offline: figures are inline PNG (``data:`` URIs), the style is one inline
+Self-contained and offline: figures are inline SVG (``data:`` URIs), the style is one inline
 ``<style>``, and the per-student table's CSV is both written beside the page and embedded as a
 ``data:`` download link. A Content-Security-Policy in the page (``default-src 'none'``) forbids
 every fetch, frame, form and plugin: the page cannot reach the network even if a value in it
@@ -127,8 +127,9 @@ def names(ids: Sequence[str]) -> str:
     return e(", ".join(ids[:MAX_LISTED])) + cut
 
 
-def img(png: str, alt: str) -> str:
-    return f'<img alt="{e(alt)}" src="data:image/png;base64,{png}">'
+def img(svg: str, alt: str) -> str:
+    """A figure of :mod:`grader.report.figures` (base64 SVG) as an image."""
+    return f'<img alt="{e(alt)}" src="data:image/svg+xml;base64,{svg}">'
 
 
 def table(header: Sequence[str], rows: Sequence[Sequence[str]], sortable: bool = False) -> str:

@@ -47,7 +47,7 @@ DRAWINGS = {
 @pytest.mark.parametrize("name", DRAWINGS)
 def test_every_text_of_a_figure_is_inside_it(monkeypatch, name):
     drawn: list[Figure] = []
-    monkeypatch.setattr(figures, "png_base64", lambda fig: drawn.append(fig) or "")
+    monkeypatch.setattr(figures, "svg_base64", lambda fig: drawn.append(fig) or "")
     DRAWINGS[name]()
     (fig,) = drawn
     canvas = FigureCanvasAgg(fig)

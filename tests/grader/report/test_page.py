@@ -92,7 +92,7 @@ def test_chromium_runs_the_sort_script_under_the_policy_and_blocks_nothing(
     dom = run.stdout
     tables = dom.count('class="sortable"')
     assert tables >= 3 and dom.count('data-sortable="on"') == tables  # the script ran
-    assert dom.count('src="data:image/png;base64,') >= 4
+    assert dom.count('src="data:image/svg+xml;base64,') >= 4
     assert "Content Security Policy" not in run.stderr  # nothing refused
 
 

@@ -25,7 +25,7 @@ def test_grading_run_writes_the_report_page_and_its_csv_files(planted_class):
     graded = planted_class.made.graded
     page = (graded / "report.html").read_text(encoding="utf-8")
     assert "Class report: Synthetic class (planted patterns)" in page
-    assert page.count('src="data:image/png;base64,') >= 4
+    assert page.count('src="data:image/svg+xml;base64,') >= 4
     with open(graded / "report.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     assert {r["id"] for r in rows} == set(planted_class.made.ids)
