@@ -1322,14 +1322,8 @@ def _unchecked(answer: Answer, **changes: Any) -> Answer:
     tolerances, which can make no value unreadable or the key ungradable (it checks each
     mistake against the widened key itself)."""
     copy = object.__new__(Answer)
-    for name in _field_names_in_order(Answer):
-        object.__setattr__(copy, name, changes.get(name, getattr(answer, name)))
+    vars(copy).update(vars(answer), **changes)  # the fields are the instance's attributes
     return copy
-
-
-@cache
-def _field_names_in_order(cls: type) -> tuple[str, ...]:
-    return tuple(f.name for f in fields(cls))
 
 
 def distinguishable_answers(

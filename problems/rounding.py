@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 import numbers
 from decimal import Decimal, getcontext
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -93,6 +94,14 @@ def _parts(x: ArrayLike, sig: int, trailing_zeros: bool) -> tuple[str, int | Non
         if value.ndim:
             raise ParameterError("x", f"must be a single number, got shape {value.shape}")
         x = float(value)
+    trailing_zeros = bool(trailing_zeros)
+    if trailing_zeros or sig <= getcontext().prec:  # then a pure function of its arguments
+        return _exact_parts(x, sig, trailing_zeros)
+    return _float_parts(x, sig, trailing_zeros)
+
+
+def _float_parts(x: float, sig: int, trailing_zeros: bool) -> tuple[str, int | None]:
+    """:func:`_parts` of a finite float."""
     text = _digits(x, sig)
     mantissa, exponent = text.split("e")
     magnitude = abs(float(text))
@@ -106,6 +115,12 @@ def _parts(x: ArrayLike, sig: int, trailing_zeros: bool) -> tuple[str, int | Non
     if not trailing_zeros and "." in mantissa:
         mantissa = mantissa.rstrip("0").rstrip(".")
     return mantissa, int(exponent)
+
+
+_exact_parts = lru_cache(maxsize=4096)(_float_parts)
+""":func:`_float_parts` where no Decimal context rounds, remembered: a class's statements
+print the same rounded parameters again and again (0 and −0, the one pair of equal floats that
+differ, both print ``0``)."""
 
 
 def _positional(mantissa: str, exponent: int, trailing_zeros: bool) -> str:
