@@ -989,12 +989,7 @@ def _same_angle(x: float, v: float, answer: Answer) -> bool:
 
 
 def _same_vector(x: NDArray, v: NDArray, answer: Answer) -> bool:
-    return _norm(x - v) <= _vector_tolerance(v, answer.rtol, answer.atol)
-
-
-def _vector_tolerance(v: NDArray, rtol: float, atol: float) -> float:
-    """How far from the vector ``v`` a vector still matches it (``atol + rtol·‖v‖₂``)."""
-    return atol + rtol * _norm(v)
+    return _norm(x - v) <= answer.atol + answer.rtol * _norm(v)
 
 
 def _norm(x: NDArray) -> float:
@@ -1026,8 +1021,9 @@ def _matches(answer: Answer, x: Any, v: Any) -> bool:
 
 
 def _near(answer: Answer, v: Any) -> Callable[[Any], bool]:
-    """``x ↦ _matches(answer, x, v)`` for values read, with what depends on ``v`` alone (its
-    tolerance, :func:`_size`) worked out once: the key compared with each mistake."""
+    """``x ↦ _matches(answer, x, v)`` for values read (a scalar's are floats, a vector's float
+    arrays), with what depends on ``v`` alone (its tolerance, :func:`_size`) worked out once:
+    the key compared with each mistake."""
     size = _size(answer)
     if size is None:
         return lambda x: _matches(answer, x, v)
@@ -1210,7 +1206,7 @@ def _require_gradable_key(answer: Answer) -> None:
 
 
 def _check_depends_on(answer: Answer) -> None:
-    if answer.depends_on == () and type(answer.depends_on) is tuple:
+    if type(answer.depends_on) is tuple and not answer.depends_on:
         return  # none, as most answers: nothing to check or convert
     depends = tuple(answer.depends_on)
     if not all(isinstance(n, str) and n.isidentifier() and n != answer.name for n in depends):
