@@ -57,7 +57,7 @@ from __future__ import annotations
 import math
 import numbers
 import sys
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import asdict, dataclass, fields, replace
 from functools import cache, lru_cache, partial
 from typing import TYPE_CHECKING, Any, NamedTuple
@@ -269,11 +269,13 @@ class Answer:
         _require_gradable_key(self)
         if self.kind in ("vector", "expression"):  # the graded form knows the key: its length,
             form = _Form.of(self)  # the points where it is defined
-        object.__setattr__(self, "accepted", tuple(
-            _to_json(_read_key(form, v, "accepted")) for v in self.accepted))
+        if type(self.accepted) is not tuple or self.accepted:  # () as it is: most answers
+            object.__setattr__(self, "accepted", tuple(
+                _to_json(_read_key(form, v, "accepted")) for v in self.accepted))
         _check_depends_on(self)
         # each mistake read in the graded form, against the key read once
-        mistakes = tuple(_checked_mistake(self, m, form, key) for m in self.mistakes)
+        near_key = _near(self, key)
+        mistakes = tuple(_checked_mistake(self, m, form, near_key) for m in self.mistakes)
         object.__setattr__(self, "mistakes", mistakes)
         if len(mistakes) > 1 and len({m.name for m in mistakes}) != len(mistakes):
             raise ParameterError("mistakes", f"answer {self.name!r}: duplicate names "
@@ -730,6 +732,8 @@ def _read_key(form: _Form, value: Any, field: str) -> Any:
     """Read a value written by the template (key or mistake): malformed is a template bug."""
     if type(value) is float and form.kind in _NUMBER_KINDS and math.isfinite(value):
         return value  # what _read gives, without its calls: most of a key
+    if form.kind == "vector" and _finite_floats(value, form.length):
+        return np.array(value)  # what _read gives (_read_vector), without its calls
     try:
         return _read(form, value)
     except (_Missing, _Invalid) as err:
@@ -859,9 +863,15 @@ def _read_scalar(x: Any, form: _Form) -> float:
     return _number(x, unit=form.unit)
 
 
+def _finite_floats(x: Any, length: int | None) -> bool:
+    """Whether ``x`` is a non-empty list of finite floats, of ``length`` if given: a vector
+    that :func:`_read_vector` reads as ``np.array(x)``."""
+    return type(x) is list and bool(x) and (length is None or len(x) == length) \
+        and all(type(e) is float and math.isfinite(e) for e in x)
+
+
 def _read_vector(x: Any, form: _Form) -> NDArray[np.float64]:
-    if type(x) is list and x and (form.length is None or len(x) == form.length) \
-            and all(type(e) is float and math.isfinite(e) for e in x):
+    if _finite_floats(x, form.length):
         return np.array(x)  # what the checks below give a list of finite floats
     expected = f"a list of {form.length} numbers" if form.length else "a list of numbers"
     if not isinstance(x, list):
@@ -979,7 +989,14 @@ def _same_angle(x: float, v: float, answer: Answer) -> bool:
 
 
 def _same_vector(x: NDArray, v: NDArray, answer: Answer) -> bool:
-    return bool(np.linalg.norm(x - v) <= answer.atol + answer.rtol * np.linalg.norm(v))
+    return _norm(x - v) <= answer.atol + answer.rtol * _norm(v)
+
+
+def _norm(x: NDArray) -> float:
+    """``np.linalg.norm(x)`` of a 1-d float array, which is ``sqrt(x.dot(x))`` (numpy's own
+    path for it), without its checks of shape, type and arguments; both square roots are
+    correctly rounded, so the result is the same float."""
+    return math.sqrt(x.dot(x))
 
 
 def _same_expression(x: str, v: str, answer: Answer) -> bool:
@@ -1001,6 +1018,17 @@ _COMPARATORS = {
 
 def _matches(answer: Answer, x: Any, v: Any) -> bool:
     return _COMPARATORS[answer.kind](x, v, answer)
+
+
+def _near(answer: Answer, v: Any) -> Callable[[Any], bool]:
+    """``x ↦ _matches(answer, x, v)`` for values read (a scalar's are floats, a vector's float
+    arrays), with what depends on ``v`` alone (its tolerance, :func:`_size`) worked out once:
+    the key compared with each mistake."""
+    size = _size(answer)
+    if size is None:
+        return lambda x: _matches(answer, x, v)
+    tolerance = answer.atol + answer.rtol * size(v)
+    return lambda x: size(x - v) <= tolerance
 
 
 def _show(form: _Form, value: Any) -> str:
@@ -1090,6 +1118,8 @@ def _validate_fields(answer: Answer) -> None:
                              f"{answer.kind!r}")
     for field in ("rtol", "atol", "points"):
         value = getattr(answer, field)
+        if type(value) is float and 0 <= value < math.inf:
+            continue  # finite and ≥ 0 (NaN fails both), and float(value) is value
         real = type(value) is float or (
             not isinstance(value, bool) and isinstance(value, numbers.Real))
         if not real or not math.isfinite(value) or value < 0:
@@ -1099,7 +1129,9 @@ def _validate_fields(answer: Answer) -> None:
         if not isinstance(getattr(answer, field), str):
             raise ParameterError(field, f"answer {name!r}: must be a string")
     for field in ("mistakes", "options", "symbols"):
-        object.__setattr__(answer, field, tuple(getattr(answer, field)))
+        value = getattr(answer, field)
+        if type(value) is not tuple:  # tuple(value) would be value itself
+            object.__setattr__(answer, field, tuple(value))
     _validate_kind_fields(answer)
 
 
@@ -1174,6 +1206,8 @@ def _require_gradable_key(answer: Answer) -> None:
 
 
 def _check_depends_on(answer: Answer) -> None:
+    if type(answer.depends_on) is tuple and not answer.depends_on:
+        return  # none, as most answers: nothing to check or convert
     depends = tuple(answer.depends_on)
     if not all(isinstance(n, str) and n.isidentifier() and n != answer.name for n in depends):
         raise ParameterError("depends_on", f"answer {answer.name!r}: names of other answers, "
@@ -1182,23 +1216,28 @@ def _check_depends_on(answer: Answer) -> None:
 
 
 def _is_zero(value: float | list[float]) -> bool:
-    """Whether a read scalar, angle or vector key is exactly zero (``not np.any``)."""
-    return value == 0.0 if type(value) is float else not np.any(value)
+    """Whether a read scalar, angle or vector key (a float, a list of floats) is exactly zero:
+    ``not np.any(value)``, which for floats is ``not any(value)`` (a float is true when
+    nonzero, NaN included), without making an array of the list."""
+    return value == 0.0 if type(value) is float else not any(value)
 
 
-def _checked_mistake(answer: Answer, mistake: Any, form: _Form, key: Any) -> Mistake:
-    """``mistake`` read in ``form``; a ParameterError if it matches the (read) ``key``."""
+def _checked_mistake(answer: Answer, mistake: Any, form: _Form,
+                     near_key: Callable[[Any], bool]) -> Mistake:
+    """``mistake`` read in ``form``; a ParameterError if it matches the (read) key, which
+    ``near_key`` tells (:func:`_near`)."""
     if not isinstance(mistake, Mistake):
         raise ParameterError("mistakes", f"answer {answer.name!r}: not a Mistake: {mistake!r}")
     value = _read_key(form, mistake.value, "mistakes")
-    if _matches(answer, value, key):
+    if near_key(value):
         raise ParameterError(
             "mistakes",
             f"answer {answer.name!r}: mistake {mistake.name!r} is indistinguishable from the key "
             "within tolerance",
         )
-    plain = _to_json(value)
-    return mistake if plain is mistake.value else Mistake(mistake.name, plain, mistake.feedback)
+    if value is mistake.value:  # read as it was written (a float): already plain JSON
+        return mistake
+    return Mistake(mistake.name, _to_json(value), mistake.feedback)
 
 
 def _known_keys(cls: type, d: Mapping[str, Any], what: str) -> dict[str, Any]:
@@ -1225,16 +1264,19 @@ def mistakes_distinguishable(answer: Answer, margin: float = 5.0) -> bool:
     """
     if not answer.mistakes:
         return True
-    wide = _unchecked(answer, rtol=margin * answer.rtol, atol=margin * answer.atol)
-    if (answer.kind == "scalar" or (answer.kind == "angle" and answer.period is None)) \
-            and wide.rtol >= 0 and wide.atol >= 0:
-        return _numbers_apart((wide.value, *wide.accepted), [m.value for m in wide.mistakes],
-                              wide.rtol, wide.atol)
+    rtol, atol = margin * answer.rtol, margin * answer.atol
+    size = _size(answer)
+    if size is abs:  # the floats the answer holds are read already
+        return _apart((answer.value, *answer.accepted), [m.value for m in answer.mistakes],
+                      rtol, atol, size)
+    wide = _unchecked(answer, rtol=rtol, atol=atol)
     form = _Form.of(wide)
     keys = [_read_key(form, v, "value") for v in (wide.value, *wide.accepted)]
+    values = (_read_key(form, m.value, "mistakes") for m in wide.mistakes)  # each when reached
+    if size is not None:
+        return _apart(keys, values, rtol, atol, size)
     seen: list = []
-    for mistake in wide.mistakes:  # what grade(wide, mistake.value) names, without its reads
-        value = _read_key(form, mistake.value, "mistakes")
+    for value in values:  # what grade(wide, mistake.value) names, without its reads
         if any(_matches(wide, value, v) for v in (*keys, *seen)) \
                 or not _matches(wide, value, value):
             return False
@@ -1242,16 +1284,31 @@ def mistakes_distinguishable(answer: Answer, margin: float = 5.0) -> bool:
     return True
 
 
-def _numbers_apart(keys: tuple[float, ...], mistakes: list[float], rtol: float,
-                   atol: float) -> bool:
-    """:func:`mistakes_distinguishable` of a scalar (an angle without a period): the same
-    comparisons as :func:`_within`'s, on the floats the answer holds (each matches itself:
-    its tolerances are ≥ 0)."""
-    seen: list[float] = []
+def _size(answer: Answer) -> Callable[[Any], float] | None:
+    """``abs`` for a scalar (an angle without a period), :func:`_norm` for a vector: the kinds
+    whose values (read) match when ``size(x − v) ≤ atol + rtol·size(v)`` (:func:`_within` of
+    two floats, :func:`_same_vector`); None for the others."""
+    kind = answer.kind
+    if kind == "scalar" or (kind == "angle" and answer.period is None):
+        return abs
+    return _norm if kind == "vector" else None
+
+
+def _apart(keys: Iterable[Any], mistakes: Iterable[Any], rtol: float, atol: float,
+           size: Callable[[Any], float]) -> bool:
+    """:func:`mistakes_distinguishable` of values (read) compared by their ``size``
+    (:func:`_size`), with tolerances ``rtol`` and ``atol``: each reference's tolerance worked
+    out once. A mistake matches itself when its tolerance is ≥ 0 (``size(x − x)`` is 0: it
+    is finite)."""
+    known = [(v, atol + rtol * size(v)) for v in keys]
     for x in mistakes:
-        if any(abs(x - v) <= atol + rtol * abs(v) for v in (*keys, *seen)):
+        for v, tolerance in known:
+            if size(x - v) <= tolerance:
+                return False
+        tolerance = atol + rtol * size(x)
+        if not 0.0 <= tolerance:
             return False
-        seen.append(x)
+        known.append((x, tolerance))
     return True
 
 
@@ -1261,14 +1318,8 @@ def _unchecked(answer: Answer, **changes: Any) -> Answer:
     tolerances, which can make no value unreadable or the key ungradable (it checks each
     mistake against the widened key itself)."""
     copy = object.__new__(Answer)
-    for name in _field_names_in_order(Answer):
-        object.__setattr__(copy, name, changes.get(name, getattr(answer, name)))
+    vars(copy).update(vars(answer), **changes)  # the fields are the instance's attributes
     return copy
-
-
-@cache
-def _field_names_in_order(cls: type) -> tuple[str, ...]:
-    return tuple(f.name for f in fields(cls))
 
 
 def distinguishable_answers(

@@ -152,6 +152,11 @@ def generator_version() -> str:
         return "0+unknown"
 
 
+_SEED_JSON = json.JSONEncoder(ensure_ascii=False, separators=(",", ":"))
+"""What ``json.dumps(payload, ensure_ascii=False, separators=(",", ":"))`` encodes with, made
+once: the text hashed into a student's seeds (:func:`variant_seed`, :func:`pool_member`)."""
+
+
 def variant_seed(seed: int, student_id: str, question: int, family: str, reroll: int = 0) -> int:
     """The 256-bit integer seeding one student's question (stable everywhere; no ``hash()``).
 
@@ -162,11 +167,8 @@ def variant_seed(seed: int, student_id: str, question: int, family: str, reroll:
     >>> variant_seed(1, "alice", 1, "rod") == variant_seed(1, "alice", 1, "rod", reroll=1)
     False
     """
-    payload = json.dumps(
-        ["eulertop-variant", 1, int(seed), student_id, int(question), family, int(reroll)],
-        ensure_ascii=False,
-        separators=(",", ":"),
-    )
+    payload = _SEED_JSON.encode(
+        ["eulertop-variant", 1, int(seed), student_id, int(question), family, int(reroll)])
     return int.from_bytes(hashlib.sha256(payload.encode("utf-8")).digest(), "big")
 
 
@@ -191,10 +193,8 @@ def pool_member(pool: Sequence[str], seed: int, student_id: str, question: int,
     """
     if len(pool) == 1:  # what the hash below gives (any number modulo 1 is 0), without it
         return pool[0]
-    payload = json.dumps(
-        ["eulertop-pool", 1, int(seed), student_id, int(question), list(pool), int(reroll)],
-        ensure_ascii=False, separators=(",", ":"),
-    )
+    payload = _SEED_JSON.encode(
+        ["eulertop-pool", 1, int(seed), student_id, int(question), list(pool), int(reroll)])
     digest = int.from_bytes(hashlib.sha256(payload.encode("utf-8")).digest(), "big")
     return pool[digest % len(pool)]
 

@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import math
 import numbers
-from decimal import Decimal
+from decimal import Decimal, getcontext
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -28,6 +29,10 @@ __all__ = ["PLAIN_RANGE", "format_sig", "latex_sig", "round_sig"]
 PLAIN_RANGE = (1e-3, 1e5)
 """Rounded magnitudes in ``[low, high)`` print positionally (``0.00123``, ``12300``); others, in
 scientific notation (``1.23e-4``, ``1.23e5``). Zero prints as ``0``."""
+
+
+_FLOATS = frozenset({float, np.float64})
+"""Types of one number whose ``float`` is its value (no ``__float__`` of a subclass)."""
 
 
 def _check_sig(sig: int) -> int:
@@ -71,6 +76,8 @@ def round_sig(x: ArrayLike, sig: int) -> float | NDArray[np.float64]:
     [0.000123, -10.0]
     """
     sig = _check_sig(sig)
+    if type(x) in _FLOATS and math.isfinite(x):  # as_real's array holds float(x)
+        return float(_digits(float(x), sig))
     if isinstance(x, float):  # one number, the common case: what the array path gives for it
         return float(_digits(float(as_real("x", x)), sig))
     values = as_real("x", x)
@@ -87,18 +94,49 @@ def _parts(x: ArrayLike, sig: int, trailing_zeros: bool) -> tuple[str, int | Non
         if value.ndim:
             raise ParameterError("x", f"must be a single number, got shape {value.shape}")
         x = float(value)
+    trailing_zeros = bool(trailing_zeros)
+    if trailing_zeros or sig <= getcontext().prec:  # then a pure function of its arguments
+        return _exact_parts(x, sig, trailing_zeros)
+    return _float_parts(x, sig, trailing_zeros)
+
+
+def _float_parts(x: float, sig: int, trailing_zeros: bool) -> tuple[str, int | None]:
+    """:func:`_parts` of a finite float."""
     text = _digits(x, sig)
     mantissa, exponent = text.split("e")
     magnitude = abs(float(text))
-    if magnitude == 0 or PLAIN_RANGE[0] <= magnitude < PLAIN_RANGE[1]:
-        number = Decimal(text)
-        if not trailing_zeros:
-            number = number.normalize()  # 2.50 → 2.5, 1.230E+3 → 1.23E+3 (printed 1230)
-        plain = f"{number:f}"
-        return ("0" if float(text) == 0 else plain), None
+    if magnitude == 0:
+        return "0", None
+    if PLAIN_RANGE[0] <= magnitude < PLAIN_RANGE[1]:
+        if trailing_zeros or sig <= getcontext().prec:  # normalize() would round nothing
+            return _positional(mantissa, int(exponent), trailing_zeros), None
+        number = Decimal(text).normalize()  # rounded to the context's precision
+        return f"{number:f}", None
     if not trailing_zeros and "." in mantissa:
         mantissa = mantissa.rstrip("0").rstrip(".")
     return mantissa, int(exponent)
+
+
+_exact_parts = lru_cache(maxsize=4096)(_float_parts)
+""":func:`_float_parts` where no Decimal context rounds, remembered: a class's statements
+print the same rounded parameters again and again (0 and −0, the one pair of equal floats that
+differ, both print ``0``)."""
+
+
+def _positional(mantissa: str, exponent: int, trailing_zeros: bool) -> str:
+    """``f"{Decimal(f'{mantissa}e{exponent}'):f}"`` of a nonzero mantissa (``-1.230``), its
+    trailing zeros first dropped unless ``trailing_zeros`` (as ``normalize()`` drops them when
+    it rounds nothing): the digits, and the point ``exponent + 1`` places after the first."""
+    sign = "-" if mantissa[0] == "-" else ""
+    digits = mantissa.lstrip("-").replace(".", "")
+    if not trailing_zeros:
+        digits = digits.rstrip("0")  # not empty: the first digit of a nonzero number is not 0
+    point = exponent + 1  # digits before the decimal point
+    if point <= 0:
+        return f"{sign}0.{'0' * -point}{digits}"
+    if point >= len(digits):
+        return f"{sign}{digits}{'0' * (point - len(digits))}"
+    return f"{sign}{digits[:point]}.{digits[point:]}"
 
 
 def format_sig(x: float, sig: int, *, trailing_zeros: bool = False) -> str:

@@ -47,6 +47,8 @@ def as_real(
 
 def positive(name: str, value: ArrayLike) -> NDArray[np.float64]:
     """`as_real`, and every element > 0 (masses, moments of inertia, lengths)."""
+    if isinstance(value, float) and 0 < value < math.inf:  # NaN fails both: as_real refuses it
+        return np.asarray(value, dtype=float)  # what as_real gives, and it is > 0
     arr = as_real(name, value)
     if any_true(arr <= 0):
         raise ParameterError(name, f"must be positive, got {_worst(arr, arr <= 0)}")

@@ -11,19 +11,33 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from dataclasses import fields, replace
+from types import SimpleNamespace
+from typing import Any
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from problems.answers import (
     Answer,
     Mistake,
     RubricItem,
+    _Form,
+    _Invalid,
+    _is_zero,
+    _Missing,
+    _norm,
+    _read,
+    _read_key,
+    _unchecked,
     distinguishable_answers,
     grade,
     mistakes_distinguishable,
     numbers_of,
+    read_value,
 )
 from solver.parameters import ParameterError
 
@@ -214,3 +228,127 @@ def test_following_checks_the_names_it_is_given_and_keeps_the_rest():
     for names, fragment in ((("t",), "names of other answers"), (("2L",), "names of other")):
         with pytest.raises(ParameterError, match=fragment):
             answer.following(*names)
+
+
+# -- the fast paths of reading and comparing (issue 34) agree with the generic ones
+
+_FINITE = st.floats(allow_nan=False, allow_infinity=False)
+_ELEMENT = st.one_of(st.floats(), st.integers(-3, 3), st.booleans(),
+                     st.floats().map(np.float64), st.just([1.0]), st.just("1.0"))
+
+
+def _vector_form(length: int | None) -> _Form:
+    return _Form("w", "vector", "", 1.0, length, (), (), None)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(_FINITE, min_size=1, max_size=6))
+def test_the_norm_of_a_vector_is_numpys_to_the_last_bit(x):
+    array = np.array(x)
+    with np.errstate(over="ignore"):  # both overflow alike, to infinity
+        assert _norm(array) == float(np.linalg.norm(array))
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(_ELEMENT, max_size=4) | _ELEMENT, st.sampled_from([None, 3]))
+def test_a_vector_key_is_read_as_the_generic_reader_reads_it(x, length):
+    """_read_key's fast path for a list of finite floats gives what _read gives, and any other
+    value is refused with _read's message."""
+    form = _vector_form(length)
+    try:
+        expected = _read(form, x)
+    except (_Invalid, _Missing) as err:
+        with pytest.raises(ParameterError) as refused:
+            _read_key(form, x, "value")
+        assert str(refused.value) == f"value: answer 'w': {str(err) or 'no value (None)'}"
+        return
+    read = _read_key(form, x, "value")
+    assert read.dtype == expected.dtype and read.tobytes() == expected.tobytes()
+
+
+@given(st.lists(st.floats(allow_infinity=False), min_size=1, max_size=4))
+def test_a_zero_vector_key_is_told_as_numpy_tells_it(x):
+    assert _is_zero(x) == (not np.any(x))
+
+
+def _reference_match(answer: Any, x, v) -> bool:
+    """The comparisons as written before issue 34 (np.linalg.norm, each tolerance anew), for
+    values read (``answer``: anything with ``kind``, ``rtol`` and ``atol``)."""
+    if answer.kind == "vector":
+        return bool(np.linalg.norm(x - v) <= answer.atol + answer.rtol * np.linalg.norm(v))
+    return abs(x - v) <= answer.atol + answer.rtol * abs(v)
+
+
+def _reference_distinguishable(answer: Answer, margin: float) -> bool:
+    """mistakes_distinguishable as written before issue 34: every value read, each compared
+    with the keys, the mistakes before it and itself."""
+    wide = _unchecked(answer, rtol=margin * answer.rtol, atol=margin * answer.atol)
+    keys = [read_value(wide, v) for v in (wide.value, *wide.accepted)]
+    seen: list = []
+    for mistake in wide.mistakes:
+        value = read_value(wide, mistake.value)
+        if any(_reference_match(wide, value, v) for v in (*keys, *seen)) \
+                or not _reference_match(wide, value, value):
+            return False
+        seen.append(value)
+    return True
+
+
+_TOLERANCE = st.sampled_from([0.0, 2**-8, 1e-3, 0.1, 1e300])
+_MARGIN = st.sampled_from([0.0, 1.0, 2.0, 5.0, -1.0, math.nan, math.inf])
+
+
+@st.composite
+def _near_values(draw, kind: str) -> tuple:
+    """A key, mistakes around it (some exactly a power-of-two step away, at the edge of a
+    tolerance of powers of two) and the tolerances."""
+    n = 3 if kind == "vector" else 1
+    key = np.array(draw(st.lists(st.floats(-4, 4), min_size=n, max_size=n)))
+    steps = draw(st.lists(st.lists(st.sampled_from([0.0, 2**-9, -2**-8, 2**-7, 1e-3, 3.0]),
+                                   min_size=n, max_size=n), min_size=1, max_size=5))
+    mistakes = [key + np.array(step) for step in steps]
+    as_plain = (lambda a: a.tolist()) if kind == "vector" else (lambda a: float(a[0]))
+    return as_plain(key), [as_plain(m) for m in mistakes], draw(_TOLERANCE), draw(_TOLERANCE)
+
+
+@settings(max_examples=400, deadline=None)
+@given(st.sampled_from(["scalar", "angle", "vector"]).flatmap(
+    lambda kind: st.tuples(st.just(kind), _near_values(kind), _MARGIN)))
+def test_distinguishing_mistakes_compares_as_before(case):
+    """The key against each mistake (at construction: refused or not, with the same message)
+    and mistakes_distinguishable, for every margin, against the comparisons spelled out."""
+    kind, (key, values, rtol, atol), margin = case
+    mistakes = tuple(Mistake(f"m{i}", v, "?") for i, v in enumerate(values))
+    try:
+        answer = Answer("x", kind, key, rtol=rtol, atol=atol, mistakes=mistakes)
+    except ParameterError as err:
+        if err.parameter == "atol":  # a zero key without atol: refused before any mistake
+            assert atol == 0 and not np.any(key)
+            return
+        read = (lambda v: np.array(v)) if kind == "vector" else (lambda v: v)
+        tolerances = SimpleNamespace(kind=kind, rtol=rtol, atol=atol)
+        first = next(m for m in mistakes
+                     if _reference_match(tolerances, read(m.value), read(key)))
+        assert str(err) == (f"mistakes: answer 'x': mistake {first.name!r} is "
+                            "indistinguishable from the key within tolerance")
+        return
+    assert mistakes_distinguishable(answer, margin) == _reference_distinguishable(answer, margin)
+
+
+@pytest.mark.parametrize("value", [0.0, -0.0, 5e-324, 1e-3, 1.7e308, 1, np.float64(2e-3),
+                                   math.inf, -math.inf, math.nan, -1e-300, -1, True, "0.1"])
+def test_a_tolerance_is_refused_or_kept_as_before(value):
+    """rtol, atol and points: kept as float(value) (the very float given) when a finite real
+    number ≥ 0, else refused naming the field and the value."""
+    ok = not isinstance(value, bool | str) and math.isfinite(value) and value >= 0
+    for field in ("rtol", "atol", "points"):
+        if not ok:
+            with pytest.raises(ParameterError, match=re.escape(
+                    f"{field}: answer 'x': must be finite and ≥ 0, got {value!r}")):
+                Answer("x", "scalar", 1.0, **{field: value})
+            continue
+        kept = getattr(Answer("x", "scalar", 1.0, **{field: value}), field)
+        assert type(kept) is float and kept == value
+        assert math.copysign(1.0, kept) == math.copysign(1.0, value)
+        if type(value) is float:
+            assert kept is value

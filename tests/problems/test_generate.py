@@ -9,6 +9,8 @@ import subprocess
 import sys
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from problems.answers import Answer
 from problems.generate import (
@@ -18,6 +20,7 @@ from problems.generate import (
     generate_assignment,
     json_text,
     key_hash,
+    pool_member,
     reroll_students,
     resolve_problems,
     student_answers,
@@ -56,6 +59,24 @@ def test_variant_seed_is_the_documented_sha256():
     payload = '["eulertop-variant",1,7,"alice",2,"rod",0]'
     expected = int.from_bytes(hashlib.sha256(payload.encode()).digest(), "big")
     assert variant_seed(7, "alice", 2, "rod") == expected
+
+
+def _sha256_of_json(payload: list) -> int:
+    text = json.dumps(payload, ensure_ascii=False, separators=(",", ":"))
+    return int.from_bytes(hashlib.sha256(text.encode("utf-8")).digest(), "big")
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(-2**70, 2**70), st.text(), st.integers(1, 99), st.text(),
+       st.integers(0, 9) | st.booleans())
+def test_seeds_hash_the_text_json_dumps_writes(seed, student_id, question, family, reroll):
+    """The encoder made once writes what json.dumps writes, whatever the id and the family
+    (quotes, backslashes, non-ASCII, control characters)."""
+    assert variant_seed(seed, student_id, question, family, reroll) == _sha256_of_json(
+        ["eulertop-variant", 1, seed, student_id, question, family, int(reroll)])
+    pool = [family, student_id]
+    assert pool_member(pool, seed, student_id, question, reroll) == pool[_sha256_of_json(
+        ["eulertop-pool", 1, seed, student_id, question, pool, int(reroll)]) % 2]
 
 
 def test_variant_seed_does_not_depend_on_the_interpreter_run():

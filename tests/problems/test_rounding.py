@@ -12,8 +12,10 @@ from decimal import ROUND_HALF_EVEN, Decimal
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from problems.rounding import PLAIN_RANGE, format_sig, latex_sig, round_sig
+from problems.rounding import PLAIN_RANGE, _parts, format_sig, latex_sig, round_sig
 from solver.parameters import ParameterError
 
 
@@ -144,3 +146,41 @@ def test_bad_input_is_refused(x: object, sig: object, parameter: str) -> None:
 def test_format_sig_wants_one_number() -> None:
     with pytest.raises(ParameterError, match="single number"):
         format_sig([1.0, 2.0], 3)
+
+
+def _decimal_parts(x: float, sig: int, trailing_zeros: bool) -> tuple[str, int | None]:
+    """:func:`problems.rounding._parts` as written before issue 34: positional notation by
+    ``Decimal`` (normalized, without trailing zeros, unless ``trailing_zeros``)."""
+    text = f"{x:.{sig - 1}e}"
+    mantissa, exponent = text.split("e")
+    magnitude = abs(float(text))
+    if magnitude == 0 or PLAIN_RANGE[0] <= magnitude < PLAIN_RANGE[1]:
+        number = Decimal(text) if trailing_zeros else Decimal(text).normalize()
+        return ("0" if float(text) == 0 else f"{number:f}"), None
+    if not trailing_zeros and "." in mantissa:
+        mantissa = mantissa.rstrip("0").rstrip(".")
+    return mantissa, int(exponent)
+
+
+_DECADES = st.builds(lambda m, e: m * 10.0 ** e, st.floats(-10, 10), st.integers(-6, 7))
+
+
+@settings(max_examples=1000, deadline=None)
+@given(st.floats(allow_nan=False, allow_infinity=False) | _DECADES, st.integers(1, 32),
+       st.booleans())
+def test_positional_digits_are_the_decimal_modules(x: float, sig: int,
+                                                   trailing_zeros: bool) -> None:
+    """The digits and point placed by string work, as ``Decimal`` places them (past 28
+    figures, the context's precision, ``normalize`` rounds: the Decimal path is kept there)."""
+    assert _parts(x, sig, trailing_zeros) == _decimal_parts(x, sig, trailing_zeros)
+
+
+@pytest.mark.parametrize("sig", [1, 3, 17, 29])
+def test_one_number_is_rounded_as_an_array_of_it(sig: int) -> None:
+    """A plain float's shortest path, a numpy float's and an array's give the same float."""
+    for x in (2.675, -0.0, 1.5e-310, -1e300, 9.9995):
+        array = round_sig(np.array([x]), sig)
+        for value in (x, np.float64(x)):
+            r = round_sig(value, sig)
+            assert type(r) is float and r == array[0]
+            assert math.copysign(1.0, r) == math.copysign(1.0, array[0])

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -64,3 +65,24 @@ def test_principal_moments_broadcast_as_before():
     np.testing.assert_array_equal(b, [2.0, 2.0])
     with pytest.raises(ParameterError, match=r"^I3: violates .*\(I3 = 3\.5 exceeds"):
         principal_moments([1.5, 1.0], 2.0, [2.5, 3.5])
+
+
+@pytest.mark.parametrize("value", [2.5, 5e-324, 1.7e308, np.float64(3.0), 0.0, -0.0, -2.0,
+                                   math.nan, math.inf, -math.inf, np.float64("nan"), 2,
+                                   np.array(1.5), [1.0, 2.0]])
+def test_positive_of_a_float_is_as_real_then_the_sign(value):
+    """positive's short path for a float > 0 gives what the checks give, and refuses the rest
+    with their messages."""
+    try:
+        arr = as_real("M", value)
+        expected = None if not (arr <= 0).any() else \
+            f"M: must be positive, got {np.asarray(arr)[arr <= 0].ravel()[0]:.6g}"
+    except ParameterError as err:
+        expected = str(err)
+    if expected is not None:
+        with pytest.raises(ParameterError, match=f"^{re.escape(expected)}$"):
+            positive("M", value)
+        return
+    got = positive("M", value)
+    assert type(got) is np.ndarray and got.dtype == arr.dtype and got.shape == arr.shape
+    assert got.tobytes() == arr.tobytes()
