@@ -71,7 +71,7 @@ import numpy as np
 from problems.answers import Answer
 from problems.deadlines import LatePolicy
 from problems.family import Family, FamilyError
-from problems.notebook import DEFAULT_INSTALL, build_notebooks, notebook_text
+from problems.notebook import DEFAULT_INSTALL, notebook_texts
 from problems.roster import Roster
 from problems.settings import QuestionSettings
 from problems.variant import Variant, variable_name
@@ -429,11 +429,9 @@ def _write_student(
     """Write a student's release and solutions notebooks; ``validate`` checks them against the
     nbformat schema (:func:`problems.notebook.notebook_text`); ``install``: what their first
     cell says to install for the check (default :data:`problems.notebook.DEFAULT_INSTALL`)."""
-    notebooks = build_notebooks(title, row, variants, families,  # sharing their common cells
-                                install or DEFAULT_INSTALL)
-    memo: dict = {}  # so that notebook_text encodes each shared cell once
-    for sub, nb in zip((RELEASE, SOLUTIONS), notebooks, strict=True):
-        text = notebook_text(nb, validate=validate, memo=memo)
+    texts = notebook_texts(title, row, variants, families, install or DEFAULT_INSTALL,
+                           validate=validate)
+    for sub, text in zip((RELEASE, SOLUTIONS), texts, strict=True):
         (folder / sub / f"{row['id']}.ipynb").write_text(text, encoding="utf-8")
 
 

@@ -40,7 +40,8 @@ from __future__ import annotations
 import html
 import json
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from functools import lru_cache
 from typing import Any
 
 import nbformat
@@ -53,7 +54,6 @@ from problems.written import PLACEHOLDER
 
 FORMAT_VERSION = 1
 KERNELSPEC = {"name": "python3", "display_name": "Python 3 (ipykernel)", "language": "python"}
-_READ_ONLY = {"editable": False, "deletable": False}
 
 DEFAULT_INSTALL = "eulertop-check"
 """What ``%pip install`` is given for the checker (the student package, ``student/``), unless
@@ -210,12 +210,39 @@ def build_notebooks(
     return release, solutions
 
 
+def notebook_texts(
+    title: str, student: Mapping[str, str], variants: Sequence[Variant],
+    families: Mapping[str, Any] | None = None, install: str = DEFAULT_INSTALL,
+    *, validate: bool = True,
+) -> tuple[str, str]:
+    """The text of the release and the solutions notebook of one student: the same as
+    :func:`notebook_text` of each of :func:`build_notebooks`, cheaper for a class.
+
+    Every cell is encoded by :func:`_cell_text`, and every question's record in the metadata
+    by :func:`_question_text`, which keep the texts they have made by content: a question's
+    answer cell in the release, its written parts, its record are often the same for many
+    students, and then encoded once per process. ``validate`` checks the texts against the
+    nbformat schema (:func:`notebook_text`).
+    """
+    memo: dict = {}  # the metadata both notebooks share, encoded once
+    texts = tuple(_indented(nb, "\n", memo) + "\n" for nb in _notebooks(
+        title, student, variants, (False, True), families, install, _cell_text, _question_text))
+    if validate:
+        for text in texts:
+            _validate(json.loads(text))
+    return texts
+
+
 def _notebooks(
     title: str, student: Mapping[str, str], variants: Sequence[Variant],
     kinds: Sequence[bool], families: Mapping[str, Any] | None = None,
-    install: str = DEFAULT_INSTALL,
+    install: str = DEFAULT_INSTALL, cell: Callable[..., Any] | None = None,
+    record: Callable[[dict], Any] | None = None,
 ) -> list[dict]:
-    """One notebook per entry of ``kinds`` (True: solutions), sharing what they have in common."""
+    """One notebook per entry of ``kinds`` (True: solutions), sharing what they have in common;
+    each cell made by ``cell`` (the arguments of :func:`_cell`; default: :func:`_cell`), each
+    question's record in the metadata by ``record`` (of the record; default: as it is)."""
+    cell = cell or _cell
     questions = [
         {"question": k, "family": v.family, "title": v.title,
          "answers": [answer_spec(a, k) for a in v.answers]}
@@ -225,11 +252,13 @@ def _notebooks(
                                 install=_one_line(install))
     rules = _rules_cell(student, notebook_conventions(variants, families))
     shared = [
-        _cell("markdown", "title", heading, _READ_ONLY),
-        _cell("markdown", "rules", rules, _READ_ONLY),
-        _cell("code", "parameters", _parameter_cell(variants), _READ_ONLY),
+        cell("markdown", "title", heading),
+        cell("markdown", "rules", rules),
+        cell("code", "parameters", _parameter_cell(variants)),
     ]
-    statements = [_statement_cell(k, v) for k, v in enumerate(variants, start=1)]
+    statements = [cell("markdown", f"q{k}-statement", _statement(k, v), question=k)
+                  for k, v in enumerate(variants, start=1)]
+    records = questions if record is None else [record(q) for q in questions]
     notebooks = []
     for solutions in kinds:
         cells = list(shared)
@@ -240,9 +269,9 @@ def _notebooks(
                      if a.kind != WRITTEN]
             cells.append(statement)
             if lines:
-                cells.append(_cell("code", f"q{k}-answer", "\n".join(lines),
-                                   {"deletable": False}, question=k))
-            cells += _written_cells(k, variant, solutions)
+                cells.append(cell("code", f"q{k}-answer", "\n".join(lines), editable=True,
+                                  question=k))
+            cells += _written_cells(k, variant, solutions, cell)
         metadata = {
             "kernelspec": dict(KERNELSPEC),
             "language_info": {"name": "python"},
@@ -251,7 +280,7 @@ def _notebooks(
                 "notebook": "solutions" if solutions else "release",
                 "student": student["id"],
                 "assignment": title,
-                "questions": questions,
+                "questions": records,
             },
         }
         notebooks.append({"nbformat": v4.nbformat, "nbformat_minor": v4.nbformat_minor,
@@ -259,18 +288,20 @@ def _notebooks(
     return notebooks
 
 
-def _statement_cell(k: int, variant: Variant) -> dict:
-    """Question ``k``'s statement: its title, statement, and how its answers are compared
+def _statement(k: int, variant: Variant) -> str:
+    """Question ``k``'s statement cell: its title, statement, and how its answers are compared
     (written parts have their own cells)."""
     compared = [a for a in variant.answers if a.kind != WRITTEN]
     statement = f"## Question {k}: {_one_line(variant.title)}\n\n{variant.statement.strip()}"
     if compared:
         statement += f"\n\n{comparison_line(compared, k)}"
-    return _cell("markdown", f"q{k}-statement", statement, _READ_ONLY, question=k)
+    return statement
 
 
-def _written_cells(k: int, variant: Variant, solutions: bool) -> list[dict]:
-    """The prompt and answer cells of question ``k``'s written parts (module docstring)."""
+def _written_cells(k: int, variant: Variant, solutions: bool,
+                   cell: Callable[..., Any]) -> list[Any]:
+    """The prompt and answer cells of question ``k``'s written parts (module docstring), each
+    made by ``cell`` (:func:`_notebooks`)."""
     cells = []
     parts = [a for a in variant.answers if a.kind == WRITTEN]
     for j, answer in enumerate(parts, start=1):
@@ -278,11 +309,10 @@ def _written_cells(k: int, variant: Variant, solutions: bool) -> list[dict]:
         points = f"{answer.points:g} point{'' if answer.points == 1 else 's'}"
         prompt = (f"**Written answer `{variable}`** ({points}, scored by a person against a "
                   f"rubric; write it in the cell below)\n\n{answer.value.strip()}")
-        cells.append(_cell("markdown", f"q{k}-w{j}-prompt", prompt, _READ_ONLY, question=k))
+        cells.append(cell("markdown", f"q{k}-w{j}-prompt", prompt, question=k))
         text = rubric_text(answer) if solutions else PLACEHOLDER
-        cell = _cell("markdown", f"q{k}-w{j}-written", text, {"deletable": False}, question=k)
-        cell["metadata"]["eulertop"]["written"] = variable
-        cells.append(cell)
+        cells.append(cell("markdown", f"q{k}-w{j}-written", text, editable=True, question=k,
+                          written=variable))
     return cells
 
 
@@ -292,13 +322,19 @@ def rubric_text(answer: Answer) -> str:
     return f"*Rubric ({answer.points:g} points):*\n\n{items}"
 
 
-def _cell(kind: str, cell_id: str, source: str, flags: dict, question: int | None = None) -> dict:
+def _cell(kind: str, cell_id: str, source: str, editable: bool = False,
+          question: int | None = None, written: str | None = None) -> dict:
+    """A cell as a plain dict: generated cells are never deletable, only answer cells editable;
+    ``written``: the variable of the written answer the cell holds."""
     # Built as plain dicts: nbformat.v4.new_*_cell validates every cell against the schema, which
     # made it most of the generator's run time; notebook_text validates the whole notebook once.
     role = cell_id.split("-")[-1]
-    metadata = {**flags, "eulertop": {"role": role}}
+    metadata: dict = {"deletable": False} if editable else {"editable": False, "deletable": False}
+    metadata["eulertop"] = {"role": role}
     if question is not None:
         metadata["eulertop"]["question"] = question
+    if written is not None:
+        metadata["eulertop"]["written"] = written
     # Sources as lists of lines, the way nbformat writes them (line-based diffs).
     cell = {"cell_type": kind, "id": cell_id, "metadata": metadata,
             "source": source.splitlines(keepends=True)}
@@ -323,11 +359,71 @@ def notebook_text(nb: Mapping, *, validate: bool = True, memo: dict | None = Non
     encode each shared part once: pass the same one for both, while both exist unchanged.
     """
     if validate:
-        try:
-            nbformat.validate(nb)
-        except nbformat.ValidationError as e:
-            raise ValueError(f"generated an invalid notebook: {e}") from None
+        _validate(nb)
     return indented_json(nb, memo) + "\n"
+
+
+def _validate(nb: Mapping) -> None:
+    try:
+        nbformat.validate(nb)
+    except nbformat.ValidationError as e:
+        raise ValueError(f"generated an invalid notebook: {e}") from None
+
+
+_COMPACT = json.JSONEncoder(sort_keys=True, ensure_ascii=False, allow_nan=False)
+"""One line of JSON, by the json module's C encoder: several times faster than indenting."""
+
+
+class _Encoded(str):
+    """JSON text that :func:`_indented` writes as it is: a cell already encoded at its depth."""
+
+
+_CELL_NEWLINE = "\n  "
+"""Where a cell's nested lines start in a notebook (in the list ``cells``, itself in the
+notebook: two levels deep)."""
+
+
+def _cell_text(kind: str, cell_id: str, source: str, editable: bool = False,
+               question: int | None = None, written: str | None = None) -> _Encoded:
+    """:func:`_cell` of these arguments, encoded as it stands in a notebook's cells: its
+    source's lines encoded into the rest, which is encoded once per process
+    (:func:`_cell_frame`)."""
+    head, tail = _cell_frame(kind, cell_id, editable, question, written)
+    lines = source.splitlines(keepends=True)
+    return _Encoded(head + _indented(lines, _CELL_NEWLINE + " ", {}) + tail)
+
+
+@lru_cache(maxsize=1024, typed=True)
+def _cell_frame(kind: str, cell_id: str, editable: bool, question: int | None,
+                written: str | None) -> tuple[str, str]:
+    """The text of a cell (:func:`_cell`, as :func:`_cell_text` places it) before and after
+    its source: ``source`` is its last key in sorted order, so its empty list ``[]`` is the
+    last one in the text of the cell without a source."""
+    cell = _cell(kind, cell_id, "", editable, question, written)
+    if max(cell) != "source":  # the premise above; never seen unless _cell changes
+        raise AssertionError(f"a cell's last key is {max(cell)!r}, not 'source'")
+    head, tail = _indented(cell, _CELL_NEWLINE, {}).rsplit("[]", 1)
+    return head, tail
+
+
+_QUESTION_NEWLINE = "\n    "
+"""Where a question's record's nested lines start in a notebook (``metadata``, ``eulertop``,
+``questions``: four levels deep)."""
+
+
+def _question_text(record: dict) -> _Encoded:
+    """A question's record (:func:`_notebooks`) encoded as it stands in a notebook's metadata,
+    kept by its content (:func:`_indented_of`)."""
+    return _indented_of(_COMPACT.encode(record), _QUESTION_NEWLINE)
+
+
+@lru_cache(maxsize=1024)
+def _indented_of(compact: str, newline: str) -> _Encoded:
+    """The value written as ``compact`` (one line of JSON, :data:`_COMPACT`), indented.
+
+    A function of the one line alone (its value, read back, is the same to the last bit), so its
+    result is kept by it: cheap to make, the line is the content's key."""
+    return _Encoded(_indented(json.loads(compact), newline, {}))
 
 
 _encode_string = json.encoder.encode_basestring  # the C encoder's, as ensure_ascii=False uses
@@ -370,6 +466,8 @@ def _indented(value: Any, newline: str, memo: dict) -> str:
     kind = type(value)
     if kind is str:
         return _encode_string(value)
+    if kind is _Encoded:
+        return value
     if kind is dict or kind is list:
         known = (id(value), len(newline))
         text = memo.get(known)
