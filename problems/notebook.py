@@ -90,6 +90,8 @@ def python_literal(value: Any) -> str:
     >>> python_literal([0.1, 2.5e-07, True, "loops"])
     "[0.1, 2.5e-07, True, 'loops']"
     """
+    if type(value) is float and math.isfinite(value):  # the common case, first
+        return float.__repr__(value)
     if value is None or isinstance(value, bool | str):
         return repr(value)
     if isinstance(value, int):
@@ -113,6 +115,13 @@ def answer_line(spec: Mapping[str, Any], value: Any = None) -> str:
     The comment gives the unit, and the form where it is not a plain number (``kg m^2, a list
     of 3 numbers``); the points when they are not 1 (the notebook's conventions say so).
     """
+    head, tail = _answer_line_parts(spec)
+    return head + python_literal(value) + tail
+
+
+def _answer_line_parts(spec: Mapping[str, Any]) -> tuple[str, str]:
+    """:func:`answer_line` before and after its value (made once for a student's two
+    notebooks)."""
     form = spec["unit"] or kind_hint(spec)
     if spec["unit"] and spec["kind"] not in ("scalar", "angle"):
         form = f"{spec['unit']}, {kind_hint(spec)}"
@@ -120,7 +129,7 @@ def answer_line(spec: Mapping[str, Any], value: Any = None) -> str:
     worth = f" ({points:g} point{'' if points == 1 else 's'})" if points != 1 else ""
     notes = [form, _one_line(spec["description"]) + worth]
     comment = " — ".join(n for n in notes if n.strip())
-    return f"{spec['variable']} = {python_literal(value)}  # {comment}"
+    return f"{spec['variable']} = ", f"  # {comment}"
 
 
 def _parameter_cell(variants: Sequence[Variant]) -> str:
@@ -259,14 +268,17 @@ def _notebooks(
     statements = [cell("markdown", f"q{k}-statement", _statement(k, v), question=k)
                   for k, v in enumerate(variants, start=1)]
     records = questions if record is None else [record(q) for q in questions]
+    answered = [[(a.value, *_answer_line_parts(spec))  # (value, before it, after it)
+                 for a, spec in zip(variant.answers, question["answers"], strict=True)
+                 if a.kind != WRITTEN]
+                for variant, question in zip(variants, questions, strict=True)]
     notebooks = []
     for solutions in kinds:
         cells = list(shared)
-        for k, (variant, question, statement) in enumerate(
-                zip(variants, questions, statements, strict=True), start=1):
-            lines = [answer_line(spec, a.value if solutions else None)
-                     for a, spec in zip(variant.answers, question["answers"], strict=True)
-                     if a.kind != WRITTEN]
+        for k, (variant, parts, statement) in enumerate(
+                zip(variants, answered, statements, strict=True), start=1):
+            lines = [head + python_literal(value if solutions else None) + tail
+                     for value, head, tail in parts]
             cells.append(statement)
             if lines:
                 cells.append(cell("code", f"q{k}-answer", "\n".join(lines), editable=True,
