@@ -376,30 +376,35 @@ def key_hash(questions: Sequence[Mapping]) -> str:
 def key_entry(variants: Sequence[Variant], *, hashed: bool = True) -> dict:
     """One student's entry in ``key.json``: answers per question, and their hash (left out
     unless ``hashed``)."""
-    questions = [
-        {"question": k, "family": v.family, "answers": [a.to_dict() for a in v.answers]}
-        for k, v in enumerate(variants, start=1)
-    ]
+    questions = _key_questions(variants)
     return {"hash": key_hash(questions), "questions": questions} if hashed else \
         {"questions": questions}
 
 
-_ITEM, _KEY = "\x00", "\x01"
-"""Marks after json's item and key separators: json escapes every control character inside a
-string, so in its text these can only be the separators' (:func:`key_entry_text`)."""
+def _key_questions(variants: Sequence[Variant], copy: bool = True) -> list[dict]:
+    """:func:`key_entry`'s ``questions``; ``copy=False`` shares the answers' values (for
+    encoding them at once, :meth:`problems.answers.Answer.to_dict`)."""
+    return [{"question": k, "family": v.family,
+             "answers": [a.to_dict(copy=copy) for a in v.answers]}
+            for k, v in enumerate(variants, start=1)]
+
+
+_MARK = "\x00"
+"""Marks after json's separators: json escapes every control character inside a string, so in
+its text (and in its UTF-8, where no other character has a zero byte) this can only be the
+separators' (:func:`key_entry_text`)."""
 _MARKED = json.JSONEncoder(sort_keys=True, ensure_ascii=False, allow_nan=False,
-                           separators=("," + _ITEM, ":" + _KEY))
+                           separators=("," + _MARK, ":" + _MARK))
 
 
 def key_entry_text(variants: Sequence[Variant]) -> CompactJSON:
     """:func:`key_entry` encoded as :func:`json_text` writes it, the questions encoded once for
     both the entry (``", "``, ``": "``) and its hash (``","``, ``":"``) — the floats' ``repr``
     is most of json's time here."""
-    questions = key_entry(variants, hashed=False)["questions"]
-    marked = _MARKED.encode(questions)
-    canonical = marked.replace(_ITEM, "").replace(_KEY, "")
-    spaced = marked.replace(_ITEM, " ").replace(_KEY, " ")
-    digest = "sha256:" + hashlib.sha256(canonical.encode("utf-8")).hexdigest()
+    marked = _MARKED.encode(_key_questions(variants, copy=False))
+    spaced = marked.replace(_MARK, " ")  # one character for another: a copy, no search
+    canonical = marked.encode("utf-8").replace(_MARK.encode(), b"")  # bytes: a byte search
+    digest = "sha256:" + hashlib.sha256(canonical).hexdigest()
     return CompactJSON(f'{{"hash": "{digest}", "questions": {spaced}}}')
 
 
