@@ -400,22 +400,33 @@ def _cell_text(kind: str, cell_id: str, source: str, editable: bool = False,
     """:func:`_cell` of these arguments, encoded as it stands in a notebook's cells: its
     source's lines encoded into the rest, which is encoded once per process
     (:func:`_cell_frame`)."""
-    head, tail = _cell_frame(kind, cell_id, editable, question, written)
     lines = source.splitlines(keepends=True)
-    return _Encoded(head + _indented(lines, _CELL_NEWLINE + " ", {}) + tail)
+    if not lines:  # no line to put between the frame's parts (no generated cell is empty)
+        return _Encoded(_indented(_cell(kind, cell_id, source, editable, question, written),
+                                  _CELL_NEWLINE, {}))
+    head, between, tail = _cell_frame(kind, cell_id, editable, question, written)
+    return _Encoded(head + between.join(map(_encode_string, lines)) + tail)
+
+
+_LINES = ("\x01\n", "\x02")
+"""A source of two lines that no generated cell has (control characters), to find where a
+cell's lines go in its text (:func:`_cell_frame`)."""
 
 
 @lru_cache(maxsize=1024, typed=True)
 def _cell_frame(kind: str, cell_id: str, editable: bool, question: int | None,
-                written: str | None) -> tuple[str, str]:
-    """The text of a cell (:func:`_cell`, as :func:`_cell_text` places it) before and after
-    its source: ``source`` is its last key in sorted order, so its empty list ``[]`` is the
-    last one in the text of the cell without a source."""
-    cell = _cell(kind, cell_id, "", editable, question, written)
+                written: str | None) -> tuple[str, str, str]:
+    """The text of a cell (:func:`_cell`, as :func:`_cell_text` places it) before its
+    source's first line, between two lines, and after the last: that of the cell with the
+    source :data:`_LINES`, cut around them. ``source`` is the cell's last key in sorted order,
+    so they are the last two strings of that text."""
+    cell = _cell(kind, cell_id, "".join(_LINES), editable, question, written)
     if max(cell) != "source":  # the premise above; never seen unless _cell changes
         raise AssertionError(f"a cell's last key is {max(cell)!r}, not 'source'")
-    head, tail = _indented(cell, _CELL_NEWLINE, {}).rsplit("[]", 1)
-    return head, tail
+    first, second = map(_encode_string, _LINES)
+    text, tail = _indented(cell, _CELL_NEWLINE, {}).rsplit(second, 1)
+    head, between = text.rsplit(first, 1)
+    return head, between, tail
 
 
 _QUESTION_NEWLINE = "\n    "
