@@ -432,12 +432,24 @@ def _write_student(
     install: str | None = None,
 ) -> None:
     """Write a student's release and solutions notebooks; ``validate`` checks them against the
-    nbformat schema (:func:`problems.notebook.notebook_text`); ``install``: what their first
+    nbformat schema (:func:`problems.notebook.notebook_texts`); ``install``: what their first
     cell says to install for the check (default :data:`problems.notebook.DEFAULT_INSTALL`)."""
     texts = notebook_texts(title, row, variants, families, install or DEFAULT_INSTALL,
                            validate=validate)
     for sub, text in zip((RELEASE, SOLUTIONS), texts, strict=True):
-        (folder / sub / f"{row['id']}.ipynb").write_text(text, encoding="utf-8")
+        _write_bytes(folder / sub / f"{row['id']}.ipynb", text.encode("utf-8"))
+
+
+def _write_bytes(path: Path, data: bytes) -> None:
+    """``path.write_bytes(data)`` without a Python file object and its buffer: a class's
+    notebooks are hundreds of files, each written at once."""
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666)
+    try:
+        view = memoryview(data)
+        while view:  # os.write may write less than asked
+            view = view[os.write(fd, view):]
+    finally:
+        os.close(fd)
 
 
 PARALLEL_MIN = 16
