@@ -227,15 +227,15 @@ def notebook_texts(
     """The text of the release and the solutions notebook of one student: the same as
     :func:`notebook_text` of each of :func:`build_notebooks`, cheaper for a class.
 
-    Every cell is encoded by :func:`_cell_text`, and every question's record in the metadata
-    by :func:`_question_text`, which keep the texts they have made by content: a question's
-    answer cell in the release, its written parts, its record are often the same for many
-    students, and then encoded once per process. ``validate`` checks the texts against the
-    nbformat schema (:func:`notebook_text`).
+    Every cell is encoded by :func:`_cell_text` (around its source, the rest made once per
+    process), and every question's record in the metadata by :func:`_encoded_question`, which
+    keeps it, and its answer lines' parts, by its content: often the same for many students.
+    ``validate`` checks the texts against the nbformat schema (:func:`notebook_text`).
     """
     memo: dict = {}  # the metadata both notebooks share, encoded once
     texts = tuple(_indented(nb, "\n", memo) + "\n" for nb in _notebooks(
-        title, student, variants, (False, True), families, install, _cell_text, _question_text))
+        title, student, variants, (False, True), families, install, _cell_text,
+        _encoded_question))
     if validate:
         for text in texts:
             _validate(json.loads(text))
@@ -246,12 +246,13 @@ def _notebooks(
     title: str, student: Mapping[str, str], variants: Sequence[Variant],
     kinds: Sequence[bool], families: Mapping[str, Any] | None = None,
     install: str = DEFAULT_INSTALL, cell: Callable[..., Any] | None = None,
-    record: Callable[[dict], Any] | None = None,
+    question: Callable[[dict], tuple[Any, Sequence[tuple[str, str]]]] | None = None,
 ) -> list[dict]:
     """One notebook per entry of ``kinds`` (True: solutions), sharing what they have in common;
     each cell made by ``cell`` (the arguments of :func:`_cell`; default: :func:`_cell`), each
-    question's record in the metadata by ``record`` (of the record; default: as it is)."""
-    cell = cell or _cell
+    question's record in the metadata and its answer lines' parts by ``question`` (of the
+    record; default: :func:`_question_parts`)."""
+    cell, question = cell or _cell, question or _question_parts
     questions = [
         {"question": k, "family": v.family, "title": v.title,
          "answers": [answer_spec(a, k) for a in v.answers]}
@@ -267,18 +268,17 @@ def _notebooks(
     ]
     statements = [cell("markdown", f"q{k}-statement", _statement(k, v), question=k)
                   for k, v in enumerate(variants, start=1)]
-    records = questions if record is None else [record(q) for q in questions]
-    answered = [[(a.value, *_answer_line_parts(spec))  # (value, before it, after it)
-                 for a, spec in zip(variant.answers, question["answers"], strict=True)
-                 if a.kind != WRITTEN]
-                for variant, question in zip(variants, questions, strict=True)]
+    made = [question(q) for q in questions]  # (record, its answer lines' parts)
+    records = [record for record, _ in made]
+    answered = [list(zip([a.value for a in variant.answers if a.kind != WRITTEN], parts,
+                         strict=True)) for variant, (_, parts) in zip(variants, made, strict=True)]
     notebooks = []
     for solutions in kinds:
         cells = list(shared)
         for k, (variant, parts, statement) in enumerate(
                 zip(variants, answered, statements, strict=True), start=1):
             lines = [head + python_literal(value if solutions else None) + tail
-                     for value, head, tail in parts]
+                     for value, (head, tail) in parts]
             cells.append(statement)
             if lines:
                 cells.append(cell("code", f"q{k}-answer", "\n".join(lines), editable=True,
@@ -434,10 +434,25 @@ _QUESTION_NEWLINE = "\n    "
 ``questions``: four levels deep)."""
 
 
-def _question_text(record: dict) -> _Encoded:
-    """A question's record (:func:`_notebooks`) encoded as it stands in a notebook's metadata,
-    kept by its content (:func:`_indented_of`)."""
-    return _indented_of(_COMPACT.encode(record), _QUESTION_NEWLINE)
+def _question_parts(record: dict) -> tuple[dict, tuple[tuple[str, str], ...]]:
+    """A question's record (:func:`_notebooks`) as it is, and the parts of its answer lines
+    (:func:`_answer_line_parts`; a written part has none)."""
+    return record, tuple(_answer_line_parts(spec) for spec in record["answers"]
+                         if spec["kind"] != WRITTEN)
+
+
+def _encoded_question(record: dict) -> tuple[_Encoded, tuple[tuple[str, str], ...]]:
+    """:func:`_question_parts`, the record encoded as it stands in a notebook's metadata; both
+    kept by the record's content, its one line of JSON (:func:`_indented_of`)."""
+    compact = _COMPACT.encode(record)
+    return _indented_of(compact, _QUESTION_NEWLINE), _line_parts_of(compact)
+
+
+@lru_cache(maxsize=1024)
+def _line_parts_of(compact: str) -> tuple[tuple[str, str], ...]:
+    """The answer lines' parts of the question record written as ``compact``
+    (:func:`_encoded_question`), kept by it as :func:`_indented_of` is."""
+    return _question_parts(json.loads(compact))[1]
 
 
 @lru_cache(maxsize=1024)

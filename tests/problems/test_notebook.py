@@ -13,9 +13,10 @@ from hypothesis import strategies as st
 
 from problems.generate import generate_assignment, student_answers
 from problems.notebook import (
+    _COMPACT,
     _cell,
     _cell_text,
-    _question_text,
+    _indented_of,
     answer_line,
     build_notebook,
     build_notebooks,
@@ -277,8 +278,9 @@ def test_a_question_record_kept_by_content_is_json_dumps(record):
     """Records kept by their one-line JSON: the same text json.dumps writes at their place, and
     never that of another record equal to it in Python (1, 1.0 and True; 0.0 and -0.0)."""
     notebook = {"metadata": {"eulertop": {"questions": [record]}}}
+    text = _indented_of(_COMPACT.encode(record), "\n    ")  # as _encoded_question makes it
     assert dumps(notebook) == ('{\n "metadata": {\n  "eulertop": {\n   "questions": [\n    '
-                               + _question_text(record) + "\n   ]\n  }\n }\n}")
+                               + text + "\n   ]\n  }\n }\n}")
 
 
 @settings(max_examples=300, deadline=None)
