@@ -333,6 +333,7 @@ class Answer:
 
 
 def _same(value: Any) -> Any:
+    """``value`` itself (:meth:`Answer.to_dict` without copies)."""
     return value
 
 

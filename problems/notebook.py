@@ -387,7 +387,8 @@ _COMPACT = json.JSONEncoder(sort_keys=True, ensure_ascii=False, allow_nan=False)
 
 
 class _Encoded(str):
-    """JSON text that :func:`_indented` writes as it is: a cell already encoded at its depth."""
+    """JSON text that :func:`_indented` writes as it is: a cell or a question's record already
+    encoded for its place in a notebook (:func:`notebook_texts`)."""
 
 
 _CELL_NEWLINE = "\n  "
@@ -409,8 +410,8 @@ def _cell_text(kind: str, cell_id: str, source: str, editable: bool = False,
 
 
 _LINES = ("\x01\n", "\x02")
-"""A source of two lines that no generated cell has (control characters), to find where a
-cell's lines go in its text (:func:`_cell_frame`)."""
+"""A source of two lines, to find where a cell's lines go in its text (:func:`_cell_frame`);
+any two would do, these are short."""
 
 
 @lru_cache(maxsize=1024, typed=True)
