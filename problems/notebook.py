@@ -460,8 +460,9 @@ def _line_parts_of(compact: str) -> tuple[tuple[str, str], ...]:
 def _indented_of(compact: str, newline: str) -> _Encoded:
     """The value written as ``compact`` (one line of JSON, :data:`_COMPACT`), indented.
 
-    A function of the one line alone (its value, read back, is the same to the last bit), so its
-    result is kept by it: cheap to make, the line is the content's key."""
+    A function of the one line alone (a value of plain JSON with string keys, as a question's
+    record is, reads back the same to the last bit), so its result is kept by it: cheap to
+    make, the line is the content's key."""
     return _Encoded(_indented(json.loads(compact), newline, {}))
 
 
