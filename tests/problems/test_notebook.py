@@ -8,7 +8,7 @@ import math
 
 import nbformat
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from problems.generate import generate_assignment, student_answers
@@ -274,6 +274,11 @@ _JSON = st.recursive(_JSON_SCALARS, lambda inner: st.lists(inner, max_size=4)
 
 @settings(max_examples=300, deadline=None)
 @given(st.dictionaries(st.text(), _JSON, max_size=5))
+@example({"a": 1}).via("equal in Python")
+@example({"a": 1.0}).via("equal in Python")
+@example({"a": True}).via("equal in Python")
+@example({"a": [0.0]}).via("equal in Python")
+@example({"a": [-0.0]}).via("equal in Python")
 def test_a_question_record_kept_by_content_is_json_dumps(record):
     """Records kept by their one-line JSON: the same text json.dumps writes at their place, and
     never that of another record equal to it in Python (1, 1.0 and True; 0.0 and -0.0)."""
