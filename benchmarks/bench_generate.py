@@ -94,7 +94,7 @@ def child(students: int, questions: int, jobs: int | None, seed: int, out: str) 
 def breakdown(students: int, questions: int) -> dict[str, float]:
     """CPU seconds of each part of generation, in this process (no files written)."""
     from problems.generate import prepare_families, student_entries, student_variants
-    from problems.notebook import build_notebooks, notebook_text
+    from problems.notebook import notebook_texts
 
     families, problems, roster = _setup(students, questions)
     clock = time.process_time
@@ -104,9 +104,7 @@ def breakdown(students: int, questions: int) -> dict[str, float]:
     drawn = [student_variants(families, problems, 0, row["id"]) for row in roster.rows]
     parts["drawing the variants"], start = clock() - start, clock()
     for row, variants in zip(roster.rows, drawn, strict=True):
-        memo: dict = {}
-        for notebook in build_notebooks("benchmark", row, variants):
-            notebook_text(notebook, validate=False, memo=memo)
+        notebook_texts("benchmark", row, variants, families, validate=False)
     parts["building and encoding the notebooks"], start = clock() - start, clock()
     for variants in drawn:
         student_entries(variants, 0)
@@ -134,13 +132,15 @@ def margin_parts(students: int, questions: int, rounds: int) -> dict[str, list]:
     import tempfile
 
     from problems.generate import (
+        RELEASE,
+        SOLUTIONS,
         Question,
+        _write_student,
         class_variants,
         prepare_families,
         student_entries,
         student_variants,
     )
-    from problems.notebook import build_notebooks, notebook_text
 
     families, problems, roster = _setup(students, questions)
     prepare_families(families, problems)
@@ -154,16 +154,12 @@ def margin_parts(students: int, questions: int, rounds: int) -> dict[str, list]:
     def one_pass():
         drawn[:] = class_variants(families, asked, 0, ids, {})
 
-    def notebooks():
+    def notebooks():  # as the generator writes them (its own function)
         with tempfile.TemporaryDirectory() as folder:
+            for sub in (RELEASE, SOLUTIONS):
+                (Path(folder) / sub).mkdir()
             for row, variants in zip(roster.rows, drawn, strict=True):
-                memo: dict = {}
-                for kind, notebook in zip(("release", "solutions"),
-                                          build_notebooks("benchmark", row, variants),
-                                          strict=True):
-                    text = notebook_text(notebook, validate=False, memo=memo)
-                    (Path(folder) / f"{kind}-{row['id']}.ipynb").write_text(text,
-                                                                             encoding="utf-8")
+                _write_student(Path(folder), "benchmark", row, variants, False, families)
 
     def entries():
         for variants in drawn:

@@ -285,19 +285,23 @@ class Answer:
         """The known mistake called ``name``, or None if this answer does not list it."""
         return next((m for m in self.mistakes if m.name == name), None)
 
-    def to_dict(self) -> dict:
-        """Plain JSON (lists for tuples); ``Answer.from_dict(a.to_dict()) == a``."""
+    def to_dict(self, *, copy: bool = True) -> dict:
+        """Plain JSON (lists for tuples); ``Answer.from_dict(a.to_dict()) == a``.
+
+        ``copy=False`` leaves the values (key, mistakes', accepted) the answer's own, for a
+        caller that only encodes the dict at once (the generator's key entries)."""
         # field by field in their order (the key file's bytes and hashes follow it), not
         # asdict, which deep-copies through every dataclass; values are plain JSON already,
         # lists copied so that the dict shares none with the answer
-        d = {"name": self.name, "kind": self.kind, "value": _json_copy(self.value),
+        own = _json_copy if copy else _same
+        d = {"name": self.name, "kind": self.kind, "value": own(self.value),
              "unit": self.unit, "rtol": self.rtol, "atol": self.atol, "points": self.points,
-             "mistakes": [{"name": m.name, "value": _json_copy(m.value), "feedback": m.feedback}
+             "mistakes": [{"name": m.name, "value": own(m.value), "feedback": m.feedback}
                           for m in self.mistakes],
              "options": list(self.options), "symbols": list(self.symbols),
              "period": self.period, "description": self.description}
         if self.accepted:  # the last three only when set: older keys hash as before
-            d["accepted"] = [_json_copy(v) for v in self.accepted]
+            d["accepted"] = [own(v) for v in self.accepted]
         if self.depends_on:
             d["depends_on"] = list(self.depends_on)
         if self.rubric:
@@ -328,6 +332,11 @@ class Answer:
         scale = points / self.points if self.points else 0.0
         rubric = tuple(RubricItem(r.item, r.points * scale) for r in self.rubric)
         return replace(self, points=points, rubric=rubric)
+
+
+def _same(value: Any) -> Any:
+    """``value`` itself (:meth:`Answer.to_dict` without copies)."""
+    return value
 
 
 def _json_copy(value: Any) -> Any:

@@ -71,7 +71,7 @@ import numpy as np
 from problems.answers import Answer
 from problems.deadlines import LatePolicy
 from problems.family import Family, FamilyError
-from problems.notebook import DEFAULT_INSTALL, build_notebooks, notebook_text
+from problems.notebook import DEFAULT_INSTALL, notebook_texts
 from problems.roster import Roster
 from problems.settings import QuestionSettings
 from problems.variant import Variant, variable_name
@@ -376,30 +376,35 @@ def key_hash(questions: Sequence[Mapping]) -> str:
 def key_entry(variants: Sequence[Variant], *, hashed: bool = True) -> dict:
     """One student's entry in ``key.json``: answers per question, and their hash (left out
     unless ``hashed``)."""
-    questions = [
-        {"question": k, "family": v.family, "answers": [a.to_dict() for a in v.answers]}
-        for k, v in enumerate(variants, start=1)
-    ]
+    questions = _key_questions(variants)
     return {"hash": key_hash(questions), "questions": questions} if hashed else \
         {"questions": questions}
 
 
-_ITEM, _KEY = "\x00", "\x01"
-"""Marks after json's item and key separators: json escapes every control character inside a
-string, so in its text these can only be the separators' (:func:`key_entry_text`)."""
+def _key_questions(variants: Sequence[Variant], copy: bool = True) -> list[dict]:
+    """:func:`key_entry`'s ``questions``; ``copy=False`` shares the answers' values (for
+    encoding them at once, :meth:`problems.answers.Answer.to_dict`)."""
+    return [{"question": k, "family": v.family,
+             "answers": [a.to_dict(copy=copy) for a in v.answers]}
+            for k, v in enumerate(variants, start=1)]
+
+
+_MARK = "\x00"
+"""Marks after json's separators: json escapes every control character inside a string, so in
+its text (and in its UTF-8, where no other character has a zero byte) this can only be the
+separators' (:func:`key_entry_text`)."""
 _MARKED = json.JSONEncoder(sort_keys=True, ensure_ascii=False, allow_nan=False,
-                           separators=("," + _ITEM, ":" + _KEY))
+                           separators=("," + _MARK, ":" + _MARK))
 
 
 def key_entry_text(variants: Sequence[Variant]) -> CompactJSON:
     """:func:`key_entry` encoded as :func:`json_text` writes it, the questions encoded once for
     both the entry (``", "``, ``": "``) and its hash (``","``, ``":"``) — the floats' ``repr``
     is most of json's time here."""
-    questions = key_entry(variants, hashed=False)["questions"]
-    marked = _MARKED.encode(questions)
-    canonical = marked.replace(_ITEM, "").replace(_KEY, "")
-    spaced = marked.replace(_ITEM, " ").replace(_KEY, " ")
-    digest = "sha256:" + hashlib.sha256(canonical.encode("utf-8")).hexdigest()
+    marked = _MARKED.encode(_key_questions(variants, copy=False))
+    spaced = marked.replace(_MARK, " ")  # one character for another: a copy, no search
+    canonical = marked.encode("utf-8").replace(_MARK.encode(), b"")  # bytes: a byte search
+    digest = "sha256:" + hashlib.sha256(canonical).hexdigest()
     return CompactJSON(f'{{"hash": "{digest}", "questions": {spaced}}}')
 
 
@@ -427,14 +432,24 @@ def _write_student(
     install: str | None = None,
 ) -> None:
     """Write a student's release and solutions notebooks; ``validate`` checks them against the
-    nbformat schema (:func:`problems.notebook.notebook_text`); ``install``: what their first
+    nbformat schema (:func:`problems.notebook.notebook_texts`); ``install``: what their first
     cell says to install for the check (default :data:`problems.notebook.DEFAULT_INSTALL`)."""
-    notebooks = build_notebooks(title, row, variants, families,  # sharing their common cells
-                                install or DEFAULT_INSTALL)
-    memo: dict = {}  # so that notebook_text encodes each shared cell once
-    for sub, nb in zip((RELEASE, SOLUTIONS), notebooks, strict=True):
-        text = notebook_text(nb, validate=validate, memo=memo)
-        (folder / sub / f"{row['id']}.ipynb").write_text(text, encoding="utf-8")
+    texts = notebook_texts(title, row, variants, families, install or DEFAULT_INSTALL,
+                           validate=validate)
+    for sub, text in zip((RELEASE, SOLUTIONS), texts, strict=True):
+        _write_bytes(folder / sub / f"{row['id']}.ipynb", text.encode("utf-8"))
+
+
+def _write_bytes(path: Path, data: bytes) -> None:
+    """``path.write_bytes(data)`` without a Python file object and its buffer: a class's
+    notebooks are hundreds of files, each written at once."""
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666)
+    try:
+        view = memoryview(data)
+        while view:  # os.write may write less than asked
+            view = view[os.write(fd, view):]
+    finally:
+        os.close(fd)
 
 
 PARALLEL_MIN = 16

@@ -40,7 +40,8 @@ from __future__ import annotations
 import html
 import json
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from functools import lru_cache
 from typing import Any
 
 import nbformat
@@ -53,7 +54,6 @@ from problems.written import PLACEHOLDER
 
 FORMAT_VERSION = 1
 KERNELSPEC = {"name": "python3", "display_name": "Python 3 (ipykernel)", "language": "python"}
-_READ_ONLY = {"editable": False, "deletable": False}
 
 DEFAULT_INSTALL = "eulertop-check"
 """What ``%pip install`` is given for the checker (the student package, ``student/``), unless
@@ -90,6 +90,8 @@ def python_literal(value: Any) -> str:
     >>> python_literal([0.1, 2.5e-07, True, "loops"])
     "[0.1, 2.5e-07, True, 'loops']"
     """
+    if type(value) is float and math.isfinite(value):  # the common case, first
+        return float.__repr__(value)
     if value is None or isinstance(value, bool | str):
         return repr(value)
     if isinstance(value, int):
@@ -113,6 +115,13 @@ def answer_line(spec: Mapping[str, Any], value: Any = None) -> str:
     The comment gives the unit, and the form where it is not a plain number (``kg m^2, a list
     of 3 numbers``); the points when they are not 1 (the notebook's conventions say so).
     """
+    head, tail = _answer_line_parts(spec)
+    return head + python_literal(value) + tail
+
+
+def _answer_line_parts(spec: Mapping[str, Any]) -> tuple[str, str]:
+    """:func:`answer_line` before and after its value (made once for a student's two
+    notebooks)."""
     form = spec["unit"] or kind_hint(spec)
     if spec["unit"] and spec["kind"] not in ("scalar", "angle"):
         form = f"{spec['unit']}, {kind_hint(spec)}"
@@ -120,7 +129,7 @@ def answer_line(spec: Mapping[str, Any], value: Any = None) -> str:
     worth = f" ({points:g} point{'' if points == 1 else 's'})" if points != 1 else ""
     notes = [form, _one_line(spec["description"]) + worth]
     comment = " — ".join(n for n in notes if n.strip())
-    return f"{spec['variable']} = {python_literal(value)}  # {comment}"
+    return f"{spec['variable']} = ", f"  # {comment}"
 
 
 def _parameter_cell(variants: Sequence[Variant]) -> str:
@@ -210,12 +219,40 @@ def build_notebooks(
     return release, solutions
 
 
+def notebook_texts(
+    title: str, student: Mapping[str, str], variants: Sequence[Variant],
+    families: Mapping[str, Any] | None = None, install: str = DEFAULT_INSTALL,
+    *, validate: bool = True,
+) -> tuple[str, str]:
+    """The text of the release and the solutions notebook of one student: the same as
+    :func:`notebook_text` of each of :func:`build_notebooks`, cheaper for a class.
+
+    Every cell is encoded by :func:`_cell_text` (around its source, the rest made once per
+    process), and every question's record in the metadata by :func:`_encoded_question`, which
+    keeps it, and its answer lines' parts, by its content: often the same for many students.
+    ``validate`` checks the texts against the nbformat schema (:func:`notebook_text`).
+    """
+    memo: dict = {}  # the metadata both notebooks share, encoded once
+    texts = tuple(_indented(nb, "\n", memo) + "\n" for nb in _notebooks(
+        title, student, variants, (False, True), families, install, _cell_text,
+        _encoded_question))
+    if validate:
+        for text in texts:
+            _validate(json.loads(text))
+    return texts
+
+
 def _notebooks(
     title: str, student: Mapping[str, str], variants: Sequence[Variant],
     kinds: Sequence[bool], families: Mapping[str, Any] | None = None,
-    install: str = DEFAULT_INSTALL,
+    install: str = DEFAULT_INSTALL, cell: Callable[..., Any] | None = None,
+    question: Callable[[dict], tuple[Any, Sequence[tuple[str, str]]]] | None = None,
 ) -> list[dict]:
-    """One notebook per entry of ``kinds`` (True: solutions), sharing what they have in common."""
+    """One notebook per entry of ``kinds`` (True: solutions), sharing what they have in common;
+    each cell made by ``cell`` (the arguments of :func:`_cell`; default: :func:`_cell`), each
+    question's record in the metadata and its answer lines' parts by ``question`` (of the
+    record; default: :func:`_question_parts`)."""
+    cell, question = cell or _cell, question or _question_parts
     questions = [
         {"question": k, "family": v.family, "title": v.title,
          "answers": [answer_spec(a, k) for a in v.answers]}
@@ -225,24 +262,28 @@ def _notebooks(
                                 install=_one_line(install))
     rules = _rules_cell(student, notebook_conventions(variants, families))
     shared = [
-        _cell("markdown", "title", heading, _READ_ONLY),
-        _cell("markdown", "rules", rules, _READ_ONLY),
-        _cell("code", "parameters", _parameter_cell(variants), _READ_ONLY),
+        cell("markdown", "title", heading),
+        cell("markdown", "rules", rules),
+        cell("code", "parameters", _parameter_cell(variants)),
     ]
-    statements = [_statement_cell(k, v) for k, v in enumerate(variants, start=1)]
+    statements = [cell("markdown", f"q{k}-statement", _statement(k, v), question=k)
+                  for k, v in enumerate(variants, start=1)]
+    made = [question(q) for q in questions]  # (record, its answer lines' parts)
+    records = [record for record, _ in made]
+    answered = [list(zip([a.value for a in variant.answers if a.kind != WRITTEN], parts,
+                         strict=True)) for variant, (_, parts) in zip(variants, made, strict=True)]
     notebooks = []
     for solutions in kinds:
         cells = list(shared)
-        for k, (variant, question, statement) in enumerate(
-                zip(variants, questions, statements, strict=True), start=1):
-            lines = [answer_line(spec, a.value if solutions else None)
-                     for a, spec in zip(variant.answers, question["answers"], strict=True)
-                     if a.kind != WRITTEN]
+        for k, (variant, parts, statement) in enumerate(
+                zip(variants, answered, statements, strict=True), start=1):
+            lines = [head + python_literal(value if solutions else None) + tail
+                     for value, (head, tail) in parts]
             cells.append(statement)
             if lines:
-                cells.append(_cell("code", f"q{k}-answer", "\n".join(lines),
-                                   {"deletable": False}, question=k))
-            cells += _written_cells(k, variant, solutions)
+                cells.append(cell("code", f"q{k}-answer", "\n".join(lines), editable=True,
+                                  question=k))
+            cells += _written_cells(k, variant, solutions, cell)
         metadata = {
             "kernelspec": dict(KERNELSPEC),
             "language_info": {"name": "python"},
@@ -251,7 +292,7 @@ def _notebooks(
                 "notebook": "solutions" if solutions else "release",
                 "student": student["id"],
                 "assignment": title,
-                "questions": questions,
+                "questions": records,
             },
         }
         notebooks.append({"nbformat": v4.nbformat, "nbformat_minor": v4.nbformat_minor,
@@ -259,18 +300,20 @@ def _notebooks(
     return notebooks
 
 
-def _statement_cell(k: int, variant: Variant) -> dict:
-    """Question ``k``'s statement: its title, statement, and how its answers are compared
+def _statement(k: int, variant: Variant) -> str:
+    """Question ``k``'s statement cell: its title, statement, and how its answers are compared
     (written parts have their own cells)."""
     compared = [a for a in variant.answers if a.kind != WRITTEN]
     statement = f"## Question {k}: {_one_line(variant.title)}\n\n{variant.statement.strip()}"
     if compared:
         statement += f"\n\n{comparison_line(compared, k)}"
-    return _cell("markdown", f"q{k}-statement", statement, _READ_ONLY, question=k)
+    return statement
 
 
-def _written_cells(k: int, variant: Variant, solutions: bool) -> list[dict]:
-    """The prompt and answer cells of question ``k``'s written parts (module docstring)."""
+def _written_cells(k: int, variant: Variant, solutions: bool,
+                   cell: Callable[..., Any]) -> list[Any]:
+    """The prompt and answer cells of question ``k``'s written parts (module docstring), each
+    made by ``cell`` (:func:`_notebooks`)."""
     cells = []
     parts = [a for a in variant.answers if a.kind == WRITTEN]
     for j, answer in enumerate(parts, start=1):
@@ -278,11 +321,10 @@ def _written_cells(k: int, variant: Variant, solutions: bool) -> list[dict]:
         points = f"{answer.points:g} point{'' if answer.points == 1 else 's'}"
         prompt = (f"**Written answer `{variable}`** ({points}, scored by a person against a "
                   f"rubric; write it in the cell below)\n\n{answer.value.strip()}")
-        cells.append(_cell("markdown", f"q{k}-w{j}-prompt", prompt, _READ_ONLY, question=k))
+        cells.append(cell("markdown", f"q{k}-w{j}-prompt", prompt, question=k))
         text = rubric_text(answer) if solutions else PLACEHOLDER
-        cell = _cell("markdown", f"q{k}-w{j}-written", text, {"deletable": False}, question=k)
-        cell["metadata"]["eulertop"]["written"] = variable
-        cells.append(cell)
+        cells.append(cell("markdown", f"q{k}-w{j}-written", text, editable=True, question=k,
+                          written=variable))
     return cells
 
 
@@ -292,13 +334,19 @@ def rubric_text(answer: Answer) -> str:
     return f"*Rubric ({answer.points:g} points):*\n\n{items}"
 
 
-def _cell(kind: str, cell_id: str, source: str, flags: dict, question: int | None = None) -> dict:
+def _cell(kind: str, cell_id: str, source: str, editable: bool = False,
+          question: int | None = None, written: str | None = None) -> dict:
+    """A cell as a plain dict: generated cells are never deletable, only answer cells editable;
+    ``written``: the variable of the written answer the cell holds."""
     # Built as plain dicts: nbformat.v4.new_*_cell validates every cell against the schema, which
     # made it most of the generator's run time; notebook_text validates the whole notebook once.
     role = cell_id.split("-")[-1]
-    metadata = {**flags, "eulertop": {"role": role}}
+    metadata: dict = {"deletable": False} if editable else {"editable": False, "deletable": False}
+    metadata["eulertop"] = {"role": role}
     if question is not None:
         metadata["eulertop"]["question"] = question
+    if written is not None:
+        metadata["eulertop"]["written"] = written
     # Sources as lists of lines, the way nbformat writes them (line-based diffs).
     cell = {"cell_type": kind, "id": cell_id, "metadata": metadata,
             "source": source.splitlines(keepends=True)}
@@ -323,11 +371,99 @@ def notebook_text(nb: Mapping, *, validate: bool = True, memo: dict | None = Non
     encode each shared part once: pass the same one for both, while both exist unchanged.
     """
     if validate:
-        try:
-            nbformat.validate(nb)
-        except nbformat.ValidationError as e:
-            raise ValueError(f"generated an invalid notebook: {e}") from None
+        _validate(nb)
     return indented_json(nb, memo) + "\n"
+
+
+def _validate(nb: Mapping) -> None:
+    try:
+        nbformat.validate(nb)
+    except nbformat.ValidationError as e:
+        raise ValueError(f"generated an invalid notebook: {e}") from None
+
+
+_COMPACT = json.JSONEncoder(sort_keys=True, ensure_ascii=False, allow_nan=False)
+"""One line of JSON, by the json module's C encoder: several times faster than indenting."""
+
+
+class _Encoded(str):
+    """JSON text that :func:`_indented` writes as it is: a cell or a question's record already
+    encoded for its place in a notebook (:func:`notebook_texts`)."""
+
+
+_CELL_NEWLINE = "\n  "
+"""Where a cell's nested lines start in a notebook (in the list ``cells``, itself in the
+notebook: two levels deep)."""
+
+
+def _cell_text(kind: str, cell_id: str, source: str, editable: bool = False,
+               question: int | None = None, written: str | None = None) -> _Encoded:
+    """:func:`_cell` of these arguments, encoded as it stands in a notebook's cells: its
+    source's lines encoded into the rest, which is encoded once per process
+    (:func:`_cell_frame`)."""
+    lines = source.splitlines(keepends=True)
+    if not lines:  # no line to put between the frame's parts (no generated cell is empty)
+        return _Encoded(_indented(_cell(kind, cell_id, source, editable, question, written),
+                                  _CELL_NEWLINE, {}))
+    head, between, tail = _cell_frame(kind, cell_id, editable, question, written)
+    return _Encoded(head + between.join(map(_encode_string, lines)) + tail)
+
+
+_LINES = ("\x01\n", "\x02")
+"""A source of two lines, to find where a cell's lines go in its text (:func:`_cell_frame`);
+any two would do, these are short."""
+
+
+@lru_cache(maxsize=1024, typed=True)
+def _cell_frame(kind: str, cell_id: str, editable: bool, question: int | None,
+                written: str | None) -> tuple[str, str, str]:
+    """The text of a cell (:func:`_cell`, as :func:`_cell_text` places it) before its
+    source's first line, between two lines, and after the last: that of the cell with the
+    source :data:`_LINES`, cut around them. ``source`` is the cell's last key in sorted order,
+    so they are the last two strings of that text."""
+    cell = _cell(kind, cell_id, "".join(_LINES), editable, question, written)
+    if max(cell) != "source":  # the premise above; never seen unless _cell changes
+        raise AssertionError(f"a cell's last key is {max(cell)!r}, not 'source'")
+    first, second = map(_encode_string, _LINES)
+    text, tail = _indented(cell, _CELL_NEWLINE, {}).rsplit(second, 1)
+    head, between = text.rsplit(first, 1)
+    return head, between, tail
+
+
+_QUESTION_NEWLINE = "\n    "
+"""Where a question's record's nested lines start in a notebook (``metadata``, ``eulertop``,
+``questions``: four levels deep)."""
+
+
+def _question_parts(record: dict) -> tuple[dict, tuple[tuple[str, str], ...]]:
+    """A question's record (:func:`_notebooks`) as it is, and the parts of its answer lines
+    (:func:`_answer_line_parts`; a written part has none)."""
+    return record, tuple(_answer_line_parts(spec) for spec in record["answers"]
+                         if spec["kind"] != WRITTEN)
+
+
+def _encoded_question(record: dict) -> tuple[_Encoded, tuple[tuple[str, str], ...]]:
+    """:func:`_question_parts`, the record encoded as it stands in a notebook's metadata; both
+    kept by the record's content, its one line of JSON (:func:`_indented_of`)."""
+    compact = _COMPACT.encode(record)
+    return _indented_of(compact, _QUESTION_NEWLINE), _line_parts_of(compact)
+
+
+@lru_cache(maxsize=1024)
+def _line_parts_of(compact: str) -> tuple[tuple[str, str], ...]:
+    """The answer lines' parts of the question record written as ``compact``
+    (:func:`_encoded_question`), kept by it as :func:`_indented_of` is."""
+    return _question_parts(json.loads(compact))[1]
+
+
+@lru_cache(maxsize=1024)
+def _indented_of(compact: str, newline: str) -> _Encoded:
+    """The value written as ``compact`` (one line of JSON, :data:`_COMPACT`), indented.
+
+    A function of the one line alone (a value of plain JSON with string keys, as a question's
+    record is, reads back the same to the last bit), so its result is kept by it: cheap to
+    make, the line is the content's key."""
+    return _Encoded(_indented(json.loads(compact), newline, {}))
 
 
 _encode_string = json.encoder.encode_basestring  # the C encoder's, as ensure_ascii=False uses
@@ -370,6 +506,8 @@ def _indented(value: Any, newline: str, memo: dict) -> str:
     kind = type(value)
     if kind is str:
         return _encode_string(value)
+    if kind is _Encoded:
+        return value
     if kind is dict or kind is list:
         known = (id(value), len(newline))
         text = memo.get(known)

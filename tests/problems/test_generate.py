@@ -12,13 +12,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from problems.answers import Answer
+from problems.answers import Answer, Mistake
 from problems.generate import (
     CompactJSON,
     GenerateError,
     TemplateError,
     generate_assignment,
     json_text,
+    key_entry,
+    key_entry_text,
     key_hash,
     pool_member,
     reroll_students,
@@ -27,6 +29,7 @@ from problems.generate import (
     variant_seed,
 )
 from problems.roster import read_roster
+from problems.variant import Variant
 
 from .conftest import ROSTER, make_rod_family
 
@@ -361,6 +364,22 @@ def test_entries_encoded_by_workers_are_written_as_the_parent_would():
     encoded = {**document, "students": {k: CompactJSON.of(v) for k, v in students.items()}}
     assert json_text(encoded) == json_text(document)
     assert json.loads(json_text(encoded)) == document
+
+
+@settings(max_examples=200, deadline=None)
+@given(description=st.text(), feedback=st.text().filter(str.strip),
+       value=st.floats(1e-300, 1e300), accepted=st.booleans())
+def test_a_key_entry_text_is_the_key_entry_encoded(description, feedback, value, accepted):
+    """key_entry_text marks json's separators to make the entry and its hash from one
+    encoding: the same as encoding key_entry, whatever the texts hold (control characters,
+    the mark itself, any script)."""
+    answer = Answer("x", "scalar", value, description=description,
+                    mistakes=(Mistake("m", 4 * value, feedback),),
+                    accepted=(2 * value,) if accepted else ())
+    variant = Variant("rod", "t", {"m": 0.5}, {"m": "kg"}, feedback, (answer,))
+    variants = [variant, variant]
+    assert key_entry_text(variants) == json.dumps(key_entry(variants), sort_keys=True,
+                                                  ensure_ascii=False)
 
 
 def prepared_families(calls: list[int], fail: bool = False) -> dict:

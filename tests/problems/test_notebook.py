@@ -8,14 +8,21 @@ import math
 
 import nbformat
 import pytest
+from hypothesis import example, given, settings
+from hypothesis import strategies as st
 
 from problems.generate import generate_assignment, student_answers
 from problems.notebook import (
+    _COMPACT,
+    _cell,
+    _cell_text,
+    _indented_of,
     answer_line,
     build_notebook,
     build_notebooks,
     indented_json,
     notebook_text,
+    notebook_texts,
     python_literal,
 )
 from problems.roster import read_roster
@@ -221,3 +228,74 @@ def test_the_two_notebooks_built_together_are_the_ones_built_alone(families):
     texts = [notebook_text(nb, memo=memo) for nb in (release, solutions)]
     assert memo and texts == [dumps(release) + "\n", dumps(solutions) + "\n"]
     assert texts[0] != texts[1]
+
+
+def test_notebook_texts_are_the_built_notebooks_encoded(families):
+    """notebook_texts (cells around their encoded sources, question records kept by content)
+    writes what notebook_text writes of build_notebooks, and what json.dumps writes of what it
+    reads back — for every built-in family, a written part, and students sharing cells."""
+    from problems.generate import class_variants, prepare_families, resolve_problems
+    from problems.templates import FAMILIES
+    from problems.written import Written, written_variant
+
+    every = {**FAMILIES, **families}
+    questions = resolve_problems([*FAMILIES, "rod"], every)
+    prepare_families(every, questions)
+    written = written_variant(Written("why", "Why does the top *not* fall?", 2.0,
+                                      [("torque", 1.0), ("precession", 1.0)]))
+    for seed in (3, 4):
+        ids = ["alice", "bob", "s\u2028\"é"]
+        for sid, variants in zip(ids, class_variants(every, questions, seed, ids, {}),
+                                 strict=True):
+            row = {"id": sid, "name": "Ann <O'Neil>"}
+            variants = [*variants, written]
+            texts = notebook_texts(f"Tops {seed}", row, variants, every)
+            built = build_notebooks(f"Tops {seed}", row, variants, every)
+            assert list(texts) == [notebook_text(nb) for nb in built]
+            assert [dumps(json.loads(text)) + "\n" for text in texts] == list(texts)
+
+
+def test_an_invalid_notebook_text_is_refused_only_when_validated(families, monkeypatch):
+    from problems import notebook
+    from problems.generate import student_variants
+
+    variants = student_variants(families, PROBLEMS, 5, "alice")
+    monkeypatch.setattr(notebook, "KERNELSPEC", {"language": "python"})  # no name: invalid
+    with pytest.raises(ValueError, match="generated an invalid notebook"):
+        notebook_texts("Tops", {"id": "alice"}, variants)
+    assert notebook_texts("Tops", {"id": "alice"}, variants, validate=False)
+
+
+_JSON_SCALARS = (st.none() | st.booleans() | st.integers(-10**20, 10**20)
+                 | st.floats(allow_nan=False, allow_infinity=False) | st.text())
+_JSON = st.recursive(_JSON_SCALARS, lambda inner: st.lists(inner, max_size=4)
+                     | st.dictionaries(st.text(), inner, max_size=4), max_leaves=12)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.dictionaries(st.text(), _JSON, max_size=5))
+@example({"a": 1}).via("equal in Python")
+@example({"a": 1.0}).via("equal in Python")
+@example({"a": True}).via("equal in Python")
+@example({"a": [0.0]}).via("equal in Python")
+@example({"a": [-0.0]}).via("equal in Python")
+def test_a_question_record_kept_by_content_is_json_dumps(record):
+    """Records kept by their one-line JSON: the same text json.dumps writes at their place, and
+    never that of another record equal to it in Python (1, 1.0 and True; 0.0 and -0.0)."""
+    notebook = {"metadata": {"eulertop": {"questions": [record]}}}
+    text = _indented_of(_COMPACT.encode(record), "\n    ")  # as _encoded_question makes it
+    assert dumps(notebook) == ('{\n "metadata": {\n  "eulertop": {\n   "questions": [\n    '
+                               + text + "\n   ]\n  }\n }\n}")
+
+
+@settings(max_examples=300, deadline=None)
+@given(kind=st.sampled_from(["code", "markdown"]), cell_id=st.text(min_size=1),
+       source=st.text(), editable=st.booleans(), question=st.none() | st.integers(0, 99),
+       written=st.none() | st.text())
+def test_a_cell_text_is_json_dumps(kind, cell_id, source, editable, question, written):
+    """A cell's text made from its frame (made once) and its source's lines is the text
+    json.dumps writes of the cell in a notebook's cells, whatever the source."""
+    cell = _cell(kind, cell_id, source, editable, question, written)
+    expected = dumps({"cells": [cell]})
+    assert expected == '{\n "cells": [\n  ' + _cell_text(
+        kind, cell_id, source, editable, question, written) + "\n ]\n}"
