@@ -60,19 +60,11 @@ def stage_record(tx: Transaction, a: Assignment, out: Path, result: StudentResul
 
 
 def prepare_report() -> None:
-    """Import what the class report draws with (matplotlib: about a second) and draw each
-    kind of figure once, to be thrown away (what a first drawing pays: fonts, the SVG writer,
-    each kind of artist), in a thread of its own, while the kernels' zygotes start — when the
-    grader has nothing else to do."""
+    """Import what the class report draws with (matplotlib: about a second) in a thread of
+    its own, while the kernels' zygotes start — when the grader has nothing else to do."""
     def load() -> None:
         with suppress(Exception):
             import grader.report.page  # noqa: F401
-            from grader.report import figures
-
-            figures.score_histogram([50.0])
-            figures.outcomes(["a"], [{"correct": 1, "wrong": 1}])
-            figures.facility_discrimination(["a"], [0.5], [0.5])
-            figures.wrong_ratios([("a", [2.0])])
 
     threading.Thread(target=load, name="eulertop-report-imports", daemon=True).start()
 
