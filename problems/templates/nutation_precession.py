@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -48,7 +49,14 @@ from scipy.special import ellipk
 from problems.answers import Answer, Mistake
 from problems.family import IllPosed, Parameter, distinguishable, reject_unless
 from problems.rounding import latex_sig, round_sig
-from problems.templates.sleeping_top import TOP_KINDS, TOP_PARAMETERS, draw_top
+from problems.templates.sleeping_top import (
+    TOP_KINDS,
+    TOP_PARAMETERS,
+    Top,
+    draw_top,
+    top_moments,
+    top_weights,
+)
 from solver.heavy_top import constants_of_motion, critical_spin, cubic_roots, nutation
 
 NAME = "nutation_precession"
@@ -229,24 +237,59 @@ PARAMETERS: dict[str, Parameter] = {
 }
 
 
+_NUMBERS = ("I1", "I3", "Mgl", "beta0", "omega3", "alpha_dot0")
+"""The numbers of a parameter set, in the order drawn."""
+
+
+@dataclass(frozen=True)
+class _Draws:
+    """What one student's generator gives :func:`draw_many`, in the order it is drawn: a real
+    top, then the state's random numbers (unrounded)."""
+
+    top: Top
+    spin: float  # ω3 in critical spins
+    tilt: float  # β0, rad
+    push: float | None  # α̇0 in Mgl/p_γ; None: let go without precessing
+
+    @classmethod
+    def of(cls, rng: np.random.Generator) -> _Draws:
+        top = draw_top(rng)
+        spin, tilt = rng.uniform(*SPIN_RATIO), rng.uniform(*TILT)
+        return cls(top, spin, tilt, rng.uniform(*PUSH) if rng.random() < 0.5 else None)
+
+
 def draw(rng: np.random.Generator) -> dict[str, Any] | None:
     """A real top's moments and ``Mgl`` (rounded), its spin (a multiple of the critical spin),
     the tilt, and one time in two a push ``α̇0`` (a multiple of ``Mgl/p_γ``)."""
-    top = draw_top(rng)
-    I1, I3, Mgl = (round_sig(x, SIG) for x in (top.I1, top.I3, top.Mgl))
-    if I3 > 2 * I1:  # pragma: no cover - rounding cannot cross this for real tops
-        return None
-    omega3 = round_sig(float(critical_spin(I1, I3, Mgl)) * rng.uniform(*SPIN_RATIO), SIG)
-    beta0 = round_sig(rng.uniform(*TILT), SIG)
-    alpha_dot0 = 0.0
-    if rng.random() < 0.5:
-        alpha_dot0 = round_sig(rng.uniform(*PUSH) * Mgl / (I3 * omega3), SIG)
-    return {"top": top.kind.shape, "I1": I1, "I3": I3, "Mgl": Mgl, "beta0": beta0,
-            "omega3": omega3, "alpha_dot0": alpha_dot0}
+    return draw_many([rng])[0]
+
+
+def draw_many(rngs: list[np.random.Generator]) -> list[dict[str, Any] | None]:
+    """:func:`draw` of each generator — the batch form (:mod:`problems.family`): each
+    student's random numbers drawn in order, then the tops' moments (R2, stacked by
+    :func:`~problems.templates.sleeping_top.top_moments`) and critical spins (R19) of all at
+    once."""
+    if not rngs:
+        return []
+    draws = [_Draws.of(rng) for rng in rngs]
+    tops = [d.top for d in draws]
+    I1, I3 = (round_sig(x, SIG) for x in top_moments(tops))
+    Mgl = round_sig(top_weights(tops), SIG)
+    omega3 = round_sig(critical_spin(I1, I3, Mgl) * np.array([d.spin for d in draws]), SIG)
+    beta0 = round_sig(np.array([d.tilt for d in draws]), SIG)
+    pushed = np.array([d.push is not None for d in draws])
+    push = np.array([0.0 if d.push is None else d.push for d in draws])
+    alpha_dot0 = np.where(pushed, round_sig(push * Mgl / (I3 * omega3), SIG), 0.0)
+    # a body's I3 ≤ 2 I1 (R4): a real top's rounded moments never cross it (its l² term keeps
+    # 2 I1 at least 1.6 I3), so testing it after the whole draw rejects nothing
+    body = (I3 <= 2 * I1).tolist()
+    rows = zip(*(c.tolist() for c in (I1, I3, Mgl, beta0, omega3, alpha_dot0)), strict=True)
+    return [{"top": d.top.kind.shape, **dict(zip(_NUMBERS, numbers, strict=True))} if ok
+            else None for d, ok, numbers in zip(draws, body, rows, strict=True)]
 
 
 def _numbers(params: Mapping[str, Any]) -> tuple[float, ...]:
-    return tuple(params[n] for n in ("I1", "I3", "Mgl", "beta0", "omega3", "alpha_dot0"))
+    return tuple(params[n] for n in _NUMBERS)
 
 
 def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:

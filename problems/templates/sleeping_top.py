@@ -159,6 +159,11 @@ def top_moments(tops: Sequence[Top]) -> tuple[np.ndarray, np.ndarray]:
     return I1, I3
 
 
+def top_weights(tops: Sequence[Top]) -> np.ndarray:
+    """``M g l`` of each top, J: bit for bit :attr:`Top.Mgl`."""
+    return np.array([top.Mgl for top in tops], dtype=float)
+
+
 def draw_top(rng: np.random.Generator, sig: int = SIG) -> Top:
     """A real top with dimensions drawn from :data:`TOP_KINDS` and rounded to ``sig`` figures.
 
@@ -295,9 +300,20 @@ PARAMETERS: dict[str, Parameter] = {
 
 def draw(rng: np.random.Generator) -> dict[str, Any]:
     """A real top (:func:`draw_top`) and a spin between half and twice its critical spin."""
-    top = draw_top(rng)
-    critical = float(critical_spin(top.I1, top.I3, top.Mgl))
-    return {**top_params(top), "omega3": round_sig(critical * rng.uniform(*SPIN_RATIO), SIG)}
+    return draw_many([rng])[0]
+
+
+def draw_many(rngs: list[np.random.Generator]) -> list[dict[str, Any]]:
+    """:func:`draw` of each generator — the batch form (:mod:`problems.family`): each
+    student's top and spin ratio drawn in order, then the critical spins (R19) of all the
+    tops (their moments stacked, :func:`top_moments`) in one solver call."""
+    if not rngs:
+        return []
+    drawn = [(draw_top(rng), rng.uniform(*SPIN_RATIO)) for rng in rngs]
+    tops = [top for top, _ in drawn]
+    critical = critical_spin(*top_moments(tops), top_weights(tops))
+    omega3 = round_sig(critical * np.array([ratio for _, ratio in drawn]), SIG).tolist()
+    return [{**top_params(top), "omega3": w} for top, w in zip(tops, omega3, strict=True)]
 
 
 def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
