@@ -142,9 +142,16 @@ class Top:
 
 
 def top_moments(tops: Sequence[Top]) -> tuple[np.ndarray, np.ndarray]:
-    """``I1`` (about the tip) and ``I3`` of each top, kg m² (R2): bit for bit :attr:`Top.I1`
-    and :attr:`Top.I3`, the tops of each kind stacked in one call of the solver."""
-    I1, I3 = np.empty(len(tops)), np.empty(len(tops))
+    """``I1`` (about the tip) and ``I3`` of each top, kg m² (R2): :func:`top_moments_cm`."""
+    _, I1, I3 = top_moments_cm(tops)
+    return I1, I3
+
+
+def top_moments_cm(tops: Sequence[Top]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``I_cm`` (transverse, about the centre of mass), ``I1`` (about the tip) and ``I3`` of
+    each top, kg m² (R2): bit for bit :attr:`Top.I_cm`, :attr:`Top.I1` and :attr:`Top.I3`,
+    the tops of each kind stacked in one call of the solver."""
+    I_cm, I1, I3 = np.empty(len(tops)), np.empty(len(tops)), np.empty(len(tops))
     for kind in TOP_KINDS:
         rows = [i for i, top in enumerate(tops) if top.kind.shape == kind.shape]
         if not rows:
@@ -155,8 +162,8 @@ def top_moments(tops: Sequence[Top]) -> tuple[np.ndarray, np.ndarray]:
         offset = np.zeros((len(rows), 3))
         offset[:, 2] = arm
         I1[rows] = parallel_axis(tensor_cm, M, offset)[:, 0, 0]
-        I3[rows] = tensor_cm[:, 2, 2]
-    return I1, I3
+        I_cm[rows], I3[rows] = tensor_cm[:, 0, 0], tensor_cm[:, 2, 2]
+    return I_cm, I1, I3
 
 
 def top_weights(tops: Sequence[Top]) -> np.ndarray:
@@ -237,19 +244,16 @@ _FACTOR_2 = ("A factor 2 is missing: the condition is p_γ² ≥ 4 M g l I1, so 
              "ω3 ≥ 2 √(M g l I1)/I3 (R19).")
 
 
-def _critical_inputs(top: Top) -> list[tuple[float, float, float]]:
-    """``(I1, I3, Mgl)`` of the key's critical spin (R19, I1 about the tip), then of its
-    mistakes: I1 about the centre of mass, I1 and I3 swapped."""
-    return [(top.I1, top.I3, top.Mgl), (top.I_cm, top.I3, top.Mgl), (top.I3, top.I1, top.Mgl)]
-
-
-def _critical_spins(inputs: Sequence[tuple[float, float, float]]) -> list[float]:
-    """:func:`~solver.heavy_top.critical_spin` of each ``(I1, I3, Mgl)``, in one call."""
-    return critical_spin(*np.array(inputs, dtype=float).T).tolist()
+def _critical_spins(I_cm: np.ndarray, I1: np.ndarray, I3: np.ndarray,
+                    Mgl: np.ndarray) -> list[list[float]]:
+    """Each top's critical spin (R19, I1 about the tip), rad/s, then its mistakes': I1 about
+    the centre of mass, I1 and I3 swapped — of all the tops in one solver call."""
+    return critical_spin(np.stack([I1, I_cm, I3], axis=-1), np.stack([I3, I3, I1], axis=-1),
+                         Mgl[:, None]).tolist()
 
 
 def _spin_answer(critical: Sequence[float]) -> Answer:
-    """``omega3_c`` from :func:`_critical_spins` of :func:`_critical_inputs`."""
+    """``omega3_c`` from :func:`_critical_spins` of its top."""
     w, about_cm, swapped = critical
     mistakes = (
         Mistake("I1_about_cm", about_cm, _I1_CM),
@@ -261,8 +265,8 @@ def _spin_answer(critical: Sequence[float]) -> Answer:
                   description="least spin for which the vertical top is stable")
 
 
-def _stable_answer(top: Top, omega3: float) -> Answer:
-    stable = bool(sleeping_top_stable(top.I1, top.I3, top.Mgl, omega3))
+def _stable_answer(stable: bool) -> Answer:
+    """``stable``: whether the top sleeps at the given spin (R19)."""
     why = ("The vertical spin is stable exactly when ω3 is at least the critical spin "
            "2 √(M g l I1)/I3 (R19, with I1 about the tip): compare the given spin with it.")
     return Answer("stable", "boolean", stable, points=0.5,
@@ -322,29 +326,39 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     Raises :class:`~problems.family.IllPosed` when the given spin is within
     ``THRESHOLD_MARGIN`` of the critical one, or a known mistake is close to the key.
     """
-    top = top_from_params(params)
-    return _answers(top, params["omega3"], _critical_spins(_critical_inputs(top)))
+    found = answers_many([params])[0]
+    if isinstance(found, IllPosed):
+        raise found
+    return found
 
 
 def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
     """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
-    rejected) — the batch form (:mod:`problems.family`): the critical spins (R19) of every
-    student's top and of its mistakes in one solver call."""
+    rejected) — the batch form (:mod:`problems.family`): the moments (R2) of every student's
+    top, their critical spins and those of the mistakes (R19), and whether each top sleeps at
+    its spin, each in one solver call."""
+    if not many:
+        return []
     tops = [top_from_params(p) for p in many]
-    critical = _critical_spins([row for top in tops for row in _critical_inputs(top)])
+    I_cm, I1, I3 = top_moments_cm(tops)
+    Mgl = top_weights(tops)
+    critical = _critical_spins(I_cm, I1, I3, Mgl)
+    omega3 = [p["omega3"] for p in many]
+    stable = sleeping_top_stable(I1, I3, Mgl, np.array(omega3, dtype=float)).tolist()
     found: list[tuple[Answer, ...] | IllPosed] = []
-    for i, (top, params) in enumerate(zip(tops, many, strict=True)):
+    for w, spins, sleeps in zip(omega3, critical, stable, strict=True):
         try:
-            found.append(_answers(top, params["omega3"], critical[3 * i:3 * i + 3]))
+            found.append(_answers(w, spins, sleeps))
         except IllPosed as e:
             found.append(e)
     return found
 
 
-def _answers(top: Top, omega3: float, critical: Sequence[float]) -> tuple[Answer, ...]:
+def _answers(omega3: float, critical: Sequence[float], stable: bool) -> tuple[Answer, ...]:
+    """The key of a given spin, its top's :func:`_critical_spins` and whether it sleeps."""
     reject_unless(abs(omega3 / critical[0] - 1.0) >= THRESHOLD_MARGIN,
                   "the given spin is too close to the critical one")
-    return distinguishable(lambda: (_spin_answer(critical), _stable_answer(top, omega3)), MARGIN)
+    return distinguishable(lambda: (_spin_answer(critical), _stable_answer(stable)), MARGIN)
 
 
 def statement(params: Mapping[str, Any]) -> str:
