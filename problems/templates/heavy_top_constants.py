@@ -46,7 +46,7 @@ key or of another mistake.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -135,8 +135,8 @@ class Top:
         ``"toy_top"``, ``"gyroscope"`` or ``"hanging"``.
     title : str
         Question title.
-    text : str
-        Markdown describing the body; names every number of ``params`` in backticks.
+    describe : callable
+        The Markdown describing the body, from ``params`` (:attr:`text`).
     params : dict
         The scene and its shown (rounded) numbers, SI.
     I1, I3, Mgl : float
@@ -153,7 +153,7 @@ class Top:
 
     scene: str
     title: str
-    text: str
+    describe: Callable[[Mapping[str, Any]], str]
     params: dict[str, Any]
     I1: float
     I3: float
@@ -162,6 +162,12 @@ class Top:
     tilt: tuple[float, float]
     limits: tuple[float, float]
     spin: tuple[float, float]
+
+    @property
+    def text(self) -> str:
+        """Markdown describing the body; names every number of ``params`` in backticks
+        (written when asked for: a statement's, not a draw's)."""
+        return self.describe(self.params)
 
 
 @dataclass(frozen=True)
@@ -200,6 +206,12 @@ def _r(x: float) -> float:
     return round_sig(x, SIG)
 
 
+def pick(rng: np.random.Generator, options: Sequence[float]) -> float:
+    """One of ``options``, uniformly: the very draw ``rng.choice(options)`` makes (one
+    ``integers`` below ``len(options)``), without its array work."""
+    return options[int(rng.integers(len(options)))]
+
+
 def _disc_body(rng: np.random.Generator, lever: tuple[float, float]) -> dict[str, float]:
     """Shown ``M, R, l, g`` of a thin brass disc on a light axle."""
     R, thickness = _r(rng.uniform(0.02, 0.04)), rng.uniform(0.003, 0.006)
@@ -219,79 +231,129 @@ def _shown(p: Mapping[str, Any], name: str, symbol: str, unit: str) -> str:
     return f"${symbol} = {latex_sig(p[name], SIG)}$ {unit} (`{name}`)"
 
 
-def _toy_top(p: Mapping[str, Any]) -> Top:
-    I1, I3, Mgl, I1_cm = _disc_moments(p)
-    touch = math.atan2(p["l"], p["R"])  # the rim reaches the table
-    text = (
+def _toy_top_text(p: Mapping[str, Any]) -> str:
+    return (
         f"A toy top: a thin brass disc of mass {_shown(p, 'M', 'M', 'kg')} and radius "
         f"{_shown(p, 'R', 'R', 'm')} on a massless axle whose tip, {_shown(p, 'l', 'l', 'm')} "
         f"from the disc's centre, rests in a dimple of the table; {_shown(p, 'g', 'g', 'm/s²')}."
     )
-    return Top("toy_top", "A toy top on a table", text, dict(p), I1, I3, Mgl, I1_cm,
+
+
+def _toy_top(p: Mapping[str, Any]) -> Top:
+    I1, I3, Mgl, I1_cm = _disc_moments(p)
+    touch = math.atan2(p["l"], p["R"])  # the rim reaches the table
+    return Top("toy_top", "A toy top on a table", _toy_top_text, dict(p), I1, I3, Mgl, I1_cm,
                (0.15, touch - 0.1), (POLE_MARGIN, touch - TABLE_MARGIN), (100.0, 300.0))
 
 
-def _hanging(p: Mapping[str, Any]) -> Top:
-    I1, I3, Mgl, I1_cm = _disc_moments(p)
-    text = (
+def _hanging_text(p: Mapping[str, Any]) -> str:
+    return (
         f"A thin brass disc of mass {_shown(p, 'M', 'M', 'kg')} and radius "
         f"{_shown(p, 'R', 'R', 'm')} hangs on a massless rod from a ball joint, its centre "
         f"{_shown(p, 'l', 'l', 'm')} from the joint: the symmetry axis points below the "
         f"horizontal ($\\beta > \\pi/2$); {_shown(p, 'g', 'g', 'm/s²')}."
     )
-    return Top("hanging", "A spinning disc hanging from a ball joint", text, dict(p),
+
+
+def _hanging(p: Mapping[str, Any]) -> Top:
+    I1, I3, Mgl, I1_cm = _disc_moments(p)
+    return Top("hanging", "A spinning disc hanging from a ball joint", _hanging_text, dict(p),
                I1, I3, Mgl, I1_cm, (1.9, 2.85), (math.pi / 2, math.pi - POLE_MARGIN),
                (60.0, 250.0))
 
 
-def _gyroscope_body(rng: np.random.Generator) -> dict[str, float]:
-    """Brass rotor (thin disc) at ``d`` on a steel axle (thin rod from the pivot), R2: the
-    shown ``M, l, I1, I3, g``."""
+def _gyroscope_dimensions(rng: np.random.Generator) -> tuple[float, float, float, float]:
+    """A gyroscope's drawn dimensions, m: the rotor's radius ``R``, its distance ``d`` from
+    the pivot and its thickness, and the axle's length beyond the rotor."""
     R, d = rng.uniform(0.025, 0.04), rng.uniform(0.04, 0.07)
-    m_rotor = BRASS * math.pi * R**2 * rng.uniform(0.004, 0.008)
-    length, radius = d + rng.uniform(0.01, 0.02), 0.002
+    return R, d, rng.uniform(0.004, 0.008), rng.uniform(0.01, 0.02)
+
+
+def _gyroscope_bodies(dimensions: Sequence[tuple[float, ...]]) -> list[dict[str, float]]:
+    """Brass rotor (thin disc) at ``d`` on a steel axle (thin rod from the pivot), R2: the
+    shown ``M, l, I1, I3, g`` of each gyroscope of :func:`_gyroscope_dimensions`, the
+    tensors of all in one call each (elementwise: each as alone, bit for bit)."""
+    R, d, thickness, beyond = np.array(dimensions, dtype=float).reshape(-1, 4).T
+    m_rotor = BRASS * math.pi * R**2 * thickness
+    length, radius = d + beyond, 0.002
     m_axle = STEEL * math.pi * radius**2 * length
-    rod_cm = float(centre_of_mass_offset("thin_rod", length=length))
-    tensor = (parallel_axis(shape_tensor("disc", m_rotor, radius=R), m_rotor, [0.0, 0.0, d])
+    rod_cm = centre_of_mass_offset("thin_rod", length=length)
+    tensor = (parallel_axis(shape_tensor("disc", m_rotor, radius=R), m_rotor, _on_axis(d))
               + parallel_axis(shape_tensor("thin_rod", m_axle, length=length), m_axle,
-                              [0.0, 0.0, rod_cm]))
+                              _on_axis(rod_cm)))
     M = m_rotor + m_axle
-    return {"M": _r(M), "l": _r((m_rotor * d + m_axle * rod_cm) / M),
-            "I1": _r(tensor[0, 0]), "I3": _r(tensor[2, 2]), "g": G}
+    shown = (M, (m_rotor * d + m_axle * rod_cm) / M, tensor[:, 0, 0], tensor[:, 2, 2])
+    return [{"M": M_, "l": arm, "I1": I1, "I3": I3, "g": G}
+            for M_, arm, I1, I3 in zip(*(round_sig(x, SIG).tolist() for x in shown),
+                                       strict=True)]
 
 
-def _gyroscope(p: Mapping[str, Any]) -> Top:
-    text = (
+def _on_axis(z: np.ndarray) -> np.ndarray:
+    """Points ``(0, 0, z)`` on the symmetry axis, m."""
+    points = np.zeros((len(z), 3))
+    points[:, 2] = z
+    return points
+
+
+def _gyroscope_text(p: Mapping[str, Any]) -> str:
+    return (
         "A gyroscope rests on a post at the end of its axle (the pivot): mass "
         f"{_shown(p, 'M', 'M', 'kg')}, centre of mass {_shown(p, 'l', 'l', 'm')} from the "
         f"pivot, moments {_shown(p, 'I1', 'I_1', 'kg m²')} about the pivot and "
         f"{_shown(p, 'I3', 'I_3', 'kg m²')} about the axle; {_shown(p, 'g', 'g', 'm/s²')}."
     )
-    return Top("gyroscope", "A gyroscope on a post", text, dict(p), p["I1"], p["I3"],
-               p["M"] * p["g"] * p["l"], None, (0.2, 1.6), (POLE_MARGIN, math.pi / 2 + 0.4),
-               (100.0, 400.0))
 
 
-SCENES: dict[str, tuple[Callable[[np.random.Generator], dict], Callable[[Mapping], Top]]] = {
-    "toy_top": (lambda rng: _disc_body(rng, (0.025, 0.06)), _toy_top),
-    "gyroscope": (_gyroscope_body, _gyroscope),
-    "hanging": (lambda rng: _disc_body(rng, (0.03, 0.07)), _hanging),
+def _gyroscope(p: Mapping[str, Any]) -> Top:
+    return Top("gyroscope", "A gyroscope on a post", _gyroscope_text, dict(p), p["I1"],
+               p["I3"], p["M"] * p["g"] * p["l"], None, (0.2, 1.6),
+               (POLE_MARGIN, math.pi / 2 + 0.4), (100.0, 400.0))
+
+
+@dataclass(frozen=True)
+class _Scene:
+    """A scene: the draw of its random numbers from a student's generator, the shown numbers
+    of many such draws at once, and its :class:`Top` from the shown numbers."""
+
+    draw: Callable[[np.random.Generator], Any]
+    shown: Callable[[list], list[dict[str, float]]]
+    top: Callable[[Mapping[str, Any]], Top]
+
+
+SCENES: dict[str, _Scene] = {
+    "toy_top": _Scene(lambda rng: _disc_body(rng, (0.025, 0.06)), list, _toy_top),
+    "gyroscope": _Scene(_gyroscope_dimensions, _gyroscope_bodies, _gyroscope),
+    "hanging": _Scene(lambda rng: _disc_body(rng, (0.03, 0.07)), list, _hanging),
 }
-"""Scene → (draw of its shown numbers, its :class:`Top` from them)."""
+"""The three tops (a disc's shown numbers are its draw's)."""
 
 _BODY_NAMES = ("M", "R", "l", "I1", "I3", "g")
 
 
 def draw_top(rng: np.random.Generator) -> Top:
     """A random real top (toy top, gyroscope or hanging disc), moments from the shown values."""
-    scene = list(SCENES)[int(rng.integers(len(SCENES)))]
-    return top_from_params({"scene": scene, **SCENES[scene][0](rng)})
+    return draw_tops([rng])[0]
+
+
+def draw_tops(rngs: Sequence[np.random.Generator]) -> list[Top]:
+    """:func:`draw_top` of each generator: each student's scene and random numbers drawn in
+    order, then the shown numbers of each scene's tops worked out together."""
+    scenes = [list(SCENES)[int(rng.integers(len(SCENES)))] for rng in rngs]
+    drawn = [SCENES[scene].draw(rng) for scene, rng in zip(scenes, rngs, strict=True)]
+    shown: list[dict[str, float]] = [{}] * len(rngs)
+    for name, scene in SCENES.items():
+        rows = [i for i, s in enumerate(scenes) if s == name]
+        for i, body in zip(rows, scene.shown([drawn[i] for i in rows]) if rows else (),
+                           strict=True):
+            shown[i] = body
+    return [top_from_params({"scene": scene, **body})
+            for scene, body in zip(scenes, shown, strict=True)]
 
 
 def top_from_params(params: Mapping[str, Any]) -> Top:
     """The :class:`Top` of recorded parameters (the scene and its shown numbers)."""
     shown = {k: params[k] for k in ("scene", *_BODY_NAMES) if k in params}
-    return SCENES[params["scene"]][1](shown)
+    return SCENES[params["scene"]].top(shown)
 
 
 def draw_state(rng: np.random.Generator, top: Top, precession: float, nod: float) -> State:
@@ -312,7 +374,7 @@ def draw_state(rng: np.random.Generator, top: Top, precession: float, nod: float
         ``β̇0 = 0``.
     """
     beta0 = _r(rng.uniform(*top.tilt))
-    gamma_dot0 = _r(rng.choice([1.0, 1.0, 1.0, -1.0]) * rng.uniform(*top.spin))
+    gamma_dot0 = _r(pick(rng, (1.0, 1.0, 1.0, -1.0)) * rng.uniform(*top.spin))
     alpha_dot0 = _r(precession * top.Mgl / (top.I3 * gamma_dot0)) if precession else 0.0
     beta_dot0 = _r(nod * top.I3 * abs(gamma_dot0) / top.I1) if nod else 0.0
     return State(beta0, alpha_dot0, beta_dot0, gamma_dot0)
@@ -478,9 +540,19 @@ def _statement(top: Top, state: State) -> str:
 
 def draw(rng: np.random.Generator) -> dict[str, Any]:
     """A real top (:func:`draw_top`) launched with a precession of either sense and a nod."""
-    top = draw_top(rng)
-    sense = rng.choice([1.0, 1.0, -1.0])
-    nod = rng.choice([0.0, 1.0, -1.0]) * rng.uniform(0.02, 0.15)
+    return draw_many([rng])[0]
+
+
+def draw_many(rngs: list[np.random.Generator]) -> list[dict[str, Any]]:
+    """:func:`draw` of each generator, the tops drawn together (:func:`draw_tops`; the batch
+    form, :mod:`problems.family`)."""
+    return [_launched(rng, top) for rng, top in zip(rngs, draw_tops(rngs), strict=True)]
+
+
+def _launched(rng: np.random.Generator, top: Top) -> dict[str, Any]:
+    """The parameters of ``top`` launched with a precession of either sense and a nod."""
+    sense = pick(rng, (1.0, 1.0, -1.0))
+    nod = pick(rng, (0.0, 1.0, -1.0)) * rng.uniform(0.02, 0.15)
     return variant_params(top, draw_state(rng, top, sense * rng.uniform(0.3, 2.5), nod))
 
 

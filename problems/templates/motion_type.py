@@ -53,9 +53,10 @@ from problems.templates.heavy_top_constants import (
     State,
     Top,
     draw_state,
-    draw_top,
+    draw_tops,
     mistaken_states,
     motion_within_limits,
+    pick,
     select_mistakes,
     state_args,
     state_from_params,
@@ -118,13 +119,13 @@ def _draw_state(rng: np.random.Generator, top: Top, figure: str) -> State:
     if figure == "cusps":
         return draw_state(rng, top, 0.0, 0.0)
     if figure == "waves":
-        return draw_state(rng, top, rng.choice([0.3, 1.2]) + rng.uniform(0.0, 0.5), 0.0)
+        return draw_state(rng, top, pick(rng, (0.3, 1.2)) + rng.uniform(0.0, 0.5), 0.0)
     kind = int(rng.integers(3))
     if kind == 0:
         return draw_state(rng, top, -rng.uniform(0.3, 1.5), 0.0)
     if kind == 1:
         return draw_state(rng, top, rng.uniform(2.3, 3.0), 0.0)
-    return draw_state(rng, top, 0.0, rng.choice([1.0, -1.0]) * rng.uniform(0.03, 0.15))
+    return draw_state(rng, top, 0.0, pick(rng, (1.0, -1.0)) * rng.uniform(0.03, 0.15))
 
 
 def _robust(state: State, figure: str, rates: tuple[float, float]) -> bool:
@@ -197,8 +198,14 @@ def _statement(top: Top, state: State) -> str:
 
 def draw(rng: np.random.Generator) -> dict[str, Any]:
     """A real top, a figure drawn (each equally often) and a state meant to trace it."""
-    top = draw_top(rng)
-    return variant_params(top, _draw_state(rng, top, OPTIONS[int(rng.integers(len(OPTIONS)))]))
+    return draw_many([rng])[0]
+
+
+def draw_many(rngs: list[np.random.Generator]) -> list[dict[str, Any]]:
+    """:func:`draw` of each generator, the tops drawn together (:func:`draw_tops`; the batch
+    form, :mod:`problems.family`)."""
+    return [variant_params(top, _draw_state(rng, top, OPTIONS[int(rng.integers(len(OPTIONS)))]))
+            for rng, top in zip(rngs, draw_tops(rngs), strict=True)]
 
 
 def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
