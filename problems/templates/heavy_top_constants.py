@@ -53,7 +53,7 @@ from typing import Any
 import numpy as np
 
 from problems.answers import Answer, Mistake
-from problems.family import IllPosed, Parameter, reject_unless
+from problems.family import IllPosed, Parameter
 from problems.genuine import statement_number
 from problems.rounding import latex_sig, round_sig
 from solver.heavy_top import constants_of_motion, turning_points
@@ -493,11 +493,25 @@ def _swapped_constants(top: Top, state: State) -> tuple[float, float, float]:
     return p_alpha, p_gamma, e_prime
 
 
-def _answers(top: Top, state: State) -> tuple[Answer, ...] | None:
-    mistaken = mistaken_states(top, state)
-    mistaken.pop("I1_I3_swapped", None)  # see _swapped_constants
-    stacked = np.array([state_args(top, state), *mistaken.values()])
-    p_alpha, p_gamma, e_prime = (np.atleast_1d(x) for x in constants_of_motion(*stacked.T))
+def _constants_many(motions: list[tuple[Top, State]]) -> list[tuple]:
+    """For each ``(top, state)``: its mistaken states' names (:func:`mistaken_states` but
+    the swap, see :func:`_swapped_constants`) and ``p_α``, ``p_γ``, ``E'`` (R15, R16) of the
+    key then of each mistaken state, all of them in one solver call."""
+    names, rows = [], []
+    for top, state in motions:
+        mistaken = mistaken_states(top, state)
+        mistaken.pop("I1_I3_swapped", None)
+        names.append(tuple(mistaken))
+        rows.append([state_args(top, state), *mistaken.values()])
+    ends = np.cumsum([len(r) for r in rows])[:-1]
+    columns = np.array([row for student in rows for row in student], dtype=float).T
+    split = (np.split(np.atleast_1d(c), ends) for c in constants_of_motion(*columns))
+    return list(zip(names, *split, strict=True))
+
+
+def _answers(top: Top, state: State, constants: tuple) -> tuple[Answer, ...] | None:
+    """The answers from the motion's :func:`_constants_many` (None: rejected)."""
+    mistaken, p_alpha, p_gamma, e_prime = constants
     pa, pg, e = float(p_alpha[0]), float(p_gamma[0]), float(e_prime[0])
     beta0, alpha_dot0, beta_dot0, gamma_dot0 = state.values()
     transverse = top.I1 * alpha_dot0 * math.sin(beta0) ** 2
@@ -563,31 +577,31 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     that would hit the table, sleep or flop over), an ill-conditioned answer, or a primary
     mistake close to the key.
     """
-    top, state = top_from_params(params), state_from_params(params)
-    return _answers_inside(top, state, *turning_points(*state_args(top, state)))
+    (found,) = answers_many([params])
+    if isinstance(found, IllPosed):
+        raise found
+    return found
 
 
 def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
     """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
-    rejected) — the batch form (:mod:`problems.family`): every top's turning points in one
-    solver call."""
+    rejected) — the batch form (:mod:`problems.family`): every top's turning points, then the
+    constants of every motion inside its scene's limits, each in one solver call."""
     motions = [(top_from_params(p), state_from_params(p)) for p in many]
-    ends = turning_points(*np.array([state_args(*m) for m in motions]).T)
+    beta1, beta2 = map(np.atleast_1d,
+                       turning_points(*np.array([state_args(*m) for m in motions]).T))
+    inside = [i for i, (top, _) in enumerate(motions)
+              if motion_within_limits(top, float(beta1[i]), float(beta2[i]))]
+    constants = dict(zip(inside, _constants_many([motions[i] for i in inside]) if inside
+                         else (), strict=True))
     found: list[tuple[Answer, ...] | IllPosed] = []
-    for (top, state), beta1, beta2 in zip(motions, *map(np.atleast_1d, ends), strict=True):
-        try:
-            found.append(_answers_inside(top, state, beta1, beta2))
-        except IllPosed as e:
-            found.append(e)
-    return found
-
-
-def _answers_inside(top: Top, state: State, beta1: float, beta2: float) -> tuple[Answer, ...]:
-    """:func:`answers`, given the motion's turning points."""
-    reject_unless(motion_within_limits(top, float(beta1), float(beta2)),
-                  "the motion leaves the scene's limits")
-    found = _answers(top, state)
-    reject_unless(found is not None, "ill-conditioned, or a mistake close to the key")
+    for i, motion in enumerate(motions):
+        if i not in constants:
+            found.append(IllPosed("the motion leaves the scene's limits"))
+            continue
+        answered = _answers(*motion, constants[i])
+        found.append(IllPosed("ill-conditioned, or a mistake close to the key")
+                     if answered is None else answered)
     return found
 
 
