@@ -460,8 +460,11 @@ def select_mistakes(
     feedback = FEEDBACK if feedback is None else feedback
 
     def apart(x: float, kept: list[tuple[str, float]]) -> bool:
-        return all(abs(x - y) > MARGIN * (atol + rtol * max(abs(x), abs(y)))
-                   for y in (key, *(v for _, v in kept)))
+        size = abs(x)
+        for y in (key, *(v for _, v in kept)):
+            if not abs(x - y) > MARGIN * (atol + rtol * max(size, abs(y))):
+                return False
+        return True
 
     kept: list[tuple[str, float]] = []
     for name, value in primary.items():
@@ -496,7 +499,7 @@ def _swapped_constants(top: Top, state: State) -> tuple[float, float, float]:
 def _constants_many(motions: list[tuple[Top, State]]) -> list[tuple]:
     """For each ``(top, state)``: its mistaken states' names (:func:`mistaken_states` but
     the swap, see :func:`_swapped_constants`) and ``p_α``, ``p_γ``, ``E'`` (R15, R16) of the
-    key then of each mistaken state, all of them in one solver call."""
+    key then of each mistaken state (lists of floats), all of them in one solver call."""
     names, rows = [], []
     for top, state in motions:
         mistaken = mistaken_states(top, state)
@@ -505,14 +508,15 @@ def _constants_many(motions: list[tuple[Top, State]]) -> list[tuple]:
         rows.append([state_args(top, state), *mistaken.values()])
     ends = np.cumsum([len(r) for r in rows])[:-1]
     columns = np.array([row for student in rows for row in student], dtype=float).T
-    split = (np.split(np.atleast_1d(c), ends) for c in constants_of_motion(*columns))
+    split = ([part.tolist() for part in np.split(np.atleast_1d(c), ends)]
+             for c in constants_of_motion(*columns))
     return list(zip(names, *split, strict=True))
 
 
 def _answers(top: Top, state: State, constants: tuple) -> tuple[Answer, ...] | None:
     """The answers from the motion's :func:`_constants_many` (None: rejected)."""
     mistaken, p_alpha, p_gamma, e_prime = constants
-    pa, pg, e = float(p_alpha[0]), float(p_gamma[0]), float(e_prime[0])
+    pa, pg, e = p_alpha[0], p_gamma[0], e_prime[0]
     beta0, alpha_dot0, beta_dot0, gamma_dot0 = state.values()
     transverse = top.I1 * alpha_dot0 * math.sin(beta0) ** 2
     kinetic = 0.5 * top.I1 * (beta_dot0**2 + alpha_dot0**2 * math.sin(beta0) ** 2)
@@ -520,8 +524,8 @@ def _answers(top: Top, state: State, constants: tuple) -> tuple[Answer, ...] | N
             and well_conditioned(e, kinetic, top.Mgl * math.cos(beta0))):
         return None
     pa_swap, pg_swap, e_swap = _swapped_constants(top, state)
-    pa_wrong = {k: p_alpha[i] for i, k in enumerate(mistaken, 1)}
-    e_wrong = {k: e_prime[i] for i, k in enumerate(mistaken, 1)}
+    pa_wrong = dict(zip(mistaken, p_alpha[1:], strict=True))
+    e_wrong = dict(zip(mistaken, e_prime[1:], strict=True))
     mistakes = (
         # p_γ does not involve I1; its degree-mode error is second order in α̇0/γ̇0
         select_mistakes(pg, {"omega3_is_gamma_dot": top.I3 * gamma_dot0},

@@ -150,7 +150,7 @@ def _moment_mistakes_many(motions: list[tuple[Top, State]]) -> list[tuple]:
     return list(zip(mistaken, rows, beta1, beta2, strict=True))
 
 
-def _wrong_rates_many(moments: list[tuple]) -> list[tuple[np.ndarray, np.ndarray]]:
+def _wrong_rates_many(moments: list[tuple]) -> list[tuple[list[float], list[float]]]:
     """The precession rates (R18) at ``β1`` and at ``β2`` of each motion's moment mistakes,
     from its :func:`_moment_mistakes_many` (the solver on the mistaken moments): the
     constants of all and their rates in one call each."""
@@ -161,11 +161,11 @@ def _wrong_rates_many(moments: list[tuple]) -> list[tuple[np.ndarray, np.ndarray
     at1, at2 = (np.split(np.atleast_1d(precession_rate(np.concatenate(b), rows[0], p_alpha,
                                                        p_gamma)), ends)
                 for b in (beta1, beta2))
-    return [(r1[1:], r2[1:]) for r1, r2 in zip(at1, at2, strict=True)]
+    return [(r1[1:].tolist(), r2[1:].tolist()) for r1, r2 in zip(at1, at2, strict=True)]
 
 
 def _rate_answers(rates: tuple[float, float], names: tuple[str, ...],
-                  wrong: tuple[np.ndarray, np.ndarray]) -> list[Answer] | None:
+                  wrong: tuple[list[float], list[float]]) -> list[Answer] | None:
     """``alpha_dot1``, ``alpha_dot2`` with their mistakes (None if confusable). ``wrong``:
     the rates at ``β1`` and at ``β2`` of the moment mistakes ``names``
     (:func:`_wrong_rates_many`)."""
@@ -258,7 +258,7 @@ def _key(solution: dict) -> tuple[tuple[float | None, float | None], str]:
 
 
 def _answers(key: tuple | None, mistaken: Mapping[str, Any],
-             wrong: tuple[np.ndarray, np.ndarray] | None) -> tuple[Answer, ...] | IllPosed:
+             wrong: tuple[list[float], list[float]] | None) -> tuple[Answer, ...] | IllPosed:
     """One motion's answers from its :func:`_key` (None: outside the scene's limits) and its
     moment mistakes' rates (:func:`_wrong_rates_many`; None: an ambiguous figure), or why it
     is rejected."""
