@@ -1,7 +1,8 @@
 """Heavy symmetric top: the constants of motion p_γ, p_α and E' from the initial state (R14–R16).
 
 Three real tops, drawn at random (shared with :mod:`problems.templates.turning_points` and
-:mod:`problems.templates.motion_type`, which import :func:`draw_top` and :func:`draw_state`):
+:mod:`problems.templates.motion_type`, which import :func:`draw_top` or, for a class at
+once, :func:`draw_tops`, and :func:`draw_state`):
 
 ``toy_top``
     A thin brass disc (radius 2–4 cm, 3–6 mm thick) on a light axle, its centre 2.5–6 cm from
