@@ -1,7 +1,8 @@
 """Heavy symmetric top: the constants of motion p_γ, p_α and E' from the initial state (R14–R16).
 
 Three real tops, drawn at random (shared with :mod:`problems.templates.turning_points` and
-:mod:`problems.templates.motion_type`, which import :func:`draw_top` and :func:`draw_state`):
+:mod:`problems.templates.motion_type`, which import :func:`draw_top` or, for a class at
+once, :func:`draw_tops`, and :func:`draw_state`):
 
 ``toy_top``
     A thin brass disc (radius 2–4 cm, 3–6 mm thick) on a light axle, its centre 2.5–6 cm from
@@ -46,14 +47,14 @@ key or of another mistake.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from problems.answers import Answer, Mistake
-from problems.family import IllPosed, Parameter, reject_unless
+from problems.family import IllPosed, Parameter
 from problems.genuine import statement_number
 from problems.rounding import latex_sig, round_sig
 from solver.heavy_top import constants_of_motion, turning_points
@@ -135,8 +136,8 @@ class Top:
         ``"toy_top"``, ``"gyroscope"`` or ``"hanging"``.
     title : str
         Question title.
-    text : str
-        Markdown describing the body; names every number of ``params`` in backticks.
+    describe : callable
+        The Markdown describing the body, from ``params`` (:attr:`text`).
     params : dict
         The scene and its shown (rounded) numbers, SI.
     I1, I3, Mgl : float
@@ -153,7 +154,7 @@ class Top:
 
     scene: str
     title: str
-    text: str
+    describe: Callable[[Mapping[str, Any]], str]
     params: dict[str, Any]
     I1: float
     I3: float
@@ -162,6 +163,12 @@ class Top:
     tilt: tuple[float, float]
     limits: tuple[float, float]
     spin: tuple[float, float]
+
+    @property
+    def text(self) -> str:
+        """Markdown describing the body; names every number of ``params`` in backticks
+        (written when asked for: a statement's, not a draw's)."""
+        return self.describe(self.params)
 
 
 @dataclass(frozen=True)
@@ -200,6 +207,12 @@ def _r(x: float) -> float:
     return round_sig(x, SIG)
 
 
+def pick(rng: np.random.Generator, options: Sequence[float]) -> float:
+    """One of ``options``, uniformly: the very draw ``rng.choice(options)`` makes (one
+    ``integers`` below ``len(options)``), without its array work."""
+    return options[int(rng.integers(len(options)))]
+
+
 def _disc_body(rng: np.random.Generator, lever: tuple[float, float]) -> dict[str, float]:
     """Shown ``M, R, l, g`` of a thin brass disc on a light axle."""
     R, thickness = _r(rng.uniform(0.02, 0.04)), rng.uniform(0.003, 0.006)
@@ -219,79 +232,129 @@ def _shown(p: Mapping[str, Any], name: str, symbol: str, unit: str) -> str:
     return f"${symbol} = {latex_sig(p[name], SIG)}$ {unit} (`{name}`)"
 
 
-def _toy_top(p: Mapping[str, Any]) -> Top:
-    I1, I3, Mgl, I1_cm = _disc_moments(p)
-    touch = math.atan2(p["l"], p["R"])  # the rim reaches the table
-    text = (
+def _toy_top_text(p: Mapping[str, Any]) -> str:
+    return (
         f"A toy top: a thin brass disc of mass {_shown(p, 'M', 'M', 'kg')} and radius "
         f"{_shown(p, 'R', 'R', 'm')} on a massless axle whose tip, {_shown(p, 'l', 'l', 'm')} "
         f"from the disc's centre, rests in a dimple of the table; {_shown(p, 'g', 'g', 'm/s²')}."
     )
-    return Top("toy_top", "A toy top on a table", text, dict(p), I1, I3, Mgl, I1_cm,
+
+
+def _toy_top(p: Mapping[str, Any]) -> Top:
+    I1, I3, Mgl, I1_cm = _disc_moments(p)
+    touch = math.atan2(p["l"], p["R"])  # the rim reaches the table
+    return Top("toy_top", "A toy top on a table", _toy_top_text, dict(p), I1, I3, Mgl, I1_cm,
                (0.15, touch - 0.1), (POLE_MARGIN, touch - TABLE_MARGIN), (100.0, 300.0))
 
 
-def _hanging(p: Mapping[str, Any]) -> Top:
-    I1, I3, Mgl, I1_cm = _disc_moments(p)
-    text = (
+def _hanging_text(p: Mapping[str, Any]) -> str:
+    return (
         f"A thin brass disc of mass {_shown(p, 'M', 'M', 'kg')} and radius "
         f"{_shown(p, 'R', 'R', 'm')} hangs on a massless rod from a ball joint, its centre "
         f"{_shown(p, 'l', 'l', 'm')} from the joint: the symmetry axis points below the "
         f"horizontal ($\\beta > \\pi/2$); {_shown(p, 'g', 'g', 'm/s²')}."
     )
-    return Top("hanging", "A spinning disc hanging from a ball joint", text, dict(p),
+
+
+def _hanging(p: Mapping[str, Any]) -> Top:
+    I1, I3, Mgl, I1_cm = _disc_moments(p)
+    return Top("hanging", "A spinning disc hanging from a ball joint", _hanging_text, dict(p),
                I1, I3, Mgl, I1_cm, (1.9, 2.85), (math.pi / 2, math.pi - POLE_MARGIN),
                (60.0, 250.0))
 
 
-def _gyroscope_body(rng: np.random.Generator) -> dict[str, float]:
-    """Brass rotor (thin disc) at ``d`` on a steel axle (thin rod from the pivot), R2: the
-    shown ``M, l, I1, I3, g``."""
+def _gyroscope_dimensions(rng: np.random.Generator) -> tuple[float, float, float, float]:
+    """A gyroscope's drawn dimensions, m: the rotor's radius ``R``, its distance ``d`` from
+    the pivot and its thickness, and the axle's length beyond the rotor."""
     R, d = rng.uniform(0.025, 0.04), rng.uniform(0.04, 0.07)
-    m_rotor = BRASS * math.pi * R**2 * rng.uniform(0.004, 0.008)
-    length, radius = d + rng.uniform(0.01, 0.02), 0.002
+    return R, d, rng.uniform(0.004, 0.008), rng.uniform(0.01, 0.02)
+
+
+def _gyroscope_bodies(dimensions: Sequence[tuple[float, ...]]) -> list[dict[str, float]]:
+    """Brass rotor (thin disc) at ``d`` on a steel axle (thin rod from the pivot), R2: the
+    shown ``M, l, I1, I3, g`` of each gyroscope of :func:`_gyroscope_dimensions`, the
+    tensors of all in one call each (elementwise: each as alone, bit for bit)."""
+    R, d, thickness, beyond = np.array(dimensions, dtype=float).reshape(-1, 4).T
+    m_rotor = BRASS * math.pi * R**2 * thickness
+    length, radius = d + beyond, 0.002
     m_axle = STEEL * math.pi * radius**2 * length
-    rod_cm = float(centre_of_mass_offset("thin_rod", length=length))
-    tensor = (parallel_axis(shape_tensor("disc", m_rotor, radius=R), m_rotor, [0.0, 0.0, d])
+    rod_cm = centre_of_mass_offset("thin_rod", length=length)
+    tensor = (parallel_axis(shape_tensor("disc", m_rotor, radius=R), m_rotor, _on_axis(d))
               + parallel_axis(shape_tensor("thin_rod", m_axle, length=length), m_axle,
-                              [0.0, 0.0, rod_cm]))
+                              _on_axis(rod_cm)))
     M = m_rotor + m_axle
-    return {"M": _r(M), "l": _r((m_rotor * d + m_axle * rod_cm) / M),
-            "I1": _r(tensor[0, 0]), "I3": _r(tensor[2, 2]), "g": G}
+    shown = (M, (m_rotor * d + m_axle * rod_cm) / M, tensor[:, 0, 0], tensor[:, 2, 2])
+    return [{"M": M_, "l": arm, "I1": I1, "I3": I3, "g": G}
+            for M_, arm, I1, I3 in zip(*(round_sig(x, SIG).tolist() for x in shown),
+                                       strict=True)]
 
 
-def _gyroscope(p: Mapping[str, Any]) -> Top:
-    text = (
+def _on_axis(z: np.ndarray) -> np.ndarray:
+    """Points ``(0, 0, z)`` on the symmetry axis, m."""
+    points = np.zeros((len(z), 3))
+    points[:, 2] = z
+    return points
+
+
+def _gyroscope_text(p: Mapping[str, Any]) -> str:
+    return (
         "A gyroscope rests on a post at the end of its axle (the pivot): mass "
         f"{_shown(p, 'M', 'M', 'kg')}, centre of mass {_shown(p, 'l', 'l', 'm')} from the "
         f"pivot, moments {_shown(p, 'I1', 'I_1', 'kg m²')} about the pivot and "
         f"{_shown(p, 'I3', 'I_3', 'kg m²')} about the axle; {_shown(p, 'g', 'g', 'm/s²')}."
     )
-    return Top("gyroscope", "A gyroscope on a post", text, dict(p), p["I1"], p["I3"],
-               p["M"] * p["g"] * p["l"], None, (0.2, 1.6), (POLE_MARGIN, math.pi / 2 + 0.4),
-               (100.0, 400.0))
 
 
-SCENES: dict[str, tuple[Callable[[np.random.Generator], dict], Callable[[Mapping], Top]]] = {
-    "toy_top": (lambda rng: _disc_body(rng, (0.025, 0.06)), _toy_top),
-    "gyroscope": (_gyroscope_body, _gyroscope),
-    "hanging": (lambda rng: _disc_body(rng, (0.03, 0.07)), _hanging),
+def _gyroscope(p: Mapping[str, Any]) -> Top:
+    return Top("gyroscope", "A gyroscope on a post", _gyroscope_text, dict(p), p["I1"],
+               p["I3"], p["M"] * p["g"] * p["l"], None, (0.2, 1.6),
+               (POLE_MARGIN, math.pi / 2 + 0.4), (100.0, 400.0))
+
+
+@dataclass(frozen=True)
+class _Scene:
+    """A scene: the draw of its random numbers from a student's generator, the shown numbers
+    of many such draws at once, and its :class:`Top` from the shown numbers."""
+
+    draw: Callable[[np.random.Generator], Any]
+    shown: Callable[[list], list[dict[str, float]]]
+    top: Callable[[Mapping[str, Any]], Top]
+
+
+SCENES: dict[str, _Scene] = {
+    "toy_top": _Scene(lambda rng: _disc_body(rng, (0.025, 0.06)), list, _toy_top),
+    "gyroscope": _Scene(_gyroscope_dimensions, _gyroscope_bodies, _gyroscope),
+    "hanging": _Scene(lambda rng: _disc_body(rng, (0.03, 0.07)), list, _hanging),
 }
-"""Scene → (draw of its shown numbers, its :class:`Top` from them)."""
+"""The three tops (a disc's shown numbers are its draw's)."""
 
 _BODY_NAMES = ("M", "R", "l", "I1", "I3", "g")
 
 
 def draw_top(rng: np.random.Generator) -> Top:
     """A random real top (toy top, gyroscope or hanging disc), moments from the shown values."""
-    scene = list(SCENES)[int(rng.integers(len(SCENES)))]
-    return top_from_params({"scene": scene, **SCENES[scene][0](rng)})
+    return draw_tops([rng])[0]
+
+
+def draw_tops(rngs: Sequence[np.random.Generator]) -> list[Top]:
+    """:func:`draw_top` of each generator: each student's scene and random numbers drawn in
+    order, then the shown numbers of each scene's tops worked out together."""
+    scenes = [list(SCENES)[int(rng.integers(len(SCENES)))] for rng in rngs]
+    drawn = [SCENES[scene].draw(rng) for scene, rng in zip(scenes, rngs, strict=True)]
+    shown: list[dict[str, float]] = [{}] * len(rngs)
+    for name, scene in SCENES.items():
+        rows = [i for i, s in enumerate(scenes) if s == name]
+        for i, body in zip(rows, scene.shown([drawn[i] for i in rows]) if rows else (),
+                           strict=True):
+            shown[i] = body
+    return [top_from_params({"scene": scene, **body})
+            for scene, body in zip(scenes, shown, strict=True)]
 
 
 def top_from_params(params: Mapping[str, Any]) -> Top:
     """The :class:`Top` of recorded parameters (the scene and its shown numbers)."""
     shown = {k: params[k] for k in ("scene", *_BODY_NAMES) if k in params}
-    return SCENES[params["scene"]][1](shown)
+    return SCENES[params["scene"]].top(shown)
 
 
 def draw_state(rng: np.random.Generator, top: Top, precession: float, nod: float) -> State:
@@ -312,7 +375,7 @@ def draw_state(rng: np.random.Generator, top: Top, precession: float, nod: float
         ``β̇0 = 0``.
     """
     beta0 = _r(rng.uniform(*top.tilt))
-    gamma_dot0 = _r(rng.choice([1.0, 1.0, 1.0, -1.0]) * rng.uniform(*top.spin))
+    gamma_dot0 = _r(pick(rng, (1.0, 1.0, 1.0, -1.0)) * rng.uniform(*top.spin))
     alpha_dot0 = _r(precession * top.Mgl / (top.I3 * gamma_dot0)) if precession else 0.0
     beta_dot0 = _r(nod * top.I3 * abs(gamma_dot0) / top.I1) if nod else 0.0
     return State(beta0, alpha_dot0, beta_dot0, gamma_dot0)
@@ -398,8 +461,11 @@ def select_mistakes(
     feedback = FEEDBACK if feedback is None else feedback
 
     def apart(x: float, kept: list[tuple[str, float]]) -> bool:
-        return all(abs(x - y) > MARGIN * (atol + rtol * max(abs(x), abs(y)))
-                   for y in (key, *(v for _, v in kept)))
+        size = abs(x)
+        for y in (key, *(v for _, v in kept)):
+            if not abs(x - y) > MARGIN * (atol + rtol * max(size, abs(y))):
+                return False
+        return True
 
     kept: list[tuple[str, float]] = []
     for name, value in primary.items():
@@ -431,12 +497,27 @@ def _swapped_constants(top: Top, state: State) -> tuple[float, float, float]:
     return p_alpha, p_gamma, e_prime
 
 
-def _answers(top: Top, state: State) -> tuple[Answer, ...] | None:
-    mistaken = mistaken_states(top, state)
-    mistaken.pop("I1_I3_swapped", None)  # see _swapped_constants
-    stacked = np.array([state_args(top, state), *mistaken.values()])
-    p_alpha, p_gamma, e_prime = (np.atleast_1d(x) for x in constants_of_motion(*stacked.T))
-    pa, pg, e = float(p_alpha[0]), float(p_gamma[0]), float(e_prime[0])
+def _constants_many(motions: list[tuple[Top, State]]) -> list[tuple]:
+    """For each ``(top, state)``: its mistaken states' names (:func:`mistaken_states` but
+    the swap, see :func:`_swapped_constants`) and ``p_α``, ``p_γ``, ``E'`` (R15, R16) of the
+    key then of each mistaken state (lists of floats), all of them in one solver call."""
+    names, rows = [], []
+    for top, state in motions:
+        mistaken = mistaken_states(top, state)
+        mistaken.pop("I1_I3_swapped", None)
+        names.append(tuple(mistaken))
+        rows.append([state_args(top, state), *mistaken.values()])
+    ends = np.cumsum([len(r) for r in rows])[:-1]
+    columns = np.array([row for student in rows for row in student], dtype=float).T
+    split = ([part.tolist() for part in np.split(np.atleast_1d(c), ends)]
+             for c in constants_of_motion(*columns))
+    return list(zip(names, *split, strict=True))
+
+
+def _answers(top: Top, state: State, constants: tuple) -> tuple[Answer, ...] | None:
+    """The answers from the motion's :func:`_constants_many` (None: rejected)."""
+    mistaken, p_alpha, p_gamma, e_prime = constants
+    pa, pg, e = p_alpha[0], p_gamma[0], e_prime[0]
     beta0, alpha_dot0, beta_dot0, gamma_dot0 = state.values()
     transverse = top.I1 * alpha_dot0 * math.sin(beta0) ** 2
     kinetic = 0.5 * top.I1 * (beta_dot0**2 + alpha_dot0**2 * math.sin(beta0) ** 2)
@@ -444,8 +525,8 @@ def _answers(top: Top, state: State) -> tuple[Answer, ...] | None:
             and well_conditioned(e, kinetic, top.Mgl * math.cos(beta0))):
         return None
     pa_swap, pg_swap, e_swap = _swapped_constants(top, state)
-    pa_wrong = {k: p_alpha[i] for i, k in enumerate(mistaken, 1)}
-    e_wrong = {k: e_prime[i] for i, k in enumerate(mistaken, 1)}
+    pa_wrong = dict(zip(mistaken, p_alpha[1:], strict=True))
+    e_wrong = dict(zip(mistaken, e_prime[1:], strict=True))
     mistakes = (
         # p_γ does not involve I1; its degree-mode error is second order in α̇0/γ̇0
         select_mistakes(pg, {"omega3_is_gamma_dot": top.I3 * gamma_dot0},
@@ -478,9 +559,19 @@ def _statement(top: Top, state: State) -> str:
 
 def draw(rng: np.random.Generator) -> dict[str, Any]:
     """A real top (:func:`draw_top`) launched with a precession of either sense and a nod."""
-    top = draw_top(rng)
-    sense = rng.choice([1.0, 1.0, -1.0])
-    nod = rng.choice([0.0, 1.0, -1.0]) * rng.uniform(0.02, 0.15)
+    return draw_many([rng])[0]
+
+
+def draw_many(rngs: list[np.random.Generator]) -> list[dict[str, Any]]:
+    """:func:`draw` of each generator, the tops drawn together (:func:`draw_tops`; the batch
+    form, :mod:`problems.family`)."""
+    return [_launched(rng, top) for rng, top in zip(rngs, draw_tops(rngs), strict=True)]
+
+
+def _launched(rng: np.random.Generator, top: Top) -> dict[str, Any]:
+    """The parameters of ``top`` launched with a precession of either sense and a nod."""
+    sense = pick(rng, (1.0, 1.0, -1.0))
+    nod = pick(rng, (0.0, 1.0, -1.0)) * rng.uniform(0.02, 0.15)
     return variant_params(top, draw_state(rng, top, sense * rng.uniform(0.3, 2.5), nod))
 
 
@@ -491,31 +582,31 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     that would hit the table, sleep or flop over), an ill-conditioned answer, or a primary
     mistake close to the key.
     """
-    top, state = top_from_params(params), state_from_params(params)
-    return _answers_inside(top, state, *turning_points(*state_args(top, state)))
+    (found,) = answers_many([params])
+    if isinstance(found, IllPosed):
+        raise found
+    return found
 
 
 def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
     """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
-    rejected) — the batch form (:mod:`problems.family`): every top's turning points in one
-    solver call."""
+    rejected) — the batch form (:mod:`problems.family`): every top's turning points, then the
+    constants of every motion inside its scene's limits, each in one solver call."""
     motions = [(top_from_params(p), state_from_params(p)) for p in many]
-    ends = turning_points(*np.array([state_args(*m) for m in motions]).T)
+    beta1, beta2 = map(np.atleast_1d,
+                       turning_points(*np.array([state_args(*m) for m in motions]).T))
+    inside = [i for i, (top, _) in enumerate(motions)
+              if motion_within_limits(top, float(beta1[i]), float(beta2[i]))]
+    constants = dict(zip(inside, _constants_many([motions[i] for i in inside]) if inside
+                         else (), strict=True))
     found: list[tuple[Answer, ...] | IllPosed] = []
-    for (top, state), beta1, beta2 in zip(motions, *map(np.atleast_1d, ends), strict=True):
-        try:
-            found.append(_answers_inside(top, state, beta1, beta2))
-        except IllPosed as e:
-            found.append(e)
-    return found
-
-
-def _answers_inside(top: Top, state: State, beta1: float, beta2: float) -> tuple[Answer, ...]:
-    """:func:`answers`, given the motion's turning points."""
-    reject_unless(motion_within_limits(top, float(beta1), float(beta2)),
-                  "the motion leaves the scene's limits")
-    found = _answers(top, state)
-    reject_unless(found is not None, "ill-conditioned, or a mistake close to the key")
+    for i, motion in enumerate(motions):
+        if i not in constants:
+            found.append(IllPosed("the motion leaves the scene's limits"))
+            continue
+        answered = _answers(*motion, constants[i])
+        found.append(IllPosed("ill-conditioned, or a mistake close to the key")
+                     if answered is None else answered)
     return found
 
 

@@ -38,12 +38,13 @@ zero, and a student's turning point carried to 1e-8 leaves a residue there far b
 from __future__ import annotations
 
 from collections.abc import Mapping
+from functools import cache
 from typing import Any
 
 import numpy as np
 
 from problems.answers import Answer, Mistake
-from problems.family import IllPosed, reject_unless
+from problems.family import IllPosed
 from problems.templates.heavy_top_constants import (
     CONVENTIONS as CONVENTIONS,  # the same convention topics (problems.conventions)
 )
@@ -53,9 +54,10 @@ from problems.templates.heavy_top_constants import (
     State,
     Top,
     draw_state,
-    draw_top,
+    draw_tops,
     mistaken_states,
     motion_within_limits,
+    pick,
     select_mistakes,
     state_args,
     state_from_params,
@@ -118,13 +120,13 @@ def _draw_state(rng: np.random.Generator, top: Top, figure: str) -> State:
     if figure == "cusps":
         return draw_state(rng, top, 0.0, 0.0)
     if figure == "waves":
-        return draw_state(rng, top, rng.choice([0.3, 1.2]) + rng.uniform(0.0, 0.5), 0.0)
+        return draw_state(rng, top, pick(rng, (0.3, 1.2)) + rng.uniform(0.0, 0.5), 0.0)
     kind = int(rng.integers(3))
     if kind == 0:
         return draw_state(rng, top, -rng.uniform(0.3, 1.5), 0.0)
     if kind == 1:
         return draw_state(rng, top, rng.uniform(2.3, 3.0), 0.0)
-    return draw_state(rng, top, 0.0, rng.choice([1.0, -1.0]) * rng.uniform(0.03, 0.15))
+    return draw_state(rng, top, 0.0, pick(rng, (1.0, -1.0)) * rng.uniform(0.03, 0.15))
 
 
 def _robust(state: State, figure: str, rates: tuple[float, float]) -> bool:
@@ -134,14 +136,10 @@ def _robust(state: State, figure: str, rates: tuple[float, float]) -> bool:
     return figure in OPTIONS and sizes[0] >= MIN_RATE_RATIO * sizes[1]
 
 
-def _moment_mistakes(top: Top, state: State):
-    """The moment mistakes' solver arguments, and their turning points ``(β1, β2)`` after the
-    key's (index 0): one vectorised pass, done first since it is the cheap rejection test."""
-    return _moment_mistakes_many([(top, state)])[0]
-
-
 def _moment_mistakes_many(motions: list[tuple[Top, State]]) -> list[tuple]:
-    """:func:`_moment_mistakes` of each ``(top, state)``, in one solver call for all."""
+    """Each ``(top, state)``'s moment mistakes (their names), their solver arguments (columns,
+    the key's first) and the turning points ``(β1, β2)`` of each: one solver call for all,
+    done first since it is the cheap rejection test."""
     mistaken = [{k: v for k, v in mistaken_states(top, state).items() if k != "degree_mode"}
                 for top, state in motions]
     rows = [np.array([state_args(top, state), *m.values()]).T
@@ -152,14 +150,25 @@ def _moment_mistakes_many(motions: list[tuple[Top, State]]) -> list[tuple]:
     return list(zip(mistaken, rows, beta1, beta2, strict=True))
 
 
-def _rate_answers(rates: tuple[float, float], names: tuple[str, ...], rows: np.ndarray,
-                  beta1: np.ndarray, beta2: np.ndarray):
-    """``alpha_dot1``, ``alpha_dot2`` with their mistakes (None if confusable). ``rows``,
-    ``beta1``, ``beta2``: solver arguments and turning points, the key's first, then those of
-    the moment mistakes ``names`` (their rates from the solver on the mistaken moments)."""
+def _wrong_rates_many(moments: list[tuple]) -> list[tuple[list[float], list[float]]]:
+    """The precession rates (R18) at ``β1`` and at ``β2`` of each motion's moment mistakes,
+    from its :func:`_moment_mistakes_many` (the solver on the mistaken moments): the
+    constants of all and their rates in one call each."""
+    _, rows, beta1, beta2 = (list(part) for part in zip(*moments, strict=True))
+    ends = np.cumsum([r.shape[1] for r in rows])[:-1]
+    rows = np.concatenate(rows, axis=1)
     p_alpha, p_gamma, _ = constants_of_motion(*rows)
-    wrong = [np.atleast_1d(precession_rate(b, rows[0], p_alpha, p_gamma))[1:]
-             for b in (beta1, beta2)]
+    at1, at2 = (np.split(np.atleast_1d(precession_rate(np.concatenate(b), rows[0], p_alpha,
+                                                       p_gamma)), ends)
+                for b in (beta1, beta2))
+    return [(r1[1:].tolist(), r2[1:].tolist()) for r1, r2 in zip(at1, at2, strict=True)]
+
+
+def _rate_answers(rates: tuple[float, float], names: tuple[str, ...],
+                  wrong: tuple[list[float], list[float]]) -> list[Answer] | None:
+    """``alpha_dot1``, ``alpha_dot2`` with their mistakes (None if confusable). ``wrong``:
+    the rates at ``β1`` and at ``β2`` of the moment mistakes ``names``
+    (:func:`_wrong_rates_many`)."""
     scale = max(abs(r) for r in rates)
     answers = []
     for i, name in enumerate(("alpha_dot1", "alpha_dot2")):
@@ -177,6 +186,7 @@ def _rate_answers(rates: tuple[float, float], names: tuple[str, ...], rows: np.n
     return answers
 
 
+@cache  # one of three, the same for every student (answers are immutable)
 def _figure_answer(figure: str) -> Answer:
     mistakes = tuple(Mistake(f"said_{other}", other, _FIGURE_FEEDBACK[figure, other])
                      for other in OPTIONS if other != figure)
@@ -197,8 +207,14 @@ def _statement(top: Top, state: State) -> str:
 
 def draw(rng: np.random.Generator) -> dict[str, Any]:
     """A real top, a figure drawn (each equally often) and a state meant to trace it."""
-    top = draw_top(rng)
-    return variant_params(top, _draw_state(rng, top, OPTIONS[int(rng.integers(len(OPTIONS)))]))
+    return draw_many([rng])[0]
+
+
+def draw_many(rngs: list[np.random.Generator]) -> list[dict[str, Any]]:
+    """:func:`draw` of each generator, the tops drawn together (:func:`draw_tops`; the batch
+    form, :mod:`problems.family`)."""
+    return [variant_params(top, _draw_state(rng, top, OPTIONS[int(rng.integers(len(OPTIONS)))]))
+            for rng, top in zip(rngs, draw_tops(rngs), strict=True)]
 
 
 def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
@@ -208,47 +224,52 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     Raises :class:`~problems.family.IllPosed` for a motion outside the scene's limits, a figure
     the rounding of a turning point could change, or a primary mistake close to the key.
     """
-    top, state = top_from_params(params), state_from_params(params)
-    return _answers(top, state, _moment_mistakes(top, state))
+    (found,) = answers_many([params])
+    if isinstance(found, IllPosed):
+        raise found
+    return found
 
 
 def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
     """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
     rejected) — the batch form (:mod:`problems.family`): the turning points of every state,
-    then the solver's summary of every key inside the scene's limits, each in one call."""
+    the solver's summary of every key inside the scene's limits (its exact α̇ = 0 at a cusp,
+    and the figure), then the moment mistakes' rates of every unambiguous figure, each in one
+    call."""
     motions = [(top_from_params(p), state_from_params(p)) for p in many]
     moments = _moment_mistakes_many(motions)
     inside = [i for i, ((top, _), (*_, beta1, beta2)) in enumerate(zip(motions, moments,
                                                                          strict=True))
               if motion_within_limits(top, float(beta1[0]), float(beta2[0]))]
-    solutions = {}
+    keys = {}
     if inside:
         table = solve_heavy_top_many(*np.array([state_args(*motions[i]) for i in inside]).T)
-        solutions = {i: heavy_top_record(table, j) for j, i in enumerate(inside)}
-    found: list[tuple[Answer, ...] | IllPosed] = []
-    for i, ((top, state), moment) in enumerate(zip(motions, moments, strict=True)):
-        try:
-            found.append(_answers(top, state, moment, solutions.get(i)))
-        except IllPosed as e:
-            found.append(e)
-    return found
+        keys = {i: _key(heavy_top_record(table, j)) for j, i in enumerate(inside)}
+    posed = [i for i in inside
+             if None not in keys[i][0] and _robust(motions[i][1], keys[i][1], keys[i][0])]
+    wrong = dict(zip(posed, _wrong_rates_many([moments[i] for i in posed]) if posed else (),
+                     strict=True))
+    return [_answers(keys.get(i), moments[i][0], wrong.get(i)) for i in range(len(many))]
 
 
-def _answers(top: Top, state: State, moment: tuple, solution: dict | None = None
-             ) -> tuple[Answer, ...]:
-    """:func:`answers` from the motion's :func:`_moment_mistakes` (and the key's
-    ``solve_heavy_top``, if already computed)."""
-    mistaken, rows, beta1, beta2 = moment
-    reject_unless(motion_within_limits(top, float(beta1[0]), float(beta2[0])),
-                  "the motion leaves the scene's limits")
-    # the key from the solver's one-state summary: exact α̇ = 0 at a cusp, and the figure
-    if solution is None:
-        solution = solve_heavy_top(*state_args(top, state))
-    rates = (solution["alpha_dot_beta1"], solution["alpha_dot_beta2"])
-    figure = solution["motion"]
-    reject_unless(None not in rates and _robust(state, figure, rates), "an ambiguous figure")
-    found = _rate_answers(rates, tuple(mistaken), rows, beta1, beta2)
-    reject_unless(found is not None, "a mistake close to the key")
+def _key(solution: dict) -> tuple[tuple[float | None, float | None], str]:
+    """The rates at the turning points and the figure of the solver's summary of a motion."""
+    return (solution["alpha_dot_beta1"], solution["alpha_dot_beta2"]), solution["motion"]
+
+
+def _answers(key: tuple | None, mistaken: Mapping[str, Any],
+             wrong: tuple[list[float], list[float]] | None) -> tuple[Answer, ...] | IllPosed:
+    """One motion's answers from its :func:`_key` (None: outside the scene's limits) and its
+    moment mistakes' rates (:func:`_wrong_rates_many`; None: an ambiguous figure), or why it
+    is rejected."""
+    if key is None:
+        return IllPosed("the motion leaves the scene's limits")
+    if wrong is None:
+        return IllPosed("an ambiguous figure")
+    rates, figure = key
+    found = _rate_answers(rates, tuple(mistaken), wrong)
+    if found is None:
+        return IllPosed("a mistake close to the key")
     return (*found, _figure_answer(figure))
 
 
