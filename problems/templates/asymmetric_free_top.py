@@ -27,7 +27,7 @@ one another (e.g. a small-amplitude R9 period indistinguishable from the exact o
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -37,7 +37,7 @@ from problems.answers import Answer, Mistake
 from problems.family import IllPosed, distinguishable
 from problems.rounding import latex_sig, round_sig
 from problems.templates import near_axis_stability as near_axis
-from problems.templates.near_axis_stability import Draw, draw_body
+from problems.templates.near_axis_stability import Draw, draw_bodies
 from solver.asymmetric_top import asymmetric_top_period, flip_time
 from solver.torque_free import invariants, near_axis_stability
 
@@ -70,17 +70,26 @@ WOBBLE = (0.15, 0.7)
 MAX_ATTEMPTS = 1000
 
 
-def _draw(rng: np.random.Generator) -> Draw:
-    body = draw_body(rng)
-    order = np.argsort(body.moments)
-    moments = tuple(round_sig(np.asarray(body.moments)[order], SIG_MOMENTS).tolist())
-    spin_axis = 2 if rng.random() < 0.5 else int(rng.choice([1, 3]))
-    fractions = FLIP_PERTURBATION if spin_axis == 2 else WOBBLE
-    omega = rng.uniform(*fractions, size=3) * rng.choice([-1.0, 1.0], size=3)
-    omega[spin_axis - 1] = 1.0
-    omega *= rng.uniform(*body.spin)
-    return Draw(body, tuple(int(i) for i in order), moments, spin_axis,
-                tuple(round_sig(omega, SIG).tolist()))
+def _draws(rngs: Sequence[np.random.Generator]) -> list[Draw]:
+    """A draw from each generator (:func:`draw`): each student's numbers drawn from their own
+    generator as alone, then ordered and rounded together."""
+    bodies = draw_bodies(rngs)
+    spin_axes, omegas, spins = [], [], []
+    for rng, body in zip(rngs, bodies, strict=True):
+        axis = 2 if rng.random() < 0.5 else int(rng.choice([1, 3]))
+        fractions = FLIP_PERTURBATION if axis == 2 else WOBBLE
+        spin_axes.append(axis)
+        omegas.append(rng.uniform(*fractions, size=3) * rng.choice([-1.0, 1.0], size=3))
+        spins.append(rng.uniform(*body.spin))
+    unordered = np.array([b.moments for b in bodies])
+    order = np.argsort(unordered, axis=1)
+    moments = round_sig(np.take_along_axis(unordered, order, axis=1), SIG_MOMENTS)
+    omega = np.array(omegas)
+    omega[np.arange(len(spins)), np.array(spin_axes) - 1] = 1.0
+    omega *= np.array(spins)[:, None]
+    return [Draw(body, tuple(o), tuple(m), s, tuple(w)) for body, o, m, s, w in zip(
+        bodies, order.tolist(), moments.tolist(), spin_axes, round_sig(omega, SIG).tolist(),
+        strict=True)]
 
 
 def _rigid(d: Draw) -> bool:
@@ -213,7 +222,13 @@ def draw(rng: np.random.Generator) -> dict[str, Any]:
     """A body (:func:`~problems.templates.near_axis_stability.draw_body`), its axes ordered
     ``I1 < I2 < I3``, spun about ê2 with a small perturbation or about ê1 or ê3 with a large
     wobble."""
-    return _draw(rng).params()
+    return draw_many([rng])[0]
+
+
+def draw_many(rngs: list[np.random.Generator]) -> list[dict[str, Any]]:
+    """:func:`draw` of each generator — the batch form (:mod:`problems.family`): the bodies'
+    moments, their order and the rounding of all at once."""
+    return [d.params() for d in _draws(rngs)]
 
 
 def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:

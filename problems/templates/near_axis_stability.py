@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -88,48 +88,72 @@ class Body:
         return KINDS[self.label].description
 
 
-def _u(rng: np.random.Generator, low: float, high: float) -> float:
-    return round_sig(rng.uniform(low, high), SIG)
+_RANGES: dict[str, tuple[tuple[float, float], ...]] = {
+    "smartphone": ((0.14, 0.22), (0.14, 0.165), (0.065, 0.078), (0.007, 0.009)),
+    "book": ((0.3, 1.2), (0.20, 0.28), (0.13, 0.20), (0.015, 0.05)),
+    "brick": ((2.0, 3.0), (0.20, 0.23), (0.09, 0.11), (0.05, 0.075)),
+    "racket": ((0.09, 0.12), (0.013, 0.016), (0.30, 0.36), (0.16, 0.20), (0.12, 0.14)),
+    "t_handle": ((0.03, 0.06), (0.006, 0.01), (0.08, 0.12), (0.015, 0.035), (0.005, 0.008),
+                 (0.04, 0.07)),
+}
+"""Kind of body → the ranges (kg, m) its masses and dimensions are drawn from, in the order
+drawn: a box's mass, length, width and thickness; the racket's handle mass, radius and length,
+then its head's mass and radius; the T-handle's crossbar mass, radius and length, then its
+stem's. The kinds in the order of the draw's ``rng.integers(5)``."""
+
+_LABELS = tuple(_RANGES)
+_Z_TO_X = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
+_Z_TO_Y = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]])
 
 
-def _box(rng: np.random.Generator, label: str, mass: tuple[float, float],
-         edges: tuple[tuple[float, float], ...]) -> Body:
-    """A uniform box (R2); ``edges`` are the ranges of length, width and thickness (m)."""
-    m = _u(rng, *mass)
-    a, b, c = (_u(rng, *e) for e in edges)
-    tensor = shape_tensor("box", m, a=a, b=b, c=c)
-    return Body(label, tuple(np.diag(tensor).tolist()))
+def _diagonal(tensors: np.ndarray) -> np.ndarray:
+    """The diagonals (n, 3) of tensors (n, 3, 3): the principal moments of these bodies, whose
+    tensors are diagonal."""
+    return np.diagonal(tensors, axis1=-2, axis2=-1)
 
 
-def _racket(rng: np.random.Generator) -> Body:
-    """Handle and shaft (a solid cylinder along x) and head (a disc in the xy plane, the plane
-    of the strings), joined end to rim; moments about the common centre of mass (R2)."""
-    m_h, r_h, l_h = _u(rng, 0.09, 0.12), _u(rng, 0.013, 0.016), _u(rng, 0.30, 0.36)
-    m_d, r_d = _u(rng, 0.16, 0.20), _u(rng, 0.12, 0.14)
-    along_x = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])  # z ↔ x
-    handle = along_x @ shape_tensor("solid_cylinder", m_h, radius=r_h, height=l_h) @ along_x
+def _along(*components: np.ndarray) -> np.ndarray:
+    """Displacements (n, 3), m, of which each component is an array (n,) or 0."""
+    return np.stack(np.broadcast_arrays(*components), axis=-1).astype(float)
+
+
+def _box_moments(m: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Principal moments (n, 3), kg m², of uniform boxes (R2) of mass ``m`` (kg) and edges
+    ``a``, ``b``, ``c`` (m) along x, y, z."""
+    return _diagonal(shape_tensor("box", m, a=a, b=b, c=c))
+
+
+def _racket_moments(m_h: np.ndarray, r_h: np.ndarray, l_h: np.ndarray, m_d: np.ndarray,
+                    r_d: np.ndarray) -> np.ndarray:
+    """Principal moments (n, 3), kg m², of rackets: handle and shaft (a solid cylinder along x)
+    and head (a disc in the xy plane, the plane of the strings), joined end to rim; about the
+    common centre of mass (R2)."""
+    handle = _Z_TO_X @ shape_tensor("solid_cylinder", m_h, radius=r_h, height=l_h) @ _Z_TO_X
     head = shape_tensor("disc", m_d, radius=r_d)
     x_h, x_d = l_h / 2, l_h + r_d
     x_cm = (m_h * x_h + m_d * x_d) / (m_h + m_d)
-    tensor = (parallel_axis(handle, m_h, [x_h - x_cm, 0.0, 0.0])
-              + parallel_axis(head, m_d, [x_d - x_cm, 0.0, 0.0]))
-    return Body("racket", tuple(np.diag(tensor).tolist()))
+    return _diagonal(parallel_axis(handle, m_h, _along(x_h - x_cm, 0.0, 0.0))
+                     + parallel_axis(head, m_d, _along(x_d - x_cm, 0.0, 0.0)))
 
 
-def _t_handle(rng: np.random.Generator) -> Body:
-    """A T-handle like Dzhanibekov's wing nut: a crossbar (solid cylinder along x) with a stem
-    (solid cylinder along y) fixed to its middle; moments about the common centre of mass."""
-    m_c, r_c, l_c = _u(rng, 0.03, 0.06), _u(rng, 0.006, 0.01), _u(rng, 0.08, 0.12)
-    m_s, r_s, l_s = _u(rng, 0.015, 0.035), _u(rng, 0.005, 0.008), _u(rng, 0.04, 0.07)
-    z_to_x = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
-    z_to_y = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]])
-    bar = z_to_x @ shape_tensor("solid_cylinder", m_c, radius=r_c, height=l_c) @ z_to_x
-    stem = z_to_y @ shape_tensor("solid_cylinder", m_s, radius=r_s, height=l_s) @ z_to_y
+def _t_handle_moments(m_c: np.ndarray, r_c: np.ndarray, l_c: np.ndarray, m_s: np.ndarray,
+                      r_s: np.ndarray, l_s: np.ndarray) -> np.ndarray:
+    """Principal moments (n, 3), kg m², of T-handles like Dzhanibekov's wing nut: a crossbar
+    (solid cylinder along x) with a stem (solid cylinder along y) fixed to its middle; about
+    the common centre of mass (R2)."""
+    bar = _Z_TO_X @ shape_tensor("solid_cylinder", m_c, radius=r_c, height=l_c) @ _Z_TO_X
+    stem = _Z_TO_Y @ shape_tensor("solid_cylinder", m_s, radius=r_s, height=l_s) @ _Z_TO_Y
     y_s = r_c + l_s / 2  # the stem starts at the crossbar's surface
     y_cm = m_s * y_s / (m_c + m_s)
-    tensor = (parallel_axis(bar, m_c, [0.0, -y_cm, 0.0])
-              + parallel_axis(stem, m_s, [0.0, y_s - y_cm, 0.0]))
-    return Body("t_handle", tuple(np.diag(tensor).tolist()))
+    return _diagonal(parallel_axis(bar, m_c, _along(0.0, -y_cm, 0.0))
+                     + parallel_axis(stem, m_s, _along(0.0, y_s - y_cm, 0.0)))
+
+
+_MOMENTS: dict[str, Callable[..., np.ndarray]] = {
+    "smartphone": _box_moments, "book": _box_moments, "brick": _box_moments,
+    "racket": _racket_moments, "t_handle": _t_handle_moments,
+}
+"""Kind of body → its principal moments from its masses and dimensions (:data:`_RANGES`)."""
 
 
 @dataclass(frozen=True)
@@ -180,17 +204,26 @@ def draw_body(rng: np.random.Generator) -> Body:
     Dimensions and masses are drawn from real objects' ranges and rounded to ``SIG`` figures;
     the moments (unrounded) are computed from the rounded dimensions by :mod:`solver.inertia`.
     """
-    kind = rng.integers(5)
-    if kind == 0:
-        return _box(rng, "smartphone", (0.14, 0.22),
-                    ((0.14, 0.165), (0.065, 0.078), (0.007, 0.009)))
-    if kind == 1:
-        return _box(rng, "book", (0.3, 1.2), ((0.20, 0.28), (0.13, 0.20), (0.015, 0.05)))
-    if kind == 2:
-        return _box(rng, "brick", (2.0, 3.0), ((0.20, 0.23), (0.09, 0.11), (0.05, 0.075)))
-    if kind == 3:
-        return _racket(rng)
-    return _t_handle(rng)
+    return draw_bodies([rng])[0]
+
+
+def draw_bodies(rngs: Sequence[np.random.Generator]) -> list[Body]:
+    """:func:`draw_body` of each generator: each body's numbers drawn from its own generator
+    as alone, then the moments of the bodies of a kind worked out together."""
+    drawn = [_drawn(rng) for rng in rngs]
+    moments = np.empty((len(drawn), 3))
+    for label in dict.fromkeys(label for label, _ in drawn):
+        rows = [i for i, (kind, _) in enumerate(drawn) if kind == label]
+        sizes = round_sig(np.array([drawn[i][1] for i in rows]), SIG)
+        moments[rows] = _MOMENTS[label](*sizes.T)
+    return [Body(label, tuple(m)) for (label, _), m in zip(drawn, moments.tolist(), strict=True)]
+
+
+def _drawn(rng: np.random.Generator) -> tuple[str, list[float]]:
+    """A kind of body and its masses and dimensions (kg, m; not yet rounded), drawn from
+    ``rng`` in the order of :data:`_RANGES`."""
+    label = _LABELS[rng.integers(5)]
+    return label, [rng.uniform(low, high) for low, high in _RANGES[label]]
 
 
 @dataclass(frozen=True)
@@ -223,16 +256,25 @@ class Draw:
                    tuple(params["omega0"]))
 
 
-def _draw(rng: np.random.Generator) -> Draw:
-    body = draw_body(rng)
-    order = tuple(int(i) for i in rng.permutation(3))
-    moments = tuple(round_sig([body.moments[i] for i in order], SIG_MOMENTS).tolist())
-    spin_axis = int(rng.integers(1, 4))
-    wobble = rng.uniform(*WOBBLE, size=3) * rng.choice([-1.0, 1.0], size=3)
-    spin = rng.uniform(*body.spin)
-    omega = spin * wobble
-    omega[spin_axis - 1] = spin
-    return Draw(body, order, moments, spin_axis, tuple(round_sig(omega, SIG).tolist()))
+def _draws(rngs: Sequence[np.random.Generator]) -> list[Draw]:
+    """A draw from each generator (:func:`draw`): each student's numbers drawn from their own
+    generator as alone, then rounded together."""
+    bodies = draw_bodies(rngs)
+    orders, spin_axes, wobbles, spins = [], [], [], []
+    for rng, body in zip(rngs, bodies, strict=True):
+        orders.append(rng.permutation(3))
+        spin_axes.append(int(rng.integers(1, 4)))
+        wobbles.append(rng.uniform(*WOBBLE, size=3) * rng.choice([-1.0, 1.0], size=3))
+        spins.append(rng.uniform(*body.spin))
+    order = np.array(orders)
+    moments = round_sig(np.take_along_axis(np.array([b.moments for b in bodies]), order, axis=1),
+                        SIG_MOMENTS)
+    spin = np.array(spins)
+    omega = spin[:, None] * np.array(wobbles)
+    omega[np.arange(len(spins)), np.array(spin_axes) - 1] = spin
+    return [Draw(body, tuple(o), tuple(m), s, tuple(w)) for body, o, m, s, w in zip(
+        bodies, order.tolist(), moments.tolist(), spin_axes, round_sig(omega, SIG).tolist(),
+        strict=True)]
 
 
 def _well_posed(d: Draw) -> bool:
@@ -347,7 +389,13 @@ PARAMETERS: dict[str, Parameter] = body_parameters()
 def draw(rng: np.random.Generator) -> dict[str, Any]:
     """A body (:func:`draw_body`), its axes in random order, and a spin about one of them with
     a small wobble."""
-    return _draw(rng).params()
+    return draw_many([rng])[0]
+
+
+def draw_many(rngs: list[np.random.Generator]) -> list[dict[str, Any]]:
+    """:func:`draw` of each generator — the batch form (:mod:`problems.family`): the bodies'
+    moments, and the rounding, of all at once."""
+    return [d.params() for d in _draws(rngs)]
 
 
 def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
