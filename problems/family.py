@@ -161,6 +161,18 @@ def stacked_apart(values: np.ndarray, tol: np.ndarray) -> np.ndarray:
     return ~np.any(gaps <= tol[..., None], axis=-1)
 
 
+def stacked_distinguishable(values: np.ndarray, rtol: float, atol: float = 0.0) -> np.ndarray:
+    """Whether, row by row, the finite values ``values`` (n, k) of a scalar answer — its key,
+    then its known mistakes in order — pass :func:`problems.answers.mistakes_distinguishable`
+    with the tolerances ``rtol`` and ``atol`` already widened by its margin: each mistake
+    further than ``atol + rtol·|v|`` from the key and from every mistake ``v`` before it (the
+    same float operations, so the same verdict, without building the answer)."""
+    tolerance = atol + rtol * np.abs(values)  # each value's, as the reference of later ones
+    later, earlier = np.tril_indices(values.shape[-1], -1)
+    close = np.abs(values[:, later] - values[:, earlier]) <= tolerance[:, earlier]
+    return ~np.any(close, axis=-1) & np.all(tolerance[:, 1:] >= 0.0, axis=-1)
+
+
 def remembered(work: Callable[[Mapping[str, Any]], Any]) -> Callable[[Mapping[str, Any]], Any]:
     """``work(params)`` remembering its last result, given again for equal parameters: the
     work a family's ``draw`` tests each try with (:func:`redrawn_until_well_posed`), which its

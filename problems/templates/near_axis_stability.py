@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from problems.answers import Answer, Mistake
-from problems.family import IllPosed, Parameter, distinguishable, reject_unless
+from problems.family import IllPosed, Parameter, distinguishable, stacked_distinguishable
 from problems.rounding import latex_sig, round_sig
 from problems.written import Written
 from solver.asymmetric_top import asymmetric_top_period
@@ -277,39 +277,90 @@ def _draws(rngs: Sequence[np.random.Generator]) -> list[Draw]:
         strict=True)]
 
 
-def _well_posed(d: Draw) -> bool:
-    """A rigid body's moments, far from degenerate; a stable wobble within R9's linear regime."""
-    return _well_posed_many([d])[0]
+def _rigid_apart(moments: np.ndarray) -> np.ndarray:
+    """Whether the moments (n, 3), kg m², are a rigid body's, no two within ``MIN_GAP`` of the
+    largest (the rounding may have crossed the triangle inequality, or left them nearly
+    degenerate)."""
+    I1, I2, I3 = moments.T
+    largest = moments.max(axis=1)
+    gaps = np.minimum(np.minimum(np.abs(I1 - I2), np.abs(I1 - I3)), np.abs(I2 - I3))
+    return ~((2 * largest > I1 + I2 + I3) | (gaps < MIN_GAP * largest))
 
 
-def _well_posed_many(draws: Sequence[Draw]) -> list[bool]:
-    """:func:`_well_posed` of each draw, R10's exact period (against which R9's rate of a
-    stable wobble is checked) computed in one solver call for all of them (element by element
-    what one draw alone gives)."""
-    posed, stable_rates = [], {}
-    for i, d in enumerate(draws):
-        moments = np.array(d.moments)
-        gaps = np.abs(moments[:, None] - moments[None, :])[np.triu_indices(3, 1)]
-        # the triangle inequality crossed by the rounding, or nearly degenerate moments
-        posed.append(not (2 * moments.max() > moments.sum()
-                          or gaps.min() < MIN_GAP * moments.max()))
-        if posed[i]:  # an unstable spin's growth rate describes the flip's start, however it ends
-            r9 = near_axis_stability(*d.moments, d.omega0[d.spin_axis - 1], axis=d.spin_axis)
-            if r9["stable"]:
-                stable_rates[i] = float(r9["rate"])
-    if stable_rates:
-        I1, I2, I3 = np.array([draws[i].moments for i in stable_rates], dtype=float).T
-        omega0 = np.array([draws[i].omega0 for i in stable_rates], dtype=float)
-        exact = asymmetric_top_period(I1, I2, I3, omega0)
-        for (i, rate), period in zip(stable_rates.items(), exact.tolist(), strict=True):
-            posed[i] = abs(period * rate / (2 * math.pi) - 1) < LINEAR_RTOL
-    return posed
-
-
-def _stability_answers(d: Draw) -> list[Answer]:
-    answers = []
+def _r9(moments: np.ndarray, spin: np.ndarray, axes: np.ndarray) -> dict[str, np.ndarray]:
+    """R9 for the spins ``spin`` (n,), rad/s, about the axes ``axes`` (n,) (1, 2 or 3) of
+    bodies of moments (n, 3): :func:`solver.torque_free.near_axis_stability`'s values, one
+    solver call per axis."""
+    found = {"Omega1": np.empty(len(spin)), "Omega2": np.empty(len(spin)),
+             "rate": np.empty(len(spin)), "stable": np.empty(len(spin), dtype=bool)}
     for axis in (1, 2, 3):
-        stable = bool(near_axis_stability(*d.moments, 1.0, axis=axis)["stable"])
+        rows = np.flatnonzero(axes == axis)
+        if rows.size:
+            r9 = near_axis_stability(*moments[rows].T, spin[rows], axis=axis)
+            for name, values in found.items():
+                values[rows] = r9[name]
+    return found
+
+
+def _posed_many(draws: Sequence[Draw]) -> list[tuple[Answer, ...] | IllPosed]:
+    """The answers of each draw, or the :class:`IllPosed` that rejects it: moments not a
+    rigid body's or nearly degenerate, a stable wobble beyond R9's linear regime (checked
+    against R10's exact period), or a known mistake within ``MARGIN`` tolerances of the key or
+    of another. The solver called once per axis for all draws, their mistakes tested apart
+    together (:func:`problems.family.stacked_distinguishable`); answers built for the accepted
+    draws alone."""
+    moments = np.array([d.moments for d in draws], dtype=float)
+    omega0 = np.array([d.omega0 for d in draws], dtype=float)
+    axes = np.array([d.spin_axis for d in draws])
+    spin = omega0[np.arange(len(draws)), axes - 1]
+    found: list[tuple[Answer, ...] | IllPosed] = [IllPosed(_ILL_POSED)] * len(draws)
+    rows = np.flatnonzero(_rigid_apart(moments))  # the solver refuses no rigid body
+    r9 = _r9(moments[rows], spin[rows], axes[rows])
+    # an unstable spin's growth rate describes the flip's start, however it ends
+    stable = np.flatnonzero(r9["stable"])
+    linear = np.ones(len(rows), dtype=bool)
+    if stable.size:
+        period = asymmetric_top_period(*moments[rows[stable]].T, omega0[rows[stable]])
+        linear[stable] = np.abs(period * r9["rate"][stable] / (2 * math.pi) - 1) < LINEAR_RTOL
+    rows, r9 = rows[linear], {name: values[linear] for name, values in r9.items()}
+    stable_axes = [near_axis_stability(*moments[rows].T, 1.0, axis=a)["stable"]
+                   for a in (1, 2, 3)] if rows.size else []
+    rate3 = near_axis_stability(*moments[rows].T, spin[rows], axis=3)["rate"] \
+        if rows.size else np.empty(0)
+    rate, O1, O2 = r9["rate"], np.abs(r9["Omega1"]), np.abs(r9["Omega2"])
+    wrong = np.stack([rate, rate / (2 * math.pi),
+                      np.where(r9["stable"], 2 * math.pi / rate, 1 / rate), O1, O2, rate3],
+                     axis=-1)
+    # the ê3 formula is a mistake only for a spin about another axis
+    about3 = axes[rows] == 3
+    apart = np.where(about3, stacked_distinguishable(wrong[:, :5], MARGIN * RTOL),
+                     stacked_distinguishable(wrong, MARGIN * RTOL))
+    finite = np.all(np.isfinite(wrong), axis=1)
+    for k, i in enumerate(rows.tolist()):
+        s = int(axes[i])
+        build = lambda k=k, s=s: (  # noqa: E731
+            *_stability_answers(tuple(bool(x[k]) for x in stable_axes)),
+            _rate_answer(s, *wrong[k, :5].tolist(), bool(r9["stable"][k]),
+                         None if s == 3 else float(rate3[k])))
+        if not finite[k]:  # Answer reads (and refuses) such values itself: as one alone
+            found[i] = _unless_close(build)
+        else:
+            found[i] = build() if apart[k] else IllPosed(_CLOSE)
+    return found
+
+
+def _unless_close(build: Callable[[], tuple[Answer, ...]]) -> tuple[Answer, ...] | IllPosed:
+    """:func:`problems.family.distinguishable` of ``build``, or the IllPosed it raised."""
+    try:
+        return distinguishable(build, MARGIN)
+    except IllPosed as e:
+        return e
+
+
+def _stability_answers(stable_axes: tuple[bool, bool, bool]) -> list[Answer]:
+    """``stable1``–``stable3``: whether steady spin about each principal axis is stable (R9)."""
+    answers = []
+    for axis, stable in zip((1, 2, 3), stable_axes, strict=True):
         if stable:
             why = (f"Spin about ê{axis} is stable: its moment is the largest or the smallest, so "
                    "Ω1Ω2 > 0 in R9 (small deviations oscillate).")
@@ -324,28 +375,26 @@ def _stability_answers(d: Draw) -> list[Answer]:
     return answers
 
 
-def _rate_answer(d: Draw) -> Answer:
-    s = d.spin_axis
-    spin = d.omega0[s - 1]
-    r9 = near_axis_stability(*d.moments, spin, axis=s)
-    rate, stable = float(r9["rate"]), bool(r9["stable"])
-    O1, O2 = abs(float(r9["Omega1"])), abs(float(r9["Omega2"]))
+def _rate_answer(s: int, rate: float, hz: float, period: float, O1: float, O2: float,
+                 stable: bool, rate3: float | None) -> Answer:
+    """``rate`` for the spin about ê``s``: R9's rate (1/s), its mistakes' values (the rate in
+    Hz, the period 2π/rate or the e-folding time 1/rate, |Ω1|, |Ω2|, and R9's formula for ê3
+    applied to the spin about another axis, ``rate3``)."""
     mistakes = [
-        Mistake("hz", rate / (2 * math.pi), "That is the rate divided by 2π; give it in rad/s "
+        Mistake("hz", hz, "That is the rate divided by 2π; give it in rad/s "
                 "(an angular frequency)." if stable else "A growth rate has no factor 2π: "
                 "perturbations grow as exp(√(−Ω1Ω2) t)."),
-        Mistake("period", 2 * math.pi / rate, "That is the period 2π/√(Ω1Ω2); the angular "
+        Mistake("period", period, "That is the period 2π/√(Ω1Ω2); the angular "
                 "frequency is asked.") if stable else
-        Mistake("e_folding_time", 1 / rate, "That is the e-folding time 1/√(−Ω1Ω2); the "
+        Mistake("e_folding_time", period, "That is the e-folding time 1/√(−Ω1Ω2); the "
                 "growth rate (1/s) is asked."),
         Mistake("Omega1_only", O1, "R9's rate is the geometric mean √|Ω1Ω2| of both "
                 "coefficients, not one of them."),
         Mistake("Omega2_only", O2, "R9's rate is the geometric mean √|Ω1Ω2| of both "
                 "coefficients, not one of them."),
     ]
-    if s != 3:
-        wrong = float(near_axis_stability(*d.moments, spin, axis=3)["rate"])
-        mistakes.append(Mistake("axis3_formula", wrong, f"The spin is about ê{s}, not ê3: "
+    if rate3 is not None:
+        mistakes.append(Mistake("axis3_formula", rate3, f"The spin is about ê{s}, not ê3: "
                                 "relabel R9's axes cyclically so that the spin axis plays "
                                 "the role of ê3."))
     # Unit and description are the same whether the spin is stable or not: the text of the
@@ -405,28 +454,21 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     Raises :class:`~problems.family.IllPosed` for no rigid body, nearly degenerate moments, a
     stable wobble beyond R9's linear regime, or a known mistake close to the key.
     """
-    d = Draw.of(params)
-    reject_unless(_well_posed(d), _ILL_POSED)
-    return distinguishable(lambda: (*_stability_answers(d), _rate_answer(d)), MARGIN)
+    found = _posed_many([Draw.of(params)])[0]
+    if isinstance(found, IllPosed):
+        raise found
+    return found
 
 
 _ILL_POSED = "degenerate moments, or a wobble beyond the linear regime"
+_CLOSE = f"a known mistake within {MARGIN:g} tolerances of the key or another"
 
 
 def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
     """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
-    rejected) — the batch form (:mod:`problems.family`): R10's exact periods of the stable
-    wobbles in one solver call."""
-    draws = [Draw.of(p) for p in many]
-    found: list[tuple[Answer, ...] | IllPosed] = []
-    for d, posed in zip(draws, _well_posed_many(draws), strict=True):
-        try:
-            reject_unless(posed, _ILL_POSED)
-            found.append(distinguishable(
-                lambda d=d: (*_stability_answers(d), _rate_answer(d)), MARGIN))
-        except IllPosed as e:
-            found.append(e)
-    return found
+    rejected) — the batch form (:mod:`problems.family`): the solver called for all at once,
+    their mistakes tested apart together."""
+    return _posed_many([Draw.of(p) for p in many])
 
 
 def statement(params: Mapping[str, Any]) -> str:
