@@ -435,7 +435,7 @@ class Family:
         own = getattr(self.module, "draw_many", None)
         if own is not None:
             return self._checked_many("draw_many", own(list(rngs)), len(rngs))
-        drawn = (_unless_ill_posed(self.draw, rng) for rng in rngs)
+        drawn = (unless_ill_posed(self.draw, rng) for rng in rngs)
         return [None if isinstance(params, IllPosed) else params for params in drawn]
 
     def answers_many(self, many: Sequence[Mapping[str, Any]]
@@ -444,7 +444,7 @@ class Family:
         family's ``answers_many``, else one at a time."""
         own = getattr(self.module, "answers_many", None)
         if own is None or not many:
-            return [_unless_ill_posed(self.answers, params) for params in many]
+            return [unless_ill_posed(self.answers, params) for params in many]
         found = self._checked_many("answers_many", own([dict(p) for p in many]), len(many))
         return [r if isinstance(r, IllPosed) else tuple(r) for r in found]
 
@@ -595,7 +595,7 @@ class Family:
                   settings: QuestionSettings | None) -> dict[str, Any] | None:
         """A draw with the settings applied (None: rejected), as the family records it."""
         if settings is not None:
-            params = _unless_ill_posed(settings.adjust_parameters, params, self, rng)
+            params = unless_ill_posed(settings.adjust_parameters, params, self, rng)
             if isinstance(params, IllPosed):
                 return None
         return None if params is None else self.recorded(params)
@@ -615,8 +615,9 @@ class Family:
             return None
 
 
-def _unless_ill_posed(function: Callable, *args: Any) -> Any:
-    """``function(*args)``, or the :class:`IllPosed` it raised."""
+def unless_ill_posed(function: Callable, *args: Any) -> Any:
+    """``function(*args)``, or the :class:`IllPosed` it raised (an element of a batch form's
+    result)."""
     try:
         return function(*args)
     except IllPosed as e:

@@ -28,13 +28,19 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from functools import partial
 from typing import Any, NamedTuple
 
 import numpy as np
 from scipy.special import ellipk
 
 from problems.answers import Answer, Mistake
-from problems.family import IllPosed, distinguishable, stacked_distinguishable
+from problems.family import (
+    IllPosed,
+    distinguishable,
+    stacked_distinguishable,
+    unless_ill_posed,
+)
 from problems.rounding import latex_sig, round_sig
 from problems.templates import near_axis_stability as near_axis
 from problems.templates.near_axis_stability import Draw, draw_bodies
@@ -222,10 +228,7 @@ def _posed_many(draws: list[Draw]) -> list[tuple[Answer, ...] | IllPosed]:
     for k, (i, p, f, c) in enumerate(zip(rows, period.tolist(), flip.tolist(),
                                          circled.tolist(), strict=True)):
         if not finite[k]:  # Answer reads (and refuses) such values itself: as one alone
-            try:
-                found[i] = distinguishable(lambda p=p, f=f, c=c: _answers(p, f, c), MARGIN)
-            except IllPosed as e:
-                found[i] = e
+            found[i] = unless_ill_posed(distinguishable, partial(_answers, p, f, c), MARGIN)
         else:
             found[i] = _answers(p, f, c) if apart[k] else IllPosed(_CLOSE)
     return found

@@ -23,12 +23,19 @@ import itertools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
 
 from problems.answers import Answer, Mistake
-from problems.family import IllPosed, Parameter, distinguishable, stacked_distinguishable
+from problems.family import (
+    IllPosed,
+    Parameter,
+    distinguishable,
+    stacked_distinguishable,
+    unless_ill_posed,
+)
 from problems.rounding import latex_sig, round_sig
 from problems.written import Written
 from solver.asymmetric_top import asymmetric_top_period
@@ -337,24 +344,22 @@ def _posed_many(draws: Sequence[Draw]) -> list[tuple[Answer, ...] | IllPosed]:
                      stacked_distinguishable(wrong, MARGIN * RTOL))
     finite = np.all(np.isfinite(wrong), axis=1)
     for k, i in enumerate(rows.tolist()):
-        s = int(axes[i])
-        build = lambda k=k, s=s: (  # noqa: E731
-            *_stability_answers(tuple(bool(x[k]) for x in stable_axes)),
-            _rate_answer(s, *wrong[k, :5].tolist(), bool(r9["stable"][k]),
-                         None if s == 3 else float(rate3[k])))
+        build = partial(_built, tuple(bool(x[k]) for x in stable_axes), int(axes[i]),
+                        wrong[k].tolist(), bool(r9["stable"][k]))
         if not finite[k]:  # Answer reads (and refuses) such values itself: as one alone
-            found[i] = _unless_close(build)
+            found[i] = unless_ill_posed(distinguishable, build, MARGIN)
         else:
             found[i] = build() if apart[k] else IllPosed(_CLOSE)
     return found
 
 
-def _unless_close(build: Callable[[], tuple[Answer, ...]]) -> tuple[Answer, ...] | IllPosed:
-    """:func:`problems.family.distinguishable` of ``build``, or the IllPosed it raised."""
-    try:
-        return distinguishable(build, MARGIN)
-    except IllPosed as e:
-        return e
+def _built(stable_axes: tuple[bool, bool, bool], s: int, wrong: list[float],
+           stable: bool) -> tuple[Answer, ...]:
+    """The answers of a draw spun about ê``s``: :func:`_stability_answers` and
+    :func:`_rate_answer` of the values :func:`_posed_many` stacked (``wrong``: the rate, then
+    its mistakes' values, the ê3 formula's last)."""
+    return (*_stability_answers(stable_axes),
+            _rate_answer(s, *wrong[:5], stable, None if s == 3 else wrong[5]))
 
 
 def _stability_answers(stable_axes: tuple[bool, bool, bool]) -> list[Answer]:
