@@ -161,6 +161,18 @@ def stacked_apart(values: np.ndarray, tol: np.ndarray) -> np.ndarray:
     return ~np.any(gaps <= tol[..., None], axis=-1)
 
 
+def stacked_distinguishable(values: np.ndarray, rtol: float, atol: float = 0.0) -> np.ndarray:
+    """Whether, row by row, the finite values ``values`` (n, k) of a scalar answer — its key,
+    then its known mistakes in order — pass :func:`problems.answers.mistakes_distinguishable`
+    with the tolerances ``rtol`` and ``atol`` already widened by its margin: each mistake
+    further than ``atol + rtol·|v|`` from the key and from every mistake ``v`` before it (the
+    same float operations, so the same verdict, without building the answer)."""
+    tolerance = atol + rtol * np.abs(values)  # each value's, as the reference of later ones
+    later, earlier = np.tril_indices(values.shape[-1], -1)
+    close = np.abs(values[:, later] - values[:, earlier]) <= tolerance[:, earlier]
+    return ~np.any(close, axis=-1) & np.all(tolerance[:, 1:] >= 0.0, axis=-1)
+
+
 def remembered(work: Callable[[Mapping[str, Any]], Any]) -> Callable[[Mapping[str, Any]], Any]:
     """``work(params)`` remembering its last result, given again for equal parameters: the
     work a family's ``draw`` tests each try with (:func:`redrawn_until_well_posed`), which its
@@ -423,7 +435,7 @@ class Family:
         own = getattr(self.module, "draw_many", None)
         if own is not None:
             return self._checked_many("draw_many", own(list(rngs)), len(rngs))
-        drawn = (_unless_ill_posed(self.draw, rng) for rng in rngs)
+        drawn = (unless_ill_posed(self.draw, rng) for rng in rngs)
         return [None if isinstance(params, IllPosed) else params for params in drawn]
 
     def answers_many(self, many: Sequence[Mapping[str, Any]]
@@ -432,7 +444,7 @@ class Family:
         family's ``answers_many``, else one at a time."""
         own = getattr(self.module, "answers_many", None)
         if own is None or not many:
-            return [_unless_ill_posed(self.answers, params) for params in many]
+            return [unless_ill_posed(self.answers, params) for params in many]
         found = self._checked_many("answers_many", own([dict(p) for p in many]), len(many))
         return [r if isinstance(r, IllPosed) else tuple(r) for r in found]
 
@@ -583,7 +595,7 @@ class Family:
                   settings: QuestionSettings | None) -> dict[str, Any] | None:
         """A draw with the settings applied (None: rejected), as the family records it."""
         if settings is not None:
-            params = _unless_ill_posed(settings.adjust_parameters, params, self, rng)
+            params = unless_ill_posed(settings.adjust_parameters, params, self, rng)
             if isinstance(params, IllPosed):
                 return None
         return None if params is None else self.recorded(params)
@@ -603,8 +615,9 @@ class Family:
             return None
 
 
-def _unless_ill_posed(function: Callable, *args: Any) -> Any:
-    """``function(*args)``, or the :class:`IllPosed` it raised."""
+def unless_ill_posed(function: Callable, *args: Any) -> Any:
+    """``function(*args)``, or the :class:`IllPosed` it raised (an element of a batch form's
+    result)."""
     try:
         return function(*args)
     except IllPosed as e:

@@ -27,17 +27,23 @@ one another (e.g. a small-amplitude R9 period indistinguishable from the exact o
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
+from functools import partial
 from typing import Any, NamedTuple
 
 import numpy as np
 from scipy.special import ellipk
 
 from problems.answers import Answer, Mistake
-from problems.family import IllPosed, distinguishable
+from problems.family import (
+    IllPosed,
+    distinguishable,
+    stacked_distinguishable,
+    unless_ill_posed,
+)
 from problems.rounding import latex_sig, round_sig
 from problems.templates import near_axis_stability as near_axis
-from problems.templates.near_axis_stability import Draw, draw_body
+from problems.templates.near_axis_stability import Draw, draw_bodies
 from solver.asymmetric_top import asymmetric_top_period, flip_time
 from solver.torque_free import invariants, near_axis_stability
 
@@ -70,17 +76,26 @@ WOBBLE = (0.15, 0.7)
 MAX_ATTEMPTS = 1000
 
 
-def _draw(rng: np.random.Generator) -> Draw:
-    body = draw_body(rng)
-    order = np.argsort(body.moments)
-    moments = tuple(round_sig(np.asarray(body.moments)[order], SIG_MOMENTS).tolist())
-    spin_axis = 2 if rng.random() < 0.5 else int(rng.choice([1, 3]))
-    fractions = FLIP_PERTURBATION if spin_axis == 2 else WOBBLE
-    omega = rng.uniform(*fractions, size=3) * rng.choice([-1.0, 1.0], size=3)
-    omega[spin_axis - 1] = 1.0
-    omega *= rng.uniform(*body.spin)
-    return Draw(body, tuple(int(i) for i in order), moments, spin_axis,
-                tuple(round_sig(omega, SIG).tolist()))
+def _draws(rngs: Sequence[np.random.Generator]) -> list[Draw]:
+    """A draw from each generator (:func:`draw`): each student's numbers drawn from their own
+    generator as alone, then ordered and rounded together."""
+    bodies = draw_bodies(rngs)
+    spin_axes, omegas, spins = [], [], []
+    for rng, body in zip(rngs, bodies, strict=True):
+        axis = 2 if rng.random() < 0.5 else int(rng.choice([1, 3]))
+        fractions = FLIP_PERTURBATION if axis == 2 else WOBBLE
+        spin_axes.append(axis)
+        omegas.append(rng.uniform(*fractions, size=3) * rng.choice([-1.0, 1.0], size=3))
+        spins.append(rng.uniform(*body.spin))
+    unordered = np.array([b.moments for b in bodies])
+    order = np.argsort(unordered, axis=1)
+    moments = round_sig(np.take_along_axis(unordered, order, axis=1), SIG_MOMENTS)
+    omega = np.array(omegas)
+    omega[np.arange(len(spins)), np.array(spin_axes) - 1] = 1.0
+    omega *= np.array(spins)[:, None]
+    return [Draw(body, tuple(o), tuple(m), s, tuple(w)) for body, o, m, s, w in zip(
+        bodies, order.tolist(), moments.tolist(), spin_axes, round_sig(omega, SIG).tolist(),
+        strict=True)]
 
 
 def _rigid(d: Draw) -> bool:
@@ -135,38 +150,50 @@ def _solve_many(draws: list[Draw]) -> list[_Solved | IllPosed]:
     return found
 
 
-def _parameter_m(d: Draw, T: float, L2: float) -> float:
-    """R10's ``m = k²``: ``x = (I2 − I1)(2T I3 − L²)/((I3 − I2)(L² − 2T I1))`` for
+def _parameter_m(moments: np.ndarray, T: np.ndarray, L2: np.ndarray) -> np.ndarray:
+    """R10's ``m = k²`` of motions of bodies of moments (n, 3), energies ``T`` and squared
+    momenta ``L2`` (n,): ``x = (I2 − I1)(2T I3 − L²)/((I3 − I2)(L² − 2T I1))`` for
     ``L² > 2T I2``, and ``1/x`` (indices 1 and 3 exchanged) otherwise; so ``m = min(x, 1/x)``."""
-    I1, I2, I3 = d.moments
-    x = float((I2 - I1) * (2 * T * I3 - L2) / ((I3 - I2) * (L2 - 2 * T * I1)))
-    return min(x, 1 / x)
+    I1, I2, I3 = moments.T
+    x = (I2 - I1) * (2 * T * I3 - L2) / ((I3 - I2) * (L2 - 2 * T * I1))
+    return np.where(1 / x < x, 1 / x, x)  # as Python's min(x, 1/x)
 
 
-def _answers(d: Draw, solved: _Solved) -> tuple[Answer, ...]:
-    period, t_flip = float(solved.period), float(solved.t_flip)
-    c = 3 if solved.L2 > 2 * solved.T * d.moments[1] else 1  # ê3 if L² > 2T I2, else ê1 (R10)
-    r9 = float(solved.rate3 if c == 3 else solved.rate1)
-    m = _parameter_m(d, solved.T, solved.L2)
+def _values(draws: list[Draw], solved: list[_Solved]) -> tuple[np.ndarray, np.ndarray,
+                                                                np.ndarray]:
+    """Of motions solved: the values (n, 5), s, of ``period`` and its mistakes (in their
+    order), those (n, 4) of ``t_flip`` and its mistakes, and the circled axes (n,) (R10)."""
+    moments = np.array([d.moments for d in draws], dtype=float)
+    T, L2, period, t_flip, rate1, rate3 = np.array(solved, dtype=float).reshape(-1, 6).T
+    circled = np.where(L2 > 2 * T * moments[:, 1], 3, 1)  # ê3 if L² > 2T I2, else ê1 (R10)
+    r9 = np.where(circled == 3, rate3, rate1)
+    m = _parameter_m(moments, T, L2)
     # scipy's ellipk takes the parameter m = k²; passing the modulus k is the classic slip
-    modulus_slip = float(ellipk(math.sqrt(m)) / ellipk(m))
+    modulus_slip = ellipk(np.sqrt(m)) / ellipk(m)
+    return (np.stack([period, period / 2, 2 * math.pi / r9, 2 * math.pi / period,
+                      period * modulus_slip], axis=-1),
+            np.stack([t_flip, period, period / 4, t_flip * modulus_slip], axis=-1), circled)
+
+
+def _answers(period: list[float], flip: list[float], c: int) -> tuple[Answer, ...]:
+    """``period``, ``t_flip`` and ``circled_axis`` from the values of :func:`_values`."""
     period_m = (
-        Mistake("flip_time", period / 2, "That is half the period (the flip time): ω2 goes "
+        Mistake("flip_time", period[1], "That is half the period (the flip time): ω2 goes "
                 "from its maximum to its minimum in P/2, and ω is back where it started after P "
                 "= 4K(k)/λ."),
-        Mistake("small_amplitude", 2 * math.pi / r9, "That is 2π/√(Ω1Ω2), the small-amplitude "
+        Mistake("small_amplitude", period[2], "That is 2π/√(Ω1Ω2), the small-amplitude "
                 "period of R9; the exact period is 4K(k)/λ (R10)."),
-        Mistake("angular_frequency", 2 * math.pi / period, "That is an angular frequency "
+        Mistake("angular_frequency", period[3], "That is an angular frequency "
                 "(rad/s); the period (s) is asked."),
-        Mistake("ellipk_modulus", period * modulus_slip, "scipy.special.ellipk(m) takes the "
+        Mistake("ellipk_modulus", period[4], "scipy.special.ellipk(m) takes the "
                 "parameter m = k², not the modulus k."),
     )
     flip_m = (
-        Mistake("full_period", period, "That is the full period of ω(t); the flip (ω2 from "
+        Mistake("full_period", flip[1], "That is the full period of ω(t); the flip (ω2 from "
                 "maximum to minimum) takes half of it, 2K(k)/λ."),
-        Mistake("quarter_period", period / 4, "That is a quarter period (ω2 from zero to its "
+        Mistake("quarter_period", flip[2], "That is a quarter period (ω2 from zero to its "
                 "maximum); from maximum to minimum takes 2K(k)/λ."),
-        Mistake("ellipk_modulus", t_flip * modulus_slip, "scipy.special.ellipk(m) takes the "
+        Mistake("ellipk_modulus", flip[3], "scipy.special.ellipk(m) takes the "
                 "parameter m = k², not the modulus k."),
     )
     rule = "ω circles ê3 when L² > 2T I2 and ê1 when L² < 2T I2 (R10)."
@@ -176,15 +203,38 @@ def _answers(d: Draw, solved: _Solved) -> tuple[Answer, ...]:
         Mistake("other_side", str(4 - c), "Compare L² with 2T I2: " + rule),
     )
     return (
-        Answer("period", "scalar", period, unit="s", rtol=RTOL, mistakes=period_m,
+        Answer("period", "scalar", period[0], unit="s", rtol=RTOL, mistakes=period_m,
                description="period of ω(t) in the body frame (exact)"),
-        Answer("t_flip", "scalar", t_flip, unit="s", rtol=RTOL, mistakes=flip_m,
+        Answer("t_flip", "scalar", flip[0], unit="s", rtol=RTOL, mistakes=flip_m,
                description="time for ω2 to go from a maximum to the next minimum"),
         Answer("circled_axis", "choice", str(c), options=("1", "2", "3"), mistakes=axis_m,
                description="the principal axis ω circles in the body frame"),
     )
 
 
+def _posed_many(draws: list[Draw]) -> list[tuple[Answer, ...] | IllPosed]:
+    """The answers of each draw, or the :class:`IllPosed` that rejects it (:func:`answers`):
+    the solver called once for all (:func:`_solve_many`), the known mistakes tested apart
+    together (:func:`problems.family.stacked_distinguishable`; ``circled_axis``'s are always
+    apart), answers built for the accepted draws alone."""
+    found = _solve_many(draws)
+    rows = [i for i, f in enumerate(found) if not isinstance(f, IllPosed)]
+    if not rows:
+        return found
+    period, flip, circled = _values([draws[i] for i in rows], [found[i] for i in rows])
+    apart = (stacked_distinguishable(period, MARGIN * RTOL)
+             & stacked_distinguishable(flip, MARGIN * RTOL))
+    finite = np.all(np.isfinite(period), axis=1) & np.all(np.isfinite(flip), axis=1)
+    for k, (i, p, f, c) in enumerate(zip(rows, period.tolist(), flip.tolist(),
+                                         circled.tolist(), strict=True)):
+        if not finite[k]:  # Answer reads (and refuses) such values itself: as one alone
+            found[i] = unless_ill_posed(distinguishable, partial(_answers, p, f, c), MARGIN)
+        else:
+            found[i] = _answers(p, f, c) if apart[k] else IllPosed(_CLOSE)
+    return found
+
+
+_CLOSE = f"a known mistake within {MARGIN:g} tolerances of the key or another"
 
 
 def _statement(d: Draw) -> str:
@@ -213,7 +263,13 @@ def draw(rng: np.random.Generator) -> dict[str, Any]:
     """A body (:func:`~problems.templates.near_axis_stability.draw_body`), its axes ordered
     ``I1 < I2 < I3``, spun about ê2 with a small perturbation or about ê1 or ê3 with a large
     wobble."""
-    return _draw(rng).params()
+    return draw_many([rng])[0]
+
+
+def draw_many(rngs: list[np.random.Generator]) -> list[dict[str, Any]]:
+    """:func:`draw` of each generator — the batch form (:mod:`problems.family`): the bodies'
+    moments, their order and the rounding of all at once."""
+    return [d.params() for d in _draws(rngs)]
 
 
 def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
@@ -223,26 +279,18 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     Raises :class:`~problems.family.IllPosed` for moments out of order or too close, a motion
     near the separatrix, or a known mistake close to the key.
     """
-    d = Draw.of(params)
-    solved = _solve_many([d])[0]
-    if isinstance(solved, IllPosed):
-        raise solved
-    return distinguishable(lambda: _answers(d, solved), MARGIN)
+    found = _posed_many([Draw.of(params)])[0]
+    if isinstance(found, IllPosed):
+        raise found
+    return found
 
 
 def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
     """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
     rejected) — the batch form (:mod:`problems.family`): every motion's invariants, period,
-    flip time and R9 rates in one solver call each."""
-    draws = [Draw.of(p) for p in many]
-    found: list[tuple[Answer, ...] | IllPosed] = []
-    for d, solved in zip(draws, _solve_many(draws), strict=True):
-        try:
-            found.append(solved if isinstance(solved, IllPosed) else
-                         distinguishable(lambda d=d, solved=solved: _answers(d, solved), MARGIN))
-        except IllPosed as e:
-            found.append(e)
-    return found
+    flip time and R9 rates in one solver call each, the known mistakes tested apart
+    together."""
+    return _posed_many([Draw.of(p) for p in many])
 
 
 def statement(params: Mapping[str, Any]) -> str:

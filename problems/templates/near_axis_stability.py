@@ -21,14 +21,21 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
 
 from problems.answers import Answer, Mistake
-from problems.family import IllPosed, Parameter, distinguishable, reject_unless
+from problems.family import (
+    IllPosed,
+    Parameter,
+    distinguishable,
+    stacked_distinguishable,
+    unless_ill_posed,
+)
 from problems.rounding import latex_sig, round_sig
 from problems.written import Written
 from solver.asymmetric_top import asymmetric_top_period
@@ -88,48 +95,72 @@ class Body:
         return KINDS[self.label].description
 
 
-def _u(rng: np.random.Generator, low: float, high: float) -> float:
-    return round_sig(rng.uniform(low, high), SIG)
+_RANGES: dict[str, tuple[tuple[float, float], ...]] = {
+    "smartphone": ((0.14, 0.22), (0.14, 0.165), (0.065, 0.078), (0.007, 0.009)),
+    "book": ((0.3, 1.2), (0.20, 0.28), (0.13, 0.20), (0.015, 0.05)),
+    "brick": ((2.0, 3.0), (0.20, 0.23), (0.09, 0.11), (0.05, 0.075)),
+    "racket": ((0.09, 0.12), (0.013, 0.016), (0.30, 0.36), (0.16, 0.20), (0.12, 0.14)),
+    "t_handle": ((0.03, 0.06), (0.006, 0.01), (0.08, 0.12), (0.015, 0.035), (0.005, 0.008),
+                 (0.04, 0.07)),
+}
+"""Kind of body → the ranges (kg, m) its masses and dimensions are drawn from, in the order
+drawn: a box's mass, length, width and thickness; the racket's handle mass, radius and length,
+then its head's mass and radius; the T-handle's crossbar mass, radius and length, then its
+stem's. The kinds in the order of the draw's ``rng.integers(5)``."""
+
+_LABELS = tuple(_RANGES)
+_Z_TO_X = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
+_Z_TO_Y = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]])
 
 
-def _box(rng: np.random.Generator, label: str, mass: tuple[float, float],
-         edges: tuple[tuple[float, float], ...]) -> Body:
-    """A uniform box (R2); ``edges`` are the ranges of length, width and thickness (m)."""
-    m = _u(rng, *mass)
-    a, b, c = (_u(rng, *e) for e in edges)
-    tensor = shape_tensor("box", m, a=a, b=b, c=c)
-    return Body(label, tuple(np.diag(tensor).tolist()))
+def _diagonal(tensors: np.ndarray) -> np.ndarray:
+    """The diagonals (n, 3) of tensors (n, 3, 3): the principal moments of these bodies, whose
+    tensors are diagonal."""
+    return np.diagonal(tensors, axis1=-2, axis2=-1)
 
 
-def _racket(rng: np.random.Generator) -> Body:
-    """Handle and shaft (a solid cylinder along x) and head (a disc in the xy plane, the plane
-    of the strings), joined end to rim; moments about the common centre of mass (R2)."""
-    m_h, r_h, l_h = _u(rng, 0.09, 0.12), _u(rng, 0.013, 0.016), _u(rng, 0.30, 0.36)
-    m_d, r_d = _u(rng, 0.16, 0.20), _u(rng, 0.12, 0.14)
-    along_x = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])  # z ↔ x
-    handle = along_x @ shape_tensor("solid_cylinder", m_h, radius=r_h, height=l_h) @ along_x
+def _along(*components: np.ndarray) -> np.ndarray:
+    """Displacements (n, 3), m, of which each component is an array (n,) or 0."""
+    return np.stack(np.broadcast_arrays(*components), axis=-1).astype(float)
+
+
+def _box_moments(m: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Principal moments (n, 3), kg m², of uniform boxes (R2) of mass ``m`` (kg) and edges
+    ``a``, ``b``, ``c`` (m) along x, y, z."""
+    return _diagonal(shape_tensor("box", m, a=a, b=b, c=c))
+
+
+def _racket_moments(m_h: np.ndarray, r_h: np.ndarray, l_h: np.ndarray, m_d: np.ndarray,
+                    r_d: np.ndarray) -> np.ndarray:
+    """Principal moments (n, 3), kg m², of rackets: handle and shaft (a solid cylinder along x)
+    and head (a disc in the xy plane, the plane of the strings), joined end to rim; about the
+    common centre of mass (R2)."""
+    handle = _Z_TO_X @ shape_tensor("solid_cylinder", m_h, radius=r_h, height=l_h) @ _Z_TO_X
     head = shape_tensor("disc", m_d, radius=r_d)
     x_h, x_d = l_h / 2, l_h + r_d
     x_cm = (m_h * x_h + m_d * x_d) / (m_h + m_d)
-    tensor = (parallel_axis(handle, m_h, [x_h - x_cm, 0.0, 0.0])
-              + parallel_axis(head, m_d, [x_d - x_cm, 0.0, 0.0]))
-    return Body("racket", tuple(np.diag(tensor).tolist()))
+    return _diagonal(parallel_axis(handle, m_h, _along(x_h - x_cm, 0.0, 0.0))
+                     + parallel_axis(head, m_d, _along(x_d - x_cm, 0.0, 0.0)))
 
 
-def _t_handle(rng: np.random.Generator) -> Body:
-    """A T-handle like Dzhanibekov's wing nut: a crossbar (solid cylinder along x) with a stem
-    (solid cylinder along y) fixed to its middle; moments about the common centre of mass."""
-    m_c, r_c, l_c = _u(rng, 0.03, 0.06), _u(rng, 0.006, 0.01), _u(rng, 0.08, 0.12)
-    m_s, r_s, l_s = _u(rng, 0.015, 0.035), _u(rng, 0.005, 0.008), _u(rng, 0.04, 0.07)
-    z_to_x = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
-    z_to_y = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]])
-    bar = z_to_x @ shape_tensor("solid_cylinder", m_c, radius=r_c, height=l_c) @ z_to_x
-    stem = z_to_y @ shape_tensor("solid_cylinder", m_s, radius=r_s, height=l_s) @ z_to_y
+def _t_handle_moments(m_c: np.ndarray, r_c: np.ndarray, l_c: np.ndarray, m_s: np.ndarray,
+                      r_s: np.ndarray, l_s: np.ndarray) -> np.ndarray:
+    """Principal moments (n, 3), kg m², of T-handles like Dzhanibekov's wing nut: a crossbar
+    (solid cylinder along x) with a stem (solid cylinder along y) fixed to its middle; about
+    the common centre of mass (R2)."""
+    bar = _Z_TO_X @ shape_tensor("solid_cylinder", m_c, radius=r_c, height=l_c) @ _Z_TO_X
+    stem = _Z_TO_Y @ shape_tensor("solid_cylinder", m_s, radius=r_s, height=l_s) @ _Z_TO_Y
     y_s = r_c + l_s / 2  # the stem starts at the crossbar's surface
     y_cm = m_s * y_s / (m_c + m_s)
-    tensor = (parallel_axis(bar, m_c, [0.0, -y_cm, 0.0])
-              + parallel_axis(stem, m_s, [0.0, y_s - y_cm, 0.0]))
-    return Body("t_handle", tuple(np.diag(tensor).tolist()))
+    return _diagonal(parallel_axis(bar, m_c, _along(0.0, -y_cm, 0.0))
+                     + parallel_axis(stem, m_s, _along(0.0, y_s - y_cm, 0.0)))
+
+
+_MOMENTS: dict[str, Callable[..., np.ndarray]] = {
+    "smartphone": _box_moments, "book": _box_moments, "brick": _box_moments,
+    "racket": _racket_moments, "t_handle": _t_handle_moments,
+}
+"""Kind of body → its principal moments from its masses and dimensions (:data:`_RANGES`)."""
 
 
 @dataclass(frozen=True)
@@ -180,17 +211,26 @@ def draw_body(rng: np.random.Generator) -> Body:
     Dimensions and masses are drawn from real objects' ranges and rounded to ``SIG`` figures;
     the moments (unrounded) are computed from the rounded dimensions by :mod:`solver.inertia`.
     """
-    kind = rng.integers(5)
-    if kind == 0:
-        return _box(rng, "smartphone", (0.14, 0.22),
-                    ((0.14, 0.165), (0.065, 0.078), (0.007, 0.009)))
-    if kind == 1:
-        return _box(rng, "book", (0.3, 1.2), ((0.20, 0.28), (0.13, 0.20), (0.015, 0.05)))
-    if kind == 2:
-        return _box(rng, "brick", (2.0, 3.0), ((0.20, 0.23), (0.09, 0.11), (0.05, 0.075)))
-    if kind == 3:
-        return _racket(rng)
-    return _t_handle(rng)
+    return draw_bodies([rng])[0]
+
+
+def draw_bodies(rngs: Sequence[np.random.Generator]) -> list[Body]:
+    """:func:`draw_body` of each generator: each body's numbers drawn from its own generator
+    as alone, then the moments of the bodies of a kind worked out together."""
+    drawn = [_drawn(rng) for rng in rngs]
+    moments = np.empty((len(drawn), 3))
+    for label in dict.fromkeys(label for label, _ in drawn):
+        rows = [i for i, (kind, _) in enumerate(drawn) if kind == label]
+        sizes = round_sig(np.array([drawn[i][1] for i in rows]), SIG)
+        moments[rows] = _MOMENTS[label](*sizes.T)
+    return [Body(label, tuple(m)) for (label, _), m in zip(drawn, moments.tolist(), strict=True)]
+
+
+def _drawn(rng: np.random.Generator) -> tuple[str, list[float]]:
+    """A kind of body and its masses and dimensions (kg, m; not yet rounded), drawn from
+    ``rng`` in the order of :data:`_RANGES`."""
+    label = _LABELS[rng.integers(5)]
+    return label, [rng.uniform(low, high) for low, high in _RANGES[label]]
 
 
 @dataclass(frozen=True)
@@ -223,51 +263,109 @@ class Draw:
                    tuple(params["omega0"]))
 
 
-def _draw(rng: np.random.Generator) -> Draw:
-    body = draw_body(rng)
-    order = tuple(int(i) for i in rng.permutation(3))
-    moments = tuple(round_sig([body.moments[i] for i in order], SIG_MOMENTS).tolist())
-    spin_axis = int(rng.integers(1, 4))
-    wobble = rng.uniform(*WOBBLE, size=3) * rng.choice([-1.0, 1.0], size=3)
-    spin = rng.uniform(*body.spin)
-    omega = spin * wobble
-    omega[spin_axis - 1] = spin
-    return Draw(body, order, moments, spin_axis, tuple(round_sig(omega, SIG).tolist()))
+def _draws(rngs: Sequence[np.random.Generator]) -> list[Draw]:
+    """A draw from each generator (:func:`draw`): each student's numbers drawn from their own
+    generator as alone, then rounded together."""
+    bodies = draw_bodies(rngs)
+    orders, spin_axes, wobbles, spins = [], [], [], []
+    for rng, body in zip(rngs, bodies, strict=True):
+        orders.append(rng.permutation(3))
+        spin_axes.append(int(rng.integers(1, 4)))
+        wobbles.append(rng.uniform(*WOBBLE, size=3) * rng.choice([-1.0, 1.0], size=3))
+        spins.append(rng.uniform(*body.spin))
+    order = np.array(orders)
+    moments = round_sig(np.take_along_axis(np.array([b.moments for b in bodies]), order, axis=1),
+                        SIG_MOMENTS)
+    spin = np.array(spins)
+    omega = spin[:, None] * np.array(wobbles)
+    omega[np.arange(len(spins)), np.array(spin_axes) - 1] = spin
+    return [Draw(body, tuple(o), tuple(m), s, tuple(w)) for body, o, m, s, w in zip(
+        bodies, order.tolist(), moments.tolist(), spin_axes, round_sig(omega, SIG).tolist(),
+        strict=True)]
 
 
-def _well_posed(d: Draw) -> bool:
-    """A rigid body's moments, far from degenerate; a stable wobble within R9's linear regime."""
-    return _well_posed_many([d])[0]
+def _rigid_apart(moments: np.ndarray) -> np.ndarray:
+    """Whether the moments (n, 3), kg m², are a rigid body's, no two within ``MIN_GAP`` of the
+    largest (the rounding may have crossed the triangle inequality, or left them nearly
+    degenerate)."""
+    I1, I2, I3 = moments.T
+    largest = moments.max(axis=1)
+    gaps = np.minimum(np.minimum(np.abs(I1 - I2), np.abs(I1 - I3)), np.abs(I2 - I3))
+    return ~((2 * largest > I1 + I2 + I3) | (gaps < MIN_GAP * largest))
 
 
-def _well_posed_many(draws: Sequence[Draw]) -> list[bool]:
-    """:func:`_well_posed` of each draw, R10's exact period (against which R9's rate of a
-    stable wobble is checked) computed in one solver call for all of them (element by element
-    what one draw alone gives)."""
-    posed, stable_rates = [], {}
-    for i, d in enumerate(draws):
-        moments = np.array(d.moments)
-        gaps = np.abs(moments[:, None] - moments[None, :])[np.triu_indices(3, 1)]
-        # the triangle inequality crossed by the rounding, or nearly degenerate moments
-        posed.append(not (2 * moments.max() > moments.sum()
-                          or gaps.min() < MIN_GAP * moments.max()))
-        if posed[i]:  # an unstable spin's growth rate describes the flip's start, however it ends
-            r9 = near_axis_stability(*d.moments, d.omega0[d.spin_axis - 1], axis=d.spin_axis)
-            if r9["stable"]:
-                stable_rates[i] = float(r9["rate"])
-    if stable_rates:
-        I1, I2, I3 = np.array([draws[i].moments for i in stable_rates], dtype=float).T
-        omega0 = np.array([draws[i].omega0 for i in stable_rates], dtype=float)
-        exact = asymmetric_top_period(I1, I2, I3, omega0)
-        for (i, rate), period in zip(stable_rates.items(), exact.tolist(), strict=True):
-            posed[i] = abs(period * rate / (2 * math.pi) - 1) < LINEAR_RTOL
-    return posed
-
-
-def _stability_answers(d: Draw) -> list[Answer]:
-    answers = []
+def _r9(moments: np.ndarray, spin: np.ndarray, axes: np.ndarray) -> dict[str, np.ndarray]:
+    """R9 for the spins ``spin`` (n,), rad/s, about the axes ``axes`` (n,) (1, 2 or 3) of
+    bodies of moments (n, 3): :func:`solver.torque_free.near_axis_stability`'s values, one
+    solver call per axis."""
+    found = {"Omega1": np.empty(len(spin)), "Omega2": np.empty(len(spin)),
+             "rate": np.empty(len(spin)), "stable": np.empty(len(spin), dtype=bool)}
     for axis in (1, 2, 3):
-        stable = bool(near_axis_stability(*d.moments, 1.0, axis=axis)["stable"])
+        rows = np.flatnonzero(axes == axis)
+        if rows.size:
+            r9 = near_axis_stability(*moments[rows].T, spin[rows], axis=axis)
+            for name, values in found.items():
+                values[rows] = r9[name]
+    return found
+
+
+def _posed_many(draws: Sequence[Draw]) -> list[tuple[Answer, ...] | IllPosed]:
+    """The answers of each draw, or the :class:`IllPosed` that rejects it: moments not a
+    rigid body's or nearly degenerate, a stable wobble beyond R9's linear regime (checked
+    against R10's exact period), or a known mistake within ``MARGIN`` tolerances of the key or
+    of another. The solver called once per axis for all draws, their mistakes tested apart
+    together (:func:`problems.family.stacked_distinguishable`); answers built for the accepted
+    draws alone."""
+    moments = np.array([d.moments for d in draws], dtype=float)
+    omega0 = np.array([d.omega0 for d in draws], dtype=float)
+    axes = np.array([d.spin_axis for d in draws])
+    spin = omega0[np.arange(len(draws)), axes - 1]
+    found: list[tuple[Answer, ...] | IllPosed] = [IllPosed(_ILL_POSED)] * len(draws)
+    rows = np.flatnonzero(_rigid_apart(moments))  # the solver refuses no rigid body
+    r9 = _r9(moments[rows], spin[rows], axes[rows])
+    # an unstable spin's growth rate describes the flip's start, however it ends
+    stable = np.flatnonzero(r9["stable"])
+    linear = np.ones(len(rows), dtype=bool)
+    if stable.size:
+        period = asymmetric_top_period(*moments[rows[stable]].T, omega0[rows[stable]])
+        linear[stable] = np.abs(period * r9["rate"][stable] / (2 * math.pi) - 1) < LINEAR_RTOL
+    rows, r9 = rows[linear], {name: values[linear] for name, values in r9.items()}
+    stable_axes = [near_axis_stability(*moments[rows].T, 1.0, axis=a)["stable"]
+                   for a in (1, 2, 3)] if rows.size else []
+    rate3 = near_axis_stability(*moments[rows].T, spin[rows], axis=3)["rate"] \
+        if rows.size else np.empty(0)
+    rate, O1, O2 = r9["rate"], np.abs(r9["Omega1"]), np.abs(r9["Omega2"])
+    wrong = np.stack([rate, rate / (2 * math.pi),
+                      np.where(r9["stable"], 2 * math.pi / rate, 1 / rate), O1, O2, rate3],
+                     axis=-1)
+    # the ê3 formula is a mistake only for a spin about another axis
+    about3 = axes[rows] == 3
+    apart = np.where(about3, stacked_distinguishable(wrong[:, :5], MARGIN * RTOL),
+                     stacked_distinguishable(wrong, MARGIN * RTOL))
+    finite = np.all(np.isfinite(wrong), axis=1)
+    for k, i in enumerate(rows.tolist()):
+        build = partial(_built, tuple(bool(x[k]) for x in stable_axes), int(axes[i]),
+                        wrong[k].tolist(), bool(r9["stable"][k]))
+        if not finite[k]:  # Answer reads (and refuses) such values itself: as one alone
+            found[i] = unless_ill_posed(distinguishable, build, MARGIN)
+        else:
+            found[i] = build() if apart[k] else IllPosed(_CLOSE)
+    return found
+
+
+def _built(stable_axes: tuple[bool, bool, bool], s: int, wrong: list[float],
+           stable: bool) -> tuple[Answer, ...]:
+    """The answers of a draw spun about ê``s``: :func:`_stability_answers` and
+    :func:`_rate_answer` of the values :func:`_posed_many` stacked (``wrong``: the rate, then
+    its mistakes' values, the ê3 formula's last)."""
+    return (*_stability_answers(stable_axes),
+            _rate_answer(s, *wrong[:5], stable, None if s == 3 else wrong[5]))
+
+
+def _stability_answers(stable_axes: tuple[bool, bool, bool]) -> list[Answer]:
+    """``stable1``–``stable3``: whether steady spin about each principal axis is stable (R9)."""
+    answers = []
+    for axis, stable in zip((1, 2, 3), stable_axes, strict=True):
         if stable:
             why = (f"Spin about ê{axis} is stable: its moment is the largest or the smallest, so "
                    "Ω1Ω2 > 0 in R9 (small deviations oscillate).")
@@ -282,28 +380,26 @@ def _stability_answers(d: Draw) -> list[Answer]:
     return answers
 
 
-def _rate_answer(d: Draw) -> Answer:
-    s = d.spin_axis
-    spin = d.omega0[s - 1]
-    r9 = near_axis_stability(*d.moments, spin, axis=s)
-    rate, stable = float(r9["rate"]), bool(r9["stable"])
-    O1, O2 = abs(float(r9["Omega1"])), abs(float(r9["Omega2"]))
+def _rate_answer(s: int, rate: float, hz: float, period: float, O1: float, O2: float,
+                 stable: bool, rate3: float | None) -> Answer:
+    """``rate`` for the spin about ê``s``: R9's rate (1/s), its mistakes' values (the rate in
+    Hz, the period 2π/rate or the e-folding time 1/rate, |Ω1|, |Ω2|, and R9's formula for ê3
+    applied to the spin about another axis, ``rate3``)."""
     mistakes = [
-        Mistake("hz", rate / (2 * math.pi), "That is the rate divided by 2π; give it in rad/s "
+        Mistake("hz", hz, "That is the rate divided by 2π; give it in rad/s "
                 "(an angular frequency)." if stable else "A growth rate has no factor 2π: "
                 "perturbations grow as exp(√(−Ω1Ω2) t)."),
-        Mistake("period", 2 * math.pi / rate, "That is the period 2π/√(Ω1Ω2); the angular "
+        Mistake("period", period, "That is the period 2π/√(Ω1Ω2); the angular "
                 "frequency is asked.") if stable else
-        Mistake("e_folding_time", 1 / rate, "That is the e-folding time 1/√(−Ω1Ω2); the "
+        Mistake("e_folding_time", period, "That is the e-folding time 1/√(−Ω1Ω2); the "
                 "growth rate (1/s) is asked."),
         Mistake("Omega1_only", O1, "R9's rate is the geometric mean √|Ω1Ω2| of both "
                 "coefficients, not one of them."),
         Mistake("Omega2_only", O2, "R9's rate is the geometric mean √|Ω1Ω2| of both "
                 "coefficients, not one of them."),
     ]
-    if s != 3:
-        wrong = float(near_axis_stability(*d.moments, spin, axis=3)["rate"])
-        mistakes.append(Mistake("axis3_formula", wrong, f"The spin is about ê{s}, not ê3: "
+    if rate3 is not None:
+        mistakes.append(Mistake("axis3_formula", rate3, f"The spin is about ê{s}, not ê3: "
                                 "relabel R9's axes cyclically so that the spin axis plays "
                                 "the role of ê3."))
     # Unit and description are the same whether the spin is stable or not: the text of the
@@ -347,7 +443,13 @@ PARAMETERS: dict[str, Parameter] = body_parameters()
 def draw(rng: np.random.Generator) -> dict[str, Any]:
     """A body (:func:`draw_body`), its axes in random order, and a spin about one of them with
     a small wobble."""
-    return _draw(rng).params()
+    return draw_many([rng])[0]
+
+
+def draw_many(rngs: list[np.random.Generator]) -> list[dict[str, Any]]:
+    """:func:`draw` of each generator — the batch form (:mod:`problems.family`): the bodies'
+    moments, and the rounding, of all at once."""
+    return [d.params() for d in _draws(rngs)]
 
 
 def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
@@ -357,28 +459,21 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     Raises :class:`~problems.family.IllPosed` for no rigid body, nearly degenerate moments, a
     stable wobble beyond R9's linear regime, or a known mistake close to the key.
     """
-    d = Draw.of(params)
-    reject_unless(_well_posed(d), _ILL_POSED)
-    return distinguishable(lambda: (*_stability_answers(d), _rate_answer(d)), MARGIN)
+    found = _posed_many([Draw.of(params)])[0]
+    if isinstance(found, IllPosed):
+        raise found
+    return found
 
 
 _ILL_POSED = "degenerate moments, or a wobble beyond the linear regime"
+_CLOSE = f"a known mistake within {MARGIN:g} tolerances of the key or another"
 
 
 def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:
     """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
-    rejected) — the batch form (:mod:`problems.family`): R10's exact periods of the stable
-    wobbles in one solver call."""
-    draws = [Draw.of(p) for p in many]
-    found: list[tuple[Answer, ...] | IllPosed] = []
-    for d, posed in zip(draws, _well_posed_many(draws), strict=True):
-        try:
-            reject_unless(posed, _ILL_POSED)
-            found.append(distinguishable(
-                lambda d=d: (*_stability_answers(d), _rate_answer(d)), MARGIN))
-        except IllPosed as e:
-            found.append(e)
-    return found
+    rejected) — the batch form (:mod:`problems.family`): the solver called for all at once,
+    their mistakes tested apart together."""
+    return _posed_many([Draw.of(p) for p in many])
 
 
 def statement(params: Mapping[str, Any]) -> str:

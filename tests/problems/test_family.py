@@ -11,6 +11,7 @@ import types
 import numpy as np
 import pytest
 
+from eulertop_base import ParameterError
 from problems.answers import Answer, Mistake
 from problems.family import (
     Family,
@@ -24,6 +25,7 @@ from problems.family import (
     reject_unless,
     remembered,
     stacked_apart,
+    stacked_distinguishable,
     stacked_dots,
     stacked_norms,
 )
@@ -388,6 +390,48 @@ def test_stacked_products_are_numpy_s_of_each_vector_bit_for_bit():
     values = np.array([[[1.0, 0, 0], [2.0, 0, 0], [3.0, 0, 0]],
                        [[1.0, 0, 0], [3.0, 0, 0], [1.5, 0, 0]]])
     assert stacked_apart(values, np.array([0.9, 0.9])).tolist() == [True, False]
+
+
+def test_stacked_distinguishable_is_the_verdict_of_the_answer_built():
+    """stacked_distinguishable gives, row by row, mistakes_distinguishable's verdict on the
+    scalar answer built from the row (key first, then its mistakes; an answer that refuses a
+    mistake next to its key rejected alike), values set on the edge of the widened tolerances
+    included."""
+    from problems.answers import mistakes_distinguishable
+
+    rng = np.random.default_rng(5)
+    key = rng.uniform(0.5, 2.0, 3000)
+    signs = rng.choice([-1.0, 1.0], (3000, 4))
+    values = np.concatenate([key[:, None], key[:, None] * (1 + signs * rng.uniform(0, 0.06,
+                                                                                   (3000, 4)))],
+                            axis=1)
+    values[::3, 2] = values[::3, 1] + 0.005 * np.abs(values[::3, 1])  # on the edge
+    expected = []
+    for row in values.tolist():
+        try:
+            answer = Answer("x", "scalar", row[0], rtol=1e-3, mistakes=tuple(
+                Mistake(f"m{k}", v, "why") for k, v in enumerate(row[1:])))
+        except ParameterError:
+            expected.append(False)
+        else:
+            expected.append(mistakes_distinguishable(answer, 5.0))
+    assert stacked_distinguishable(values, 5.0 * 1e-3).tolist() == expected
+    assert 0 < sum(expected) < len(expected)  # both verdicts exercised
+
+
+@pytest.mark.parametrize("name", ["asymmetric_free_top", "near_axis_stability"])
+def test_a_class_drawn_at_once_keeps_each_student_s_variant(name):
+    """A family drawing the class at once (draw_many and answers_many: the bodies, the solver
+    and the test of the mistakes stacked): 600 students in batches of 32, bit for bit the
+    variants drawn one at a time, each generator left where drawing alone leaves it."""
+    found = FAMILIES[name]
+    together_rngs = [np.random.default_rng([9, s]) for s in range(600)]
+    alone_rngs = [np.random.default_rng([9, s]) for s in range(600)]
+    together = [v for k in range(0, 600, 32)
+                for v in found.generate_many(together_rngs[k:k + 32])]
+    alone = [found.generate(rng) for rng in alone_rngs]
+    assert [v.to_dict() for v in together] == [v.to_dict() for v in alone]
+    assert [r.uniform() for r in together_rngs] == [r.uniform() for r in alone_rngs]
 
 
 def test_remembered_works_again_for_other_parameters_only():
