@@ -31,7 +31,9 @@ Distances to the poles ``1 ∓ u`` are carried separately (``1 − u0 = 2 sin²(
 ``1 + u1`` would be a cancelling difference it is taken from the exact identity
 ``(b + a)² = B (1 + u1)(1 + u2)(1 + u3)`` (``f(−1) = −(b + a)²``); ``1 − u2`` and ``u3 − 1`` come
 from the cubic re-solved in ``v = 1 − u`` (:func:`_upper_pole_distances`), whose two small roots
-solve a quadratic with a non-negative discriminant — no signed difference, so no NaN. Angles are
+solve a quadratic with a non-negative discriminant — no signed difference, so no NaN; also where
+``u2 ≈ u3`` (a swing from near the upright pole) makes the offsets ``w2, w3`` themselves
+inaccurate (:func:`_root_errors`). Angles are
 ``β = 2 atan2(√(1 − u), √(1 + u))``: full accuracy at both poles. ``b = ±a`` exactly (a top that
 reaches a pole, the planar pendulum) makes the pole an exact root.
 
@@ -176,7 +178,9 @@ def nutation_cubic(
 
     b_minus_a = Q - a * hm
     b_plus_a = Q + a * hp
-    s1, s2, d = _upper_pole_distances(hm, w, B, a, Q, P, b_minus_a)
+    c2_scale = 2.0 * np.abs(u0) * B + P + a * a
+    root_err = _root_errors(w, B, c0, c1_scale, c2_scale)
+    s1, s2, d = _upper_pole_distances(hm, w, *root_err, B, a, Q, P, b_minus_a)
     t1, t2, t3 = _lower_pole_distances(hp, w, B, a, Q, b_plus_a)
     one_minus_u = _columns(s1, s2, np.zeros_like(s1))
     one_plus_u = _columns(t1, t2, t3)
@@ -295,7 +299,39 @@ def _newton_from_above(B, c0, c1, c2, w3):
     return w3
 
 
-def _upper_pole_distances(hm, w, B, a, Q, P, b_minus_a):
+def _root_errors(
+    w: NDArray[np.float64], B: NDArray[np.float64], c0: NDArray[np.float64],
+    c1_scale: NDArray[np.float64], c2_scale: NDArray[np.float64],
+) -> list[NDArray[np.float64]]:
+    """Rounding errors of the roots ``w2``, ``w3``: ``4 ε Σ|terms of f(w)| / |f'(w)|`` (R17).
+
+    ``f'(w_i) = B ∏_{j≠i} (w_i − w_j)`` from the roots, so a near-double ``u2 ≈ u3`` (a top
+    swinging from near the upright pole) gets the large error its offsets have, not
+    ``ε |w_i|``: then ``1 − u2`` and ``u3 − 1`` must come from the re-solved cubic. The exact
+    root ``w = 0`` (``c0 = 0``) gets 0, or NaN if it is double (``0/0``: no comparison with a
+    NaN prefers the re-solved form, and the exact difference is kept).
+    """
+    w1, w2, w3 = w[:, 0], w[:, 1], w[:, 2]
+    gap = w3 - w2
+    errors = []
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        for x, other in ((w2, w2 - w1), (w3, w3 - w1)):
+            ax = np.abs(x)
+            t = B * ax
+            t += c2_scale
+            t *= ax
+            t += c1_scale
+            t *= ax
+            t += c0
+            other *= gap  # f'(x)/B
+            other *= B
+            t /= np.abs(other, out=other)
+            t *= 4.0 * _EPS
+            errors.append(t)
+    return errors
+
+
+def _upper_pole_distances(hm, w, err2, err3, B, a, Q, P, b_minus_a):
     """``1 − u1``, ``1 − u2`` and ``u3 − 1``, each to full relative accuracy (R17).
 
     ``1 − u1 = (1 − u0) − w1`` adds two non-negative numbers. ``1 − u2 = (1 − u0) − w2`` and
@@ -309,8 +345,10 @@ def _upper_pole_distances(hm, w, B, a, Q, P, b_minus_a):
     solve ``v² − S v − p = 0`` with ``p = (b − a)²/(B (1 − u1)) ≥ 0`` and
     ``S = (p − 2K/B)/(1 − u1)``, whose discriminant ``S² + 4p`` is a sum of non-negative terms:
     the two pole distances come out with no signed difference at all. Each element keeps the
-    form with the smaller rounding estimate; ``b = a`` exactly (a top that reaches the pole, or
-    the planar pendulum) makes ``p = 0`` and the pole an exact root.
+    form with the smaller rounding estimate (the direct difference's includes its root's own
+    error ``err2``, ``err3``: large for a near-double ``u2 ≈ u3``, see :func:`_root_errors`);
+    ``b = a`` exactly (a top that reaches the pole, or the planar pendulum) makes ``p = 0`` and
+    the pole an exact root.
     """
     s1 = hm - w[:, 0]
     aq, aa = a * Q, a * a
@@ -329,17 +367,18 @@ def _upper_pole_distances(hm, w, B, a, Q, P, b_minus_a):
     usable = forced & (b_minus_a != 0)
     forced &= b_minus_a == 0
     s2 = _better(np.where(up, q, small), np.where(up, err_big, err_small), hm - w[:, 1],
-                 hm + np.abs(w[:, 1]), usable, forced)
+                 8.0 * _EPS * (hm + np.abs(w[:, 1])) + err2, usable, forced)
     d = _better(-np.where(up, small, q), np.where(up, err_small, err_big), w[:, 2] - hm,
-                hm + np.abs(w[:, 2]), usable, forced)
+                8.0 * _EPS * (hm + np.abs(w[:, 2])) + err3, usable, forced)
     return s1, s2, d
 
 
-def _better(pole, err_pole, direct, scale, usable, forced):
+def _better(pole, err_pole, direct, err_direct, usable, forced):
     """A pole distance (clipped at 0): the re-solved ``pole`` form where ``forced``, or where
     ``usable`` and its rounding estimate ``err_pole`` is below the direct difference's
-    (``8 ε scale``); the ``direct`` difference elsewhere."""
-    use = forced | (usable & (err_pole < 8.0 * _EPS * scale))
+    ``err_direct`` (that of the subtraction plus that of the root); the ``direct`` difference
+    elsewhere."""
+    use = forced | (usable & (err_pole < err_direct))
     return np.maximum(np.where(use, pole, direct), 0.0)
 
 
