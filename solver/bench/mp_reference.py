@@ -82,11 +82,15 @@ def reference(state: tuple[float, ...], dps: int = DPS) -> Reference:
         if lost <= dps - 30:
             break
         dps = max(int(lost) + 40, 2 * dps)
+    if ref is None:
+        raise ArithmeticError(f"no reference for {state}: a turning point unresolved from a "
+                              f"pole at {dps} digits")
     return ref
 
 
-def _reference(state, dps: int) -> tuple[Reference, float]:
-    """(the reference at ``dps`` digits, the digits that pole distances and cancellation cost)."""
+def _reference(state, dps: int) -> tuple[Reference | None, float]:
+    """(the reference at ``dps`` digits, the digits that pole distances and cancellation cost);
+    (None, ...) where a turning point is not told apart from a pole at these digits."""
     with mp.workdps(dps):
         I1, I3, Mgl, b0, ad, bd, gd = (x if isinstance(x, mp.mpf) else mp.mpf(float(x))
                                        for x in state)
@@ -102,7 +106,9 @@ def _reference(state, dps: int) -> tuple[Reference, float]:
         # pole is the working precision failing to resolve 1 ∓ u: ask for more digits
         distances = [d for d, reached in ((1 - u2, b == a), (1 + u1, b == -a)) if not reached]
         pole = min(distances, default=mp.mpf(1))
-        lost = float(-mp.log10(pole)) if pole > 0 else float(2 * dps)
+        if pole <= 0:  # nothing at these digits means anything (α̇ there would be a/0)
+            return None, float(2 * dps)
+        lost = float(-mp.log10(pole))
         beta1, beta2 = mp.acos(min(u2, 1)), mp.acos(max(u1, -1))
         rates = (_rate(a, b, u2), _rate(a, b, u1))
         if bd == 0 and s != 0:  # u0 = cos β0 is a turning point off the poles: α̇ = α̇0 there

@@ -37,3 +37,18 @@ def test_swing_between_the_poles_matches_the_reference(state):
     for key in ("beta1", "beta2"):
         ref, tol = row["ref"][key], max(FLOOR, K * row["cond"][key])
         assert abs(float(fast[key]) - ref) <= tol, (key, float(fast[key]), ref)
+
+
+@pytest.mark.parametrize("spin", [1e-30, 1e-60, 1e-150])
+def test_the_reference_resolves_a_turning_point_rounded_onto_the_hanging_pole(spin):
+    """Upright at rest but for a spin ``γ̇0``: ``b = a = I3 γ̇0 / I1`` and the lower turning point
+    ``u1 = a²/B − 1`` lies ``a²/B`` above the hanging pole — below the reference's first
+    precision, where ``α̇(u1) = a/(1 + u1)`` was a division by zero (hypothesis seed 4). The
+    reference raises its digits instead; ``α̇(u1) = B/a`` in closed form (R18)."""
+    from solver.bench.mp_reference import reference
+
+    I1, I3, Mgl = 1.0, 0.5, 1.0
+    ref = reference((I1, I3, Mgl, 0.0, 0.0, 0.0, spin))
+    a, B = I3 * spin / I1, 2 * Mgl / I1
+    assert float(ref.rates[1]) == pytest.approx(B / a, rel=1e-12)
+    assert float(ref.rates[0]) == pytest.approx(a / 2, rel=1e-12)
