@@ -233,7 +233,10 @@ def test_two_desks_and_two_browsers_review_at_once(desk_class, serve, browser):
                                                                 for k in keys))
     theirs = made[1][0]
     pages[0].goto(f"{one.base}/question/{OWN}#{theirs}")
-    pages[0].wait_for_selector("#desk[data-ready]")
+    # the page is already on this question: only its fragment changes, and the desk shows that
+    # answer once it has fetched it (reading before then raced the fetch)
+    pages[0].wait_for_function("id => document.querySelector('#desk').dataset.shown === id",
+                               arg=theirs)
     assert pages[0].text_content("#reviewed-by").startswith("Reviewed by ta-two")
     for context in contexts:
         context.close()
