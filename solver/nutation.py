@@ -367,9 +367,9 @@ def _upper_pole_distances(hm, w, err2, err3, B, a, Q, P, b_minus_a):
     usable = forced & (b_minus_a != 0)
     forced &= b_minus_a == 0
     s2 = _better(np.where(up, q, small), np.where(up, err_big, err_small), hm - w[:, 1],
-                 8.0 * _EPS * (hm + np.abs(w[:, 1])) + err2, usable, forced)
+                 np.maximum(8.0 * _EPS * (hm + np.abs(w[:, 1])), err2), usable, forced)
     d = _better(-np.where(up, small, q), np.where(up, err_small, err_big), w[:, 2] - hm,
-                8.0 * _EPS * (hm + np.abs(w[:, 2])) + err3, usable, forced)
+                np.maximum(8.0 * _EPS * (hm + np.abs(w[:, 2])), err3), usable, forced)
     return s1, s2, d
 
 
