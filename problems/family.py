@@ -446,7 +446,7 @@ class Family:
         if own is None or not many:
             return [unless_ill_posed(self.answers, params) for params in many]
         found = self._checked_many("answers_many", own([dict(p) for p in many]), len(many))
-        return [r if isinstance(r, IllPosed) else tuple(r) for r in found]
+        return [r.with_traceback(None) if isinstance(r, IllPosed) else tuple(r) for r in found]
 
     def _checked_many(self, hook: str, found: Any, n: int) -> list:
         found = list(found)
@@ -617,11 +617,12 @@ class Family:
 
 def unless_ill_posed(function: Callable, *args: Any) -> Any:
     """``function(*args)``, or the :class:`IllPosed` it raised (an element of a batch form's
-    result)."""
+    result), without its traceback: kept, it would hold the frames that hold the batch (a
+    cycle, which only the cycle collector frees, walking through the whole batch)."""
     try:
         return function(*args)
     except IllPosed as e:
-        return e
+        return e.with_traceback(None)
 
 
 def check_contract(module: Any, where: str) -> None:

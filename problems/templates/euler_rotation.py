@@ -79,13 +79,19 @@ def _answer(name, key, mistakes, unit, description) -> Answer | None:
 
 class _Solved(NamedTuple):
     """What the solver gives one instant: R, the mistaken matrices (the product reversed,
-    the angles read as degrees), ω in body components and ω with the angles read as degrees."""
+    the angles read as degrees), ω in body components and ω with the angles read as degrees;
+    the asked vector (``r_lab`` or ``F_body``) and its mistakes (the other of ``R``, ``Rᵀ``;
+    ``R`` of the angles read as degrees); and ω in lab components."""
 
     R: np.ndarray
     reversed_order: np.ndarray
     R_deg: np.ndarray
     omega: np.ndarray
     omega_deg: np.ndarray
+    vector: np.ndarray
+    vector_transposed: np.ndarray
+    vector_deg: np.ndarray
+    omega_lab: np.ndarray
 
 
 def _solve_many(many: list[Mapping[str, Any]]) -> list[_Solved]:
@@ -94,11 +100,18 @@ def _solve_many(many: list[Mapping[str, Any]]) -> list[_Solved]:
     alpha, beta, gamma = np.array([[p[n] for n in _ANGLES] for p in many], dtype=float).T
     rates = np.array([[p[n] for n in _RATES] for p in many], dtype=float).T
     in_degrees = np.radians([alpha, beta, gamma])  # radian values read as degrees
+    R, R_deg = rotation_matrix(alpha, beta, gamma), rotation_matrix(*in_degrees)
+    omega = omega_body(beta, gamma, *rates)
+    # a marker goes body → lab (Rᵀ r'), a force lab → body (R F): each the other's transpose
+    marker = np.array(["r_body" in p for p in many])[:, None]
+    given = np.array([p["r_body"] if "r_body" in p else p["F_lab"] for p in many], dtype=float)
+    to_lab, to_own = to_inertial(R, given), to_body(R, given)
+    to_lab_deg, to_own_deg = to_inertial(R_deg, given), to_body(R_deg, given)
     return [_Solved(*found) for found in zip(
-        rotation_matrix(alpha, beta, gamma),
-        rotation_matrix(gamma, beta, alpha),  # R_α R_β R_γ: α and γ trade places
-        rotation_matrix(*in_degrees), omega_body(beta, gamma, *rates),
-        omega_body(*in_degrees[1:], *rates), strict=True)]
+        R, rotation_matrix(gamma, beta, alpha),  # R_α R_β R_γ: α and γ trade places
+        R_deg, omega, omega_body(*in_degrees[1:], *rates),
+        np.where(marker, to_lab, to_own), np.where(marker, to_own, to_lab),
+        np.where(marker, to_lab_deg, to_own_deg), to_inertial(R, omega), strict=True)]
 
 
 def _matrix_answer(solved: _Solved) -> Answer | None:
@@ -114,18 +127,12 @@ def _matrix_answer(solved: _Solved) -> Answer | None:
 
 def _vector_answer(params: Mapping[str, Any], solved: _Solved) -> Answer | None:
     """Either a marker body → lab (``r_body`` given), or a force lab → body (``F_lab``)."""
-    R, R_deg = solved.R, solved.R_deg
+    mistakes = [("transpose", solved.vector_transposed, _TRANSPOSE),
+                ("degree_mode", solved.vector_deg, _DEGREE_MODE)]
     if "r_body" in params:
-        r_body = np.array(params["r_body"])
-        return _answer("r_lab", to_inertial(R, r_body), [
-            ("transpose", to_body(R, r_body), _TRANSPOSE),
-            ("degree_mode", to_inertial(R_deg, r_body), _DEGREE_MODE),
-        ], "m", "lab components of the marker's position")
-    F_lab = np.array(params["F_lab"])
-    return _answer("F_body", to_body(R, F_lab), [
-        ("transpose", to_inertial(R, F_lab), _TRANSPOSE),
-        ("degree_mode", to_body(R_deg, F_lab), _DEGREE_MODE),
-    ], "N", "body components of the force")
+        return _answer("r_lab", solved.vector, mistakes, "m",
+                       "lab components of the marker's position")
+    return _answer("F_body", solved.vector, mistakes, "N", "body components of the force")
 
 
 def _vector_text(params: Mapping[str, Any]) -> str:
@@ -144,7 +151,7 @@ def _omega_answer(beta, rates, solved: _Solved) -> Answer | None:
     return _answer("omega_body", w, [
         ("rates_as_components", rates, "The Euler-angle rates are not the components of ω: "
          "ω = α̇ ẑ + β̇ ê'₂ + γ̇ ê₃ is a sum along three axes that are not orthogonal (R12)."),
-        ("lab_components", to_inertial(solved.R, w),
+        ("lab_components", solved.omega_lab,
          "These are the lab components of ω; the question asks for its body components "
          "(ω₁, ω₂, ω₃) along ê₁, ê₂, ê₃ (R12)."),
         ("degree_mode", solved.omega_deg, _DEGREE_MODE),

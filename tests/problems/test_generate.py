@@ -347,6 +347,28 @@ def test_generating_in_parallel_gives_the_same_bytes(tmp_path, write_roster, rea
     assert seen == [(k, 20) for k in range(1, 21)]
 
 
+@pytest.mark.parametrize("students, workers", [(0, 2), (17, 2), (150, 2), (300, 2), (401, 2),
+                                               (1000, 3), (5, 1), (401, 1)])
+def test_a_class_is_cut_into_even_batches_as_many_for_each_worker(students, workers):
+    """Each batch at most BATCH students (a batch form's solver calls cost the same for few
+    students as for many: the fewer batches the better), their number a multiple of the
+    workers', sizes within one of each other, every student once in roster order."""
+    from problems.generate import BATCH, _batch_tasks
+
+    rows = [{"id": f"s{i}"} for i in range(students)]
+    tasks = _batch_tasks(None, "T", rows, {}, workers)
+    sizes = [len(task[2]) for task in tasks]
+    assert [row for task in tasks for row in task[2]] == rows
+    assert all(size <= BATCH for size in sizes)
+    if students:
+        assert len(tasks) % workers == 0
+        assert (len(tasks) - workers) * BATCH < students  # one round fewer would not hold them
+        assert set(sizes[:-1]) <= {sizes[0]} and sizes[0] - sizes[-1] < len(tasks)
+        assert [task[4] for task in tasks] == [True] + [False] * (len(tasks) - 1)
+    else:
+        assert tasks == []
+
+
 def test_a_template_failing_in_a_worker_process_leaves_nothing(tmp_path, write_roster):
     roster = read_roster(write_roster(CLASS))
     before = sorted(os.listdir(tmp_path))
