@@ -345,8 +345,9 @@ def _upper_pole_distances(hm, w, err2, err3, B, a, Q, P, b_minus_a):
     solve ``v² − S v − p = 0`` with ``p = (b − a)²/(B (1 − u1)) ≥ 0`` and
     ``S = (p − 2K/B)/(1 − u1)``, whose discriminant ``S² + 4p`` is a sum of non-negative terms:
     the two pole distances come out with no signed difference at all. Each element keeps the
-    form with the smaller rounding estimate (the direct difference's includes its root's own
-    error ``err2``, ``err3``: large for a near-double ``u2 ≈ u3``, see :func:`_root_errors`);
+    form with the smaller rounding estimate (the direct difference's is the larger of the
+    subtraction's and its root's own error ``err2``, ``err3``: large for a near-double
+    ``u2 ≈ u3``, see :func:`_root_errors`);
     ``b = a`` exactly (a top that reaches the pole, or the planar pendulum) makes ``p = 0`` and
     the pole an exact root.
     """
@@ -376,7 +377,7 @@ def _upper_pole_distances(hm, w, err2, err3, B, a, Q, P, b_minus_a):
 def _better(pole, err_pole, direct, err_direct, usable, forced):
     """A pole distance (clipped at 0): the re-solved ``pole`` form where ``forced``, or where
     ``usable`` and its rounding estimate ``err_pole`` is below the direct difference's
-    ``err_direct`` (that of the subtraction plus that of the root); the ``direct`` difference
+    ``err_direct`` (the larger of the subtraction's and the root's); the ``direct`` difference
     elsewhere."""
     use = forced | (usable & (err_pole < err_direct))
     return np.maximum(np.where(use, pole, direct), 0.0)
