@@ -167,16 +167,34 @@ def variant_seed(seed: int, student_id: str, question: int, family: str, reroll:
     >>> variant_seed(1, "alice", 1, "rod") == variant_seed(1, "alice", 1, "rod", reroll=1)
     False
     """
+    return int.from_bytes(_variant_digest(seed, student_id, question, family, reroll), "big")
+
+
+def _variant_digest(seed: int, student_id: str, question: int, family: str, reroll: int) -> bytes:
+    """The SHA-256 digest whose big-endian integer is :func:`variant_seed`."""
     payload = _SEED_JSON.encode(
         ["eulertop-variant", 1, int(seed), student_id, int(question), family, int(reroll)])
-    return int.from_bytes(hashlib.sha256(payload.encode("utf-8")).digest(), "big")
+    return hashlib.sha256(payload.encode("utf-8")).digest()
 
 
 def variant_rng(
     seed: int, student_id: str, question: int, family: str, reroll: int = 0
 ) -> np.random.Generator:
-    """A fresh ``numpy.random.Generator`` for one student's question (see :func:`variant_seed`)."""
-    return np.random.default_rng(variant_seed(seed, student_id, question, family, reroll))
+    """A fresh ``numpy.random.Generator`` for one student's question (see :func:`variant_seed`):
+    ``default_rng(variant_seed(…))``, seeded with the integer's 32-bit words as numpy reads an
+    integer (least significant first, no leading zero word) — a third cheaper than the int."""
+    return np.random.default_rng(
+        seed_words(_variant_digest(seed, student_id, question, family, reroll)))
+
+
+def seed_words(digest: bytes) -> np.ndarray:
+    """The big-endian integer of ``digest`` as numpy's ``SeedSequence`` reads an integer:
+    its 32-bit words, least significant first, without leading zero words (one word for 0)."""
+    words = np.frombuffer(digest[::-1], dtype="<u4")
+    top = len(words)
+    while top > 1 and words[top - 1] == 0:
+        top -= 1
+    return words[:top]
 
 
 def pool_member(pool: Sequence[str], seed: int, student_id: str, question: int,

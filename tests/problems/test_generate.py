@@ -82,6 +82,20 @@ def test_seeds_hash_the_text_json_dumps_writes(seed, student_id, question, famil
         ["eulertop-pool", 1, seed, student_id, question, pool, int(reroll)]) % 2]
 
 
+@settings(max_examples=300, deadline=None)
+@given(digest=st.binary(min_size=32, max_size=32), zeros=st.integers(0, 32))
+def test_a_generator_seeded_with_the_seed_words_is_the_one_of_the_integer(digest, zeros):
+    """variant_rng seeds numpy with the 32-bit words of the digest's integer (cheaper than the
+    int): the same generator, leading zero words (numpy drops them) and zero included."""
+    import numpy as np
+
+    from problems.generate import seed_words
+
+    digest = bytes(zeros) + digest[zeros:]
+    by_words = np.random.default_rng(seed_words(digest)).bit_generator.state
+    assert by_words == np.random.default_rng(int.from_bytes(digest, "big")).bit_generator.state
+
+
 def test_variant_seed_does_not_depend_on_the_interpreter_run():
     code = "from problems.generate import variant_seed; print(variant_seed(7, 'bø', 2, 'rod', 1))"
     outputs = {
