@@ -34,7 +34,7 @@ exchanged turning points, degrees) within five tolerances of the key or of anoth
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -53,7 +53,7 @@ from problems.templates.heavy_top_constants import (
     State,
     Top,
     draw_state,
-    draw_top,
+    draw_tops,
     mistaken_states,
     motion_within_limits,
     select_mistakes,
@@ -197,9 +197,19 @@ def _split(column: np.ndarray, rows: list[list[tuple]]) -> list[np.ndarray]:
     return np.split(np.atleast_1d(column), np.cumsum([len(r) for r in rows])[:-1])
 
 
+def _draw_motions(rngs: Sequence[np.random.Generator]) -> list[tuple[Top, State]]:
+    """:func:`_draw_motion` of each generator: each student's numbers drawn in order, the
+    tops' shown numbers worked out together (:func:`draw_tops`)."""
+    return [_launched(rng, top) for rng, top in zip(rngs, draw_tops(rngs), strict=True)]
+
+
 def _draw_motion(rng: np.random.Generator) -> tuple[Top, State]:
     """A real top, released from rest in α and β one time in three, else launched."""
-    top = draw_top(rng)
+    return _draw_motions([rng])[0]
+
+
+def _launched(rng: np.random.Generator, top: Top) -> tuple[Top, State]:
+    """``top`` released from rest in α and β one time in three, else launched."""
     if rng.uniform() < RELEASED:
         return top, draw_state(rng, top, 0.0, 0.0)
     sense = rng.choice([1.0, 1.0, -1.0])
@@ -231,7 +241,7 @@ def draw(rng: np.random.Generator) -> dict[str, Any] | None:
 def draw_many(rngs: list[np.random.Generator]) -> list[dict[str, Any] | None]:
     """:func:`draw` of each generator, the motions solved together (the batch form,
     :mod:`problems.family`)."""
-    motions = [_draw_motion(rng) for rng in rngs]
+    motions = _draw_motions(rngs)
     return [_draw_query(rng, top, state, *solved[4:]) for rng, (top, state), solved
             in zip(rngs, motions, _solve_many(motions), strict=True)]
 
