@@ -17,9 +17,11 @@ one-time work, drawing the variants, writing the notebooks, and the manifest and
 
 ``--margin`` measures instead what one more student costs (issue 34), against its floor, in
 one run: ``eulertop generate``'s whole call for ``--students`` and for twice as many, in
-fresh processes and alternating (the cost at the margin is the difference over the students
-added, in wall time with one worker process per core, and in CPU time of the call and its
-workers, which other jobs on the machine disturb less); and, in this process, per student,
+fresh processes and alternating, into a temporary folder on disk and in memory (tmpfs, where
+there is one) in turn, beside what creating a file costs in each (the cost at the margin is
+the difference of a round's two calls over the students added, median of the rounds, in wall
+time with one worker process per core, and in CPU time of the call and its workers); and, in
+this process, per student,
 drawing every question one student at a time, drawing them in one pass (each family with a
 batch form for all the students at once), each question drawn in one pass alone (where the
 drawing goes, family by family), and writing the files of the students drawn (the floor, what
@@ -112,13 +114,15 @@ def breakdown(students: int, questions: int) -> dict[str, float]:
     return parts
 
 
-def _timed_child(students: int, questions: int, jobs: int | None, seed: int) -> dict:
-    """One fresh process generating ``students`` (:func:`child`): its JSON line."""
+def _timed_child(students: int, questions: int, jobs: int | None, seed: int,
+                 where: str | None = None) -> dict:
+    """One fresh process generating ``students`` (:func:`child`) into a temporary folder in
+    ``where`` (default: the temporary folder's usual place): its JSON line."""
     import tempfile
 
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
         p for p in (str(ROOT), os.environ.get("PYTHONPATH", "")) if p)}
-    with tempfile.TemporaryDirectory() as folder:
+    with tempfile.TemporaryDirectory(dir=where) as folder:
         command = [sys.executable, str(Path(__file__).resolve()), "--child",
                    str(Path(folder) / "HW"), "--seed", str(seed), "--students", str(students),
                    "--questions", str(questions), *(["--jobs", str(jobs)] if jobs else [])]
@@ -176,19 +180,71 @@ def margin_parts(students: int, questions: int, rounds: int) -> dict[str, list]:
     return {name: [r["cpu"] / students for r in rows] for name, rows in times.items()}
 
 
+def _places() -> dict[str, str]:
+    """Where the classes are generated: ``disk``, the temporary folder's usual place; and
+    ``memory``, ``/dev/shm`` where it is a RAM file system (Linux): creating a file on a
+    virtual machine's disk can cost far more than everything else a student's notebook
+    costs, so each figure is measured in both."""
+    import tempfile
+
+    places = {"disk": tempfile.gettempdir()}
+    try:
+        with open("/proc/mounts", encoding="utf-8") as mounts:
+            if any(line.split()[1:3] == ["/dev/shm", "tmpfs"] for line in mounts):
+                places["memory"] = "/dev/shm"
+    except OSError:
+        pass
+    return places
+
+
+NOTEBOOK_BYTES = 47_000
+"""About the size of a generated notebook of every built-in family (release 46.6 kB,
+solutions 47.7 kB on average): what :func:`file_creation` writes into each file."""
+
+
+def file_creation(places: dict[str, str], rounds: int, count: int = 300) -> dict[str, list]:
+    """Per place, per round: the CPU and wall seconds of creating one file of
+    :data:`NOTEBOOK_BYTES` (``count`` of them in a fresh folder, as a class's notebooks are
+    written), the places taking turns."""
+    import shutil
+    import tempfile
+
+    data = b"x" * NOTEBOOK_BYTES
+    found: dict[str, list] = {place: [] for place in places}
+    for r in range(rounds):
+        for place in places if r % 2 == 0 else list(places)[::-1]:
+            folder = tempfile.mkdtemp(dir=places[place])
+            try:
+                cpu, wall = time.process_time(), time.perf_counter()
+                for i in range(count):
+                    fd = os.open(os.path.join(folder, f"s{i:04d}.ipynb"),
+                                 os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666)
+                    os.write(fd, data)
+                    os.close(fd)
+                found[place].append({"cpu": (time.process_time() - cpu) / count,
+                                     "wall": (time.perf_counter() - wall) / count})
+            finally:
+                shutil.rmtree(folder)
+    return found
+
+
 def measure_margin(students: int, questions: int, jobs: int | None, rounds: int,
                    command: str) -> dict:
     """Every timing of a ``--margin`` run, as its record holds them."""
     record = {"bench": "bench_generate", "command": command, "date": speed_page.now(),
               "machine": speed_page.machine(), "students": [students, 2 * students],
               "questions": questions, "jobs": jobs, "rounds": rounds}
-    runs: dict[int, list] = {students: [], 2 * students: []}
+    places = _places()
+    record["places"] = places
+    runs = {place: {students: [], 2 * students: []} for place in places}
     for r in range(rounds):
-        for n in (students, 2 * students) if r % 2 == 0 else (2 * students, students):
-            runs[n].append(_timed_child(n, questions, jobs, seed=r))
-    record["generate"] = {str(n): [x["generate"] for x in found] for n, found in runs.items()}
-    record["cpu_generate"] = {str(n): [x["cpu_generate"] for x in found]
-                              for n, found in runs.items()}
+        for place in places if r % 2 == 0 else list(places)[::-1]:
+            for n in (students, 2 * students) if r % 2 == 0 else (2 * students, students):
+                runs[place][n].append(_timed_child(n, questions, jobs, r, places[place]))
+    for key in ("generate", "cpu_generate"):
+        record[key] = {place: {str(n): [x[key] for x in found] for n, found in sizes.items()}
+                       for place, sizes in runs.items()}
+    record["file_creation"] = file_creation(places, rounds)
     from problems.templates import FAMILIES
 
     record["problems"] = [[name, FAMILIES[name].batched]
@@ -198,32 +254,53 @@ def measure_margin(students: int, questions: int, jobs: int | None, rounds: int,
     return record
 
 
-def _margin(record: dict, key: str) -> tuple[float, float, float]:
-    """Medians of the call for the small and the large class, and their difference per
-    student added."""
+def _margin(record: dict, key: str, place: str) -> tuple[float, float, float]:
+    """Medians of the call for the small and the large class generated in ``place``, and the
+    median over the rounds of their difference per student added: each round's two calls run
+    one after the other, so a change of the shared machine's speed between rounds (a third
+    and more within minutes) falls on both of a difference."""
     small, large = record["students"]
-    t_small = statistics.median(record[key][str(small)])
-    t_large = statistics.median(record[key][str(large)])
-    return t_small, t_large, (t_large - t_small) / (large - small)
+    t_small, t_large = record[key][place][str(small)], record[key][place][str(large)]
+    differences = [(b - a) / (large - small) for a, b in zip(t_small, t_large, strict=True)]
+    return statistics.median(t_small), statistics.median(t_large), statistics.median(differences)
+
+
+_PLACES = {"disk": "on disk", "memory": "in memory (tmpfs)"}
 
 
 def render_margin(record: dict) -> list[str]:
     """The page's text, from the record alone."""
     small, large = record["students"]
-    t_small, t_large, margin = _margin(record, "generate")
-    cpu = _margin(record, "cpu_generate")[2]
+    places = record["places"]
     parts = {k: statistics.median(v) for k, v in record["per_student_cpu"].items()}
     files = parts["notebooks"] + parts["entries"]
     ms = speed_page.seconds
+    rows = []
+    for place, folder in places.items():
+        t_small, t_large, margin = _margin(record, "generate", place)
+        cpu = _margin(record, "cpu_generate", place)[2]
+        created = record["file_creation"][place]
+        rows.append(f"| {_PLACES[place]} (`{folder}`) | {ms(t_small)} | {ms(t_large)} | "
+                    f"**{ms(margin)}** | {ms(cpu)} | {ms(speed_page.median(created, 'cpu'))} |")
     return [
         speed_page.header(record),
         "",
         f"`eulertop generate` of {small} and of {large} students × {record['questions']} "
         f"questions (every built-in family), one worker process per core, each run a fresh "
-        f"process, {record['rounds']} of each alternating: the call took {ms(t_small)} and "
-        f"{ms(t_large)} (medians), so **one more student costs {ms(margin)}** of wall time "
-        f"(the target: at most 3 ms), and {ms(cpu)} of CPU time of the call and its worker "
-        "processes. Per student, in one process (CPU time, medians of the same rounds):",
+        f"process, {record['rounds']} of each alternating, into a temporary folder "
+        f"{' and '.join(f'{_PLACES[p]}' for p in places)} (taking turns). One more student "
+        "costs the difference of the two calls of a round over the students added (median "
+        "of the rounds), in wall time "
+        "(the target: at most 3 ms) and in CPU time of the call and its worker processes. "
+        "Beside it, in the same rounds, what creating one file of a notebook's size costs "
+        "there (CPU time, median; a student has two):",
+        "",
+        f"| written to | {small} students | {large} students | one more student | "
+        "its CPU | creating a file |",
+        "|---|---|---|---|---|---|",
+        *rows,
+        "",
+        "Per student, in one process (CPU time, medians of the same rounds, files on disk):",
         "",
         "| per student, all questions | CPU |",
         "|---|---|",

@@ -65,3 +65,17 @@ def test_a_block_of_another_bench_is_left_alone():
     assert "new" in new and "keep 1.0" in new and "old" not in new
     with pytest.raises(BlockError, match="p: needs one line '<!-- z: begin -->'"):
         current_block(text, "p", markers_of("z"))
+
+
+def test_the_cost_of_one_more_student_pairs_each_rounds_two_calls():
+    """bench_generate's margin is the median over rounds of (large − small) / added, each
+    round's two calls taken together: a slow round slows both of its calls, not the margin
+    (the difference of the two medians would mix a fast round's call with a slow one's)."""
+    bench = _bench("bench_generate")
+    record = {"students": [100, 200], "generate": {"disk": {
+        "100": [1.0, 2.0, 3.0], "200": [1.2, 2.2, 3.2]}}}
+    small, large, margin = bench._margin(record, "generate", "disk")
+    assert (small, large) == (2.0, 2.2)
+    assert margin == pytest.approx(0.2 / 100)
+    record["generate"]["disk"]["200"] = [3.2, 1.2, 2.2]  # the same calls, rounds shuffled
+    assert bench._margin(record, "generate", "disk")[2] != pytest.approx(0.2 / 100)
