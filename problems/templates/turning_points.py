@@ -105,18 +105,30 @@ def _energy_state(top: Top, state: State, p_gamma: float) -> tuple[float, ...]:
     return (top.I1, top.I3, top.Mgl, state.beta0, state.alpha_dot0, beta_dot, state.gamma_dot0)
 
 
-def _potential_answer(top: Top, state: State, beta: float, mistaken: dict,
-                      p_alpha: np.ndarray, p_gamma: np.ndarray) -> Answer | None:
-    """``V_eff(beta)`` and its mistakes (None: ill-conditioned or confusable).
-
-    ``p_alpha``, ``p_gamma``: the key's constants, then those of each ``mistaken`` state.
-    """
+def _potential_rows(top: Top, state: State, beta: float, mistaken: dict, p_alpha: np.ndarray,
+                    p_gamma: np.ndarray) -> list[list[float]]:
+    """The arguments of :func:`effective_potential` (``β``, ``I1``, ``Mgl``, ``p_α``, ``p_γ``)
+    for ``V_eff(beta)`` of the key, of each ``mistaken`` state, and without ``p_γ cos β``;
+    ``p_alpha``, ``p_gamma``: the key's constants, then those of each mistaken state."""
     pg = float(p_gamma[0])
     transverse = top.I1 * state.alpha_dot0 * math.sin(state.beta0) ** 2  # p_α without p_γ cos β
     rows = ("key", *mistaken, "missing_p_gamma_term")
     where = [math.radians(beta) if k == "degree_mode" else beta for k in rows]
     moment = [top.I1, *(args[0] for args in mistaken.values()), top.I1]
-    values = effective_potential(where, moment, top.Mgl, [*p_alpha, transverse], [*p_gamma, pg])
+    return [where, moment, [top.Mgl] * len(rows), [*p_alpha, transverse], [*p_gamma, pg]]
+
+
+def _potentials_many(rows: list[list[list[float]]]) -> list[np.ndarray]:
+    """:func:`effective_potential` of each student's :func:`_potential_rows`, in one call."""
+    values = effective_potential(*(np.concatenate(column) for column in zip(*rows, strict=True)))
+    return np.split(np.atleast_1d(values), np.cumsum([len(r[0]) for r in rows])[:-1])
+
+
+def _potential_answer(top: Top, beta: float, mistaken: dict, p_gamma: np.ndarray,
+                      values: np.ndarray) -> Answer | None:
+    """``V_eff(beta)`` and its mistakes (None: ill-conditioned or confusable), from the
+    :func:`_potentials_many` of its :func:`_potential_rows` (``values``)."""
+    pg = float(p_gamma[0])
     key = float(values[0])
     potential = top.Mgl * math.cos(beta)
     if not well_conditioned(key, key - potential, potential):
@@ -250,10 +262,13 @@ def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | Ill
     """:func:`answers` of each parameter set (an :class:`~problems.family.IllPosed` where
     rejected), the motions solved together (the batch form)."""
     motions = [(top_from_params(p), state_from_params(p)) for p in many]
+    solved = _solve_many(motions)
+    potentials = _potentials_many([_potential_rows(top, state, p["beta"], *s[:3]) for p,
+                                   (top, state), s in zip(many, motions, solved, strict=True)])
     found: list[tuple[Answer, ...] | IllPosed] = []
-    for p, (top, state), solved in zip(many, motions, _solve_many(motions), strict=True):
+    for p, (top, _), s, values in zip(many, motions, solved, potentials, strict=True):
         try:
-            found.append(_answers(top, state, p["beta"], solved))
+            found.append(_answers(top, p["beta"], s, values))
         except IllPosed as e:
             found.append(e)
     return found
@@ -267,15 +282,18 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     ill-conditioned ``V_eff``, or a primary mistake close to the key.
     """
     top, state = top_from_params(params), state_from_params(params)
-    return _answers(top, state, params["beta"], _solve(top, state))
+    solved = _solve(top, state)
+    (values,) = _potentials_many([_potential_rows(top, state, params["beta"], *solved[:3])])
+    return _answers(top, params["beta"], solved, values)
 
 
-def _answers(top: Top, state: State, beta: float, solved: tuple) -> tuple[Answer, ...]:
-    """:func:`answers` from the motion's :func:`_solve`."""
-    mistaken, p_alpha, p_gamma, moved, low, high = solved
+def _answers(top: Top, beta: float, solved: tuple, values: np.ndarray) -> tuple[Answer, ...]:
+    """:func:`answers` from the motion's :func:`_solve` and its ``V_eff`` values
+    (:func:`_potentials_many`)."""
+    mistaken, _, p_gamma, moved, low, high = solved
     reject_unless(motion_within_limits(top, float(low[0]), float(high[0])),
                   "the motion leaves the scene's limits")
-    potential = _potential_answer(top, state, beta, mistaken, p_alpha, p_gamma)
+    potential = _potential_answer(top, beta, mistaken, p_gamma, values)
     points = _turning_point_answers(tuple(moved), low, high)
     reject_unless(potential is not None and points is not None,
                   "ill-conditioned, or a mistake close to the key")
