@@ -263,6 +263,22 @@ class Answer:
         if self.kind == WRITTEN:
             _validate_written(self)
             return
+        if self.kind in _COMPARED_AS_VALUES:
+            decided_by = _checks_decided_by(self)
+            checked = _CHECKED.get(decided_by) if decided_by is not None else None
+            if checked is not None:
+                _take_checked(self, checked)
+                return
+        self._check_and_normalise()
+        if self.kind in _COMPARED_AS_VALUES and decided_by is not None:
+            if len(_CHECKED) >= _MAX_VERDICTS:
+                _CHECKED.clear()
+            _CHECKED[decided_by] = (self.value, self.accepted,
+                                    tuple(m.value for m in self.mistakes))
+
+    def _check_and_normalise(self) -> None:
+        """Every value read and checked (the key gradable, each mistake apart from it), and
+        kept as plain JSON."""
         form = _Form.of(self, reading_key=True)
         key = _read_key(form, self.value, "value")
         object.__setattr__(self, "value", _to_json(key))
@@ -1350,6 +1366,51 @@ def _apart(keys: Iterable[Any], mistakes: Iterable[Any], rtol: float, atol: floa
             return False
         known.append((x, tolerance))
     return True
+
+
+_COMPARED_AS_VALUES = frozenset({"expression", "boolean", "choice"})
+"""Kinds whose checks :data:`_CHECKED` keeps: few distinct answers in a class (an expression's
+key and mistakes read and compared at its points cost ~0.05 ms, a boolean's or a choice's
+~0.01 ms)."""
+
+_CHECKED: dict[tuple, tuple] = {}
+"""An answer of :data:`_COMPARED_AS_VALUES` that passed its checks, by what decides them
+(:func:`_checks_decided_by`): its value, accepted values and mistakes' values, normalised."""
+
+
+def _checks_decided_by(answer: Answer) -> tuple | None:
+    """What :meth:`Answer._check_and_normalise` depends on: the fields that say how values
+    compare, and every value with its type (``True``, ``1`` and ``1.0`` are equal keys but not
+    equally valid answers); None where a value cannot be a key (unhashable) or a mistake is
+    not a :class:`Mistake` (the checks say so)."""
+    if not all(type(m) is Mistake for m in answer.mistakes):
+        return None
+    try:
+        decided_by = (answer.kind, answer.name, answer.unit, answer.rtol, answer.atol,
+                      answer.options, answer.symbols, answer.period,
+                      type(answer.value), answer.value,
+                      tuple((type(v), v) for v in answer.accepted),
+                      tuple((type(m.value), m.value) for m in answer.mistakes))
+        hash(decided_by)
+    except TypeError:
+        return None
+    return decided_by
+
+
+def _take_checked(answer: Answer, checked: tuple) -> None:
+    """:meth:`Answer._check_and_normalise`'s outcome for these values (``checked``, from
+    :data:`_CHECKED`), without reading or comparing them again."""
+    value, accepted, mistake_values = checked
+    object.__setattr__(answer, "value", value)
+    object.__setattr__(answer, "accepted", accepted)
+    _check_depends_on(answer)
+    mistakes = tuple(m if type(m.value) is type(v) and m.value == v
+                     else Mistake(m.name, v, m.feedback)
+                     for m, v in zip(answer.mistakes, mistake_values, strict=True))
+    object.__setattr__(answer, "mistakes", mistakes)
+    if len(mistakes) > 1 and len({m.name for m in mistakes}) != len(mistakes):
+        raise ParameterError("mistakes", f"answer {answer.name!r}: duplicate names "
+                             f"{[m.name for m in mistakes]}")
 
 
 def _unchecked(answer: Answer, **changes: Any) -> Answer:

@@ -533,3 +533,35 @@ def test_a_wrong_value_that_is_not_the_key_rounded_is_just_wrong(submitted):
 def test_a_known_mistake_is_named_before_rounding_is_considered():
     answer = Answer("w", "scalar", 2.5, mistakes=(Mistake("rpm", 24.0, "rad/s, not rpm"),))
     assert grade(answer, 24.0).mistake == "rpm"
+
+
+@pytest.mark.parametrize("build", [
+    lambda feedback: Answer("T", "expression", "I1*w**2/2 + I3*v**2/2",
+                            symbols=("I1", "I3", "w", "v"),
+                            mistakes=(Mistake("half", "I1*w**2 + I3*v**2", feedback),)),
+    lambda feedback: Answer("stable", "boolean", True, mistakes=(Mistake("no", False, feedback),)),
+    lambda feedback: Answer("motion", "choice", "loops", options=("loops", "cusps", "waves"),
+                            mistakes=(Mistake("cusp", "cusps", feedback),)),
+])
+def test_an_answer_whose_checks_are_kept_is_the_one_checked_afresh(build):
+    """Expression, boolean and choice answers keep the outcome of their checks by what decides
+    it (problems.answers._CHECKED): built again, from what was kept, an answer is the one the
+    checks make with nothing kept, and each keeps its own mistakes' feedback."""
+    from problems import answers
+
+    answers._CHECKED.clear()
+    fresh = build("first")
+    assert answers._CHECKED  # the outcome was kept
+    again = build("other words")
+    answers._CHECKED.clear()
+    assert again.to_dict() == build("other words").to_dict()
+    assert again.to_dict() != fresh.to_dict()
+    assert [m.feedback for m in again.mistakes] == ["other words"]
+
+
+def test_a_value_equal_to_a_checked_one_but_of_another_type_is_checked_again():
+    """1 == True (and hashes the same), but 1 is no boolean answer: the kept outcome of True
+    does not let it through."""
+    Answer("stable", "boolean", True)
+    with pytest.raises(ParameterError, match="value"):
+        Answer("stable", "boolean", 1)
