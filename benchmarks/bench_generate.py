@@ -265,7 +265,7 @@ def _margin(record: dict, key: str, place: str) -> tuple[float, float, float]:
     return statistics.median(t_small), statistics.median(t_large), statistics.median(differences)
 
 
-_PLACES = {"disk": "on disk", "memory": "in memory (tmpfs)"}
+_PLACES = {"disk": "on disk", "memory": "in memory, tmpfs"}
 
 
 def render_margin(record: dict) -> list[str]:
