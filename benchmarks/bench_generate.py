@@ -209,6 +209,8 @@ def file_creation(places: dict[str, str], rounds: int, count: int = 300) -> dict
     import shutil
     import tempfile
 
+    from problems.generate import _write_bytes  # as the generator writes a notebook
+
     data = b"x" * NOTEBOOK_BYTES
     found: dict[str, list] = {place: [] for place in places}
     for r in range(rounds):
@@ -217,10 +219,7 @@ def file_creation(places: dict[str, str], rounds: int, count: int = 300) -> dict
             try:
                 cpu, wall = time.process_time(), time.perf_counter()
                 for i in range(count):
-                    fd = os.open(os.path.join(folder, f"s{i:04d}.ipynb"),
-                                 os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666)
-                    os.write(fd, data)
-                    os.close(fd)
+                    _write_bytes(Path(folder) / f"s{i:04d}.ipynb", data)
                 found[place].append({"cpu": (time.process_time() - cpu) / count,
                                      "wall": (time.perf_counter() - wall) / count})
             finally:

@@ -263,18 +263,15 @@ class Answer:
         if self.kind == WRITTEN:
             _validate_written(self)
             return
-        if self.kind in _COMPARED_AS_VALUES:
-            decided_by = _checks_decided_by(self)
-            checked = _CHECKED.get(decided_by) if decided_by is not None else None
-            if checked is not None:
-                _take_checked(self, checked)
-                return
+        decided_by = _decided_by(self) if self.kind in _COMPARED_AS_VALUES else None
+        checked = _CHECKED.get(decided_by) if decided_by is not None else None
+        if checked is not None:
+            _take_checked(self, checked)
+            return
         self._check_and_normalise()
-        if self.kind in _COMPARED_AS_VALUES and decided_by is not None:
-            if len(_CHECKED) >= _MAX_VERDICTS:
-                _CHECKED.clear()
-            _CHECKED[decided_by] = (self.value, self.accepted,
-                                    tuple(m.value for m in self.mistakes))
+        if decided_by is not None:
+            _keep(_CHECKED, decided_by,
+                  (self.value, self.accepted, tuple(m.value for m in self.mistakes)))
 
     def _check_and_normalise(self) -> None:
         """Every value read and checked (the key gradable, each mistake apart from it), and
@@ -293,9 +290,7 @@ class Answer:
         near_key = _near(self, key)
         mistakes = tuple(_checked_mistake(self, m, form, near_key) for m in self.mistakes)
         object.__setattr__(self, "mistakes", mistakes)
-        if len(mistakes) > 1 and len({m.name for m in mistakes}) != len(mistakes):
-            raise ParameterError("mistakes", f"answer {self.name!r}: duplicate names "
-                                 f"{[m.name for m in mistakes]}")
+        _check_mistake_names(self)
 
     def mistake(self, name: str) -> Mistake | None:
         """The known mistake called ``name``, or None if this answer does not list it."""
@@ -1297,18 +1292,11 @@ def mistakes_distinguishable(answer: Answer, margin: float = 5.0) -> bool:
     wide = _unchecked(answer, rtol=rtol, atol=atol)
     if size is not None:
         return _apart(*_read_values(wide), rtol, atol, size)
-    try:  # what decides it: the values (plain JSON, read the same way) and how they compare
-        decided_by = (wide.kind, wide.name, wide.unit, wide.options, wide.symbols, wide.period,
-                      rtol, atol, wide.value, wide.accepted, tuple(m.value for m in wide.mistakes))
-        hash(decided_by)
-    except TypeError:
+    decided_by = _decided_by(wide)
+    if decided_by is None:
         return _compared_apart(wide)
     verdict = _VERDICTS.get(decided_by)
-    if verdict is None:
-        if len(_VERDICTS) >= _MAX_VERDICTS:
-            _VERDICTS.clear()
-        verdict = _VERDICTS[decided_by] = _compared_apart(wide)
-    return verdict
+    return _keep(_VERDICTS, decided_by, _compared_apart(wide)) if verdict is None else verdict
 
 
 def _read_values(wide: Answer) -> tuple[list, Iterator]:
@@ -1324,7 +1312,17 @@ _VERDICTS: dict[tuple, bool] = {}
 booleans, periodic angles), by what decides it: a class's expression answers are a few
 distinct ones (7 among 600 in 300 students), each costing ~0.1 ms to compare at its points."""
 
-_MAX_VERDICTS = 4096
+_MAX_KEPT = 4096
+"""Most entries :data:`_VERDICTS` or :data:`_CHECKED` holds (emptied when full)."""
+
+
+def _keep(kept: dict, key: tuple, value: Any) -> Any:
+    """``value``, kept in ``kept`` under ``key`` (emptied first when it holds
+    :data:`_MAX_KEPT`)."""
+    if len(kept) >= _MAX_KEPT:
+        kept.clear()
+    kept[key] = value
+    return value
 
 
 def _compared_apart(wide: Answer) -> bool:
@@ -1375,11 +1373,12 @@ key and mistakes read and compared at its points cost ~0.05 ms, a boolean's or a
 
 _CHECKED: dict[tuple, tuple] = {}
 """An answer of :data:`_COMPARED_AS_VALUES` that passed its checks, by what decides them
-(:func:`_checks_decided_by`): its value, accepted values and mistakes' values, normalised."""
+(:func:`_decided_by`): its value, accepted values and mistakes' values, normalised."""
 
 
-def _checks_decided_by(answer: Answer) -> tuple | None:
-    """What :meth:`Answer._check_and_normalise` depends on: the fields that say how values
+def _decided_by(answer: Answer) -> tuple | None:
+    """What the checks of ``answer`` (:meth:`Answer._check_and_normalise`) and the comparison
+    of its values (:func:`mistakes_distinguishable`) depend on: the fields that say how values
     compare, and every value with its type (``True``, ``1`` and ``1.0`` are equal keys but not
     equally valid answers); None where a value cannot be a key (unhashable) or a mistake is
     not a :class:`Mistake` (the checks say so)."""
@@ -1408,6 +1407,11 @@ def _take_checked(answer: Answer, checked: tuple) -> None:
                      else Mistake(m.name, v, m.feedback)
                      for m, v in zip(answer.mistakes, mistake_values, strict=True))
     object.__setattr__(answer, "mistakes", mistakes)
+    _check_mistake_names(answer)
+
+
+def _check_mistake_names(answer: Answer) -> None:
+    mistakes = answer.mistakes
     if len(mistakes) > 1 and len({m.name for m in mistakes}) != len(mistakes):
         raise ParameterError("mistakes", f"answer {answer.name!r}: duplicate names "
                              f"{[m.name for m in mistakes]}")

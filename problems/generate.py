@@ -332,22 +332,14 @@ def _compact(obj: Any) -> str:
     return json.dumps(obj, sort_keys=True, ensure_ascii=False, allow_nan=False)
 
 
-class CompactJSON(str):
-    """A value already written as :func:`json_text` writes a student's entry (sorted keys, one
-    line), which :func:`json_text` copies as is: worker processes hand back their students'
-    entries so (in UTF-8, :func:`_batch_files`) — cheaper to send between processes than the
-    nested dicts, and encoded in parallel rather than by the parent at the end."""
-
-    @classmethod
-    def of(cls, obj: Any) -> CompactJSON:
-        """``obj`` encoded (as :func:`_compact` encodes it)."""
-        return cls(_ENTRY_JSON.encode(obj))
-
-
 _ENTRY_JSON = json.JSONEncoder(sort_keys=True, ensure_ascii=False, allow_nan=False,
                                check_circular=False)
-""":func:`_compact`'s encoder, made once, for the entries the generator builds fresh (trees,
-never cycles: no check for one, which costs ~10 % of encoding a student's entries)."""
+""":func:`_compact`'s encoding, by an encoder made once, for the entries the generator builds
+fresh (trees, never cycles: no check for one, which costs ~10 % of encoding a student's
+entries): worker processes hand back each student's entries so, in UTF-8
+(:func:`student_entries`), which :func:`json_pieces` writes as they are — cheaper to send
+between processes than the nested dicts, and encoded in parallel rather than by the parent at
+the end."""
 
 
 def json_text(document: Mapping[str, Any]) -> str:
@@ -364,7 +356,8 @@ def json_text(document: Mapping[str, Any]) -> str:
 def json_pieces(document: Mapping[str, Any]) -> Iterator[str | bytes]:
     """:func:`json_text` in pieces, each student's entry one of them as it is: written one by
     one (:func:`_write_json`), a class's files are never copied whole in memory. An entry
-    already encoded to UTF-8 (``bytes``, as worker processes hand them back) stays bytes."""
+    already encoded (``bytes``, UTF-8, as worker processes hand them back) stays bytes: only
+    :func:`_write_json` is given such entries."""
     yield "{\n"
     for i, name in enumerate(sorted(document)):
         value = document[name]
@@ -384,7 +377,7 @@ def json_pieces(document: Mapping[str, Any]) -> Iterator[str | bytes]:
 
 
 def _entry_text(entry: Any) -> str | bytes:
-    return entry if isinstance(entry, CompactJSON | bytes) else _compact(entry)
+    return entry if isinstance(entry, bytes) else _compact(entry)
 
 
 def key_hash(questions: Sequence[Mapping]) -> str:
@@ -422,15 +415,20 @@ _MARKED = json.JSONEncoder(sort_keys=True, ensure_ascii=False, allow_nan=False,
                            check_circular=False, separators=("," + _MARK, ":" + _MARK))
 
 
-def key_entry_text(variants: Sequence[Variant]) -> CompactJSON:
-    """:func:`key_entry` encoded as :func:`json_text` writes it, the questions encoded once for
-    both the entry (``", "``, ``": "``) and its hash (``","``, ``":"``) — the floats' ``repr``
-    is most of json's time here."""
-    marked = _MARKED.encode(_key_questions(variants, copy=False))
-    spaced = marked.replace(_MARK, " ")  # one character for another: a copy, no search
-    canonical = marked.encode("utf-8").replace(_MARK.encode(), b"")  # bytes: a byte search
-    digest = "sha256:" + hashlib.sha256(canonical).hexdigest()
-    return CompactJSON(f'{{"hash": "{digest}", "questions": {spaced}}}')
+def key_entry_text(variants: Sequence[Variant]) -> str:
+    """:func:`key_entry` encoded as :func:`json_text` writes it (:func:`key_entry_bytes`)."""
+    return key_entry_bytes(variants).decode("utf-8")
+
+
+def key_entry_bytes(variants: Sequence[Variant]) -> bytes:
+    """:func:`key_entry_text` in UTF-8, the questions encoded once for both the entry
+    (``", "``, ``": "``) and its hash (``","``, ``":"``) — the floats' ``repr`` is most of
+    json's time here."""
+    marked = _MARKED.encode(_key_questions(variants, copy=False)).encode("utf-8")
+    mark = _MARK.encode()
+    digest = hashlib.sha256(marked.replace(mark, b"")).hexdigest().encode()
+    return b'{"hash": "sha256:' + digest + b'", "questions": ' + marked.replace(mark, b" ") \
+        + b"}"
 
 
 def manifest_entry(variants: Sequence[Variant], reroll: int) -> dict:
@@ -508,18 +506,18 @@ def _batch_files(
         for i, (row, variants) in enumerate(zip(rows, drawn, strict=True)):
             _write_student(tmp, title, row, variants, validate and i == 0, families,
                            _FORKED.get("install"))
-            manifest_text, key_text = student_entries(variants, rerolls.get(row["id"], 0))
-            entries.append((manifest_text.encode("utf-8"), key_text.encode("utf-8")))
+            entries.append(student_entries(variants, rerolls.get(row["id"], 0)))
         # freed while the collector is off, so that turned on again it has no batch's worth of
-        # records to walk through (~4 % of a student's time)
+        # records to walk through
         del drawn
     return entries
 
 
-def student_entries(variants: Sequence[Variant], reroll: int) -> tuple[CompactJSON, CompactJSON]:
-    """A student's entries in ``assignment.json`` and ``key.json``, encoded
-    (:func:`manifest_entry`, :func:`key_entry_text`)."""
-    return CompactJSON.of(manifest_entry(variants, reroll)), key_entry_text(variants)
+def student_entries(variants: Sequence[Variant], reroll: int) -> tuple[bytes, bytes]:
+    """A student's entries in ``assignment.json`` and ``key.json``, encoded in UTF-8
+    (:func:`manifest_entry`, :func:`key_entry_bytes`)."""
+    return (_ENTRY_JSON.encode(manifest_entry(variants, reroll)).encode("utf-8"),
+            key_entry_bytes(variants))
 
 
 @contextmanager

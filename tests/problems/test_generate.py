@@ -14,7 +14,6 @@ from hypothesis import strategies as st
 
 from problems.answers import Answer, Mistake
 from problems.generate import (
-    CompactJSON,
     GenerateError,
     TemplateError,
     generate_assignment,
@@ -392,14 +391,23 @@ def test_a_template_failing_in_a_worker_process_leaves_nothing(tmp_path, write_r
     assert sorted(os.listdir(tmp_path)) == before
 
 
-def test_entries_encoded_by_workers_are_written_as_the_parent_would():
-    """Workers hand back each student's entries as encoded lines; the files are the same."""
+def test_entries_encoded_by_workers_are_written_as_the_parent_would(tmp_path):
+    """Workers hand back each student's entries as encoded lines (UTF-8); the files are the
+    same."""
+    from problems.generate import _ENTRY_JSON, ASSIGNMENT, _write_json
+
     students = {"b": {"reroll": 0, "questions": [{"x": [0.1, 1e-300], "t": "θ\n\"q\""}]},
                 "a": {"reroll": 2, "questions": []}}
     document = {"title": "T", "seed": 1, "students": students}
-    encoded = {**document, "students": {k: CompactJSON.of(v) for k, v in students.items()}}
-    assert json_text(encoded) == json_text(document)
-    assert json.loads(json_text(encoded)) == document
+    encoded = {**document, "students": {k: _ENTRY_JSON.encode(v).encode("utf-8")
+                                        for k, v in students.items()}}
+    for folder, written in (("parent", document), ("workers", encoded)):
+        (tmp_path / folder).mkdir()
+        _write_json(tmp_path / folder, written, written)
+    text = (tmp_path / "workers" / ASSIGNMENT).read_text(encoding="utf-8")
+    assert text == (tmp_path / "parent" / ASSIGNMENT).read_text(encoding="utf-8")
+    assert text == json_text(document)
+    assert json.loads(text) == document
 
 
 @settings(max_examples=200, deadline=None)
