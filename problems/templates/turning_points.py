@@ -121,7 +121,7 @@ def _potential_rows(top: Top, state: State, beta: float, mistaken: dict, p_alpha
 def _potentials_many(rows: list[list[list[float]]]) -> list[np.ndarray]:
     """:func:`effective_potential` of each student's :func:`_potential_rows`, in one call."""
     values = effective_potential(*(np.concatenate(column) for column in zip(*rows, strict=True)))
-    return np.split(np.atleast_1d(values), np.cumsum([len(r[0]) for r in rows])[:-1])
+    return _split(values, [r[0] for r in rows])  # each student's rows: one per value of β
 
 
 def _potential_answer(top: Top, beta: float, mistaken: dict, p_gamma: np.ndarray,
