@@ -94,6 +94,21 @@ def distinguishable(build: Callable[[], tuple[Answer, ...]], margin: float) -> t
     return answers
 
 
+def drawn_scene(scenes: Mapping[str, Any], rng: np.random.Generator) -> str:
+    """The name of one of ``scenes`` (in their order) drawn at random: one integer from
+    ``rng``, a family's first draw of a variant."""
+    return list(scenes)[int(rng.integers(len(scenes)))]
+
+
+def batch_of_one(many: Callable[[list], list], params: Mapping[str, Any]) -> Any:
+    """What the batch form ``many`` (an :class:`IllPosed` element where it rejects) gives for
+    the one parameter set ``params``; that IllPosed raised."""
+    found = many([params])[0]
+    if isinstance(found, IllPosed):
+        raise found
+    return found
+
+
 def redrawn_until_well_posed(
     draw_once: Callable[[np.random.Generator], dict | None],
     answers: Callable[[Mapping[str, Any]], tuple[Answer, ...]],

@@ -23,7 +23,7 @@ of a hand computation of a small angle from nearly parallel vectors would grow).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -33,6 +33,8 @@ from problems.answers import Answer, Mistake
 from problems.family import (
     IllPosed,
     Parameter,
+    batch_of_one,
+    drawn_scene,
     redrawn_many_until_well_posed,
     redrawn_until_well_posed,
     remembered,
@@ -282,19 +284,14 @@ PARAMETERS: dict[str, Parameter] = {
 def draw(rng: np.random.Generator) -> dict[str, Any] | None:
     """A scene of :data:`SCENES`, then draws of it until one is well posed (at most
     ``MAX_TRIES``)."""
-    return redrawn_until_well_posed(_scene(rng), _specs, rng, MAX_TRIES)
+    return redrawn_until_well_posed(SCENES[drawn_scene(SCENES, rng)][0], _specs, rng, MAX_TRIES)
 
 
 def draw_many(rngs: list[np.random.Generator]) -> list[dict[str, Any] | None]:
     """:func:`draw` of each generator, each round's tries tested together (the batch form,
     :mod:`problems.family`)."""
-    return redrawn_many_until_well_posed([_scene(rng) for rng in rngs], _specs_many, rngs,
-                                         MAX_TRIES)
-
-
-def _scene(rng: np.random.Generator) -> Callable[[np.random.Generator], dict[str, Any] | None]:
-    """A scene drawn at random: its draw."""
-    return SCENES[list(SCENES)[int(rng.integers(len(SCENES)))]][0]
+    return redrawn_many_until_well_posed([SCENES[drawn_scene(SCENES, rng)][0] for rng in rngs],
+                                         _specs_many, rngs, MAX_TRIES)
 
 
 def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
@@ -317,10 +314,7 @@ def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | Ill
 def _specs(params: Mapping[str, Any]) -> tuple:
     """What :func:`answers` builds its answers from; IllPosed where it rejects them (the
     draw's test of each try, which builds none)."""
-    found = _specs_many([params])[0]
-    if isinstance(found, IllPosed):
-        raise found
-    return found
+    return batch_of_one(_specs_many, params)
 
 
 def _specs_many(many: list[Mapping[str, Any]]) -> list[tuple | IllPosed]:

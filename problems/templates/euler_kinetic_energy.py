@@ -35,7 +35,7 @@ import numpy as np
 import sympy as sp
 
 from problems.answers import Answer, Mistake
-from problems.family import IllPosed, Parameter, reject_unless
+from problems.family import IllPosed, Parameter, drawn_scene, reject_unless
 from problems.rounding import latex_sig, round_sig
 from solver.euler_angles import kinetic_energy_euler
 from solver.inertia import parallel_axis, shape_tensor
@@ -234,7 +234,7 @@ PARAMETERS: dict[str, Parameter] = {
 
 def draw(rng: np.random.Generator) -> dict[str, Any]:
     """A scene of :data:`SCENES`: its moments, Euler angles and rates."""
-    return list(SCENES.values())[int(rng.integers(len(SCENES)))](rng)
+    return SCENES[drawn_scene(SCENES, rng)](rng)
 
 
 def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:

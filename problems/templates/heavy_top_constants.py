@@ -54,7 +54,7 @@ from typing import Any
 import numpy as np
 
 from problems.answers import Answer, Mistake
-from problems.family import IllPosed, Parameter
+from problems.family import IllPosed, Parameter, drawn_scene
 from problems.genuine import statement_number
 from problems.rounding import latex_sig, round_sig
 from solver.heavy_top import constants_of_motion, turning_points
@@ -339,7 +339,7 @@ def draw_top(rng: np.random.Generator) -> Top:
 def draw_tops(rngs: Sequence[np.random.Generator]) -> list[Top]:
     """:func:`draw_top` of each generator: each student's scene and random numbers drawn in
     order, then the shown numbers of each scene's tops worked out together."""
-    scenes = [list(SCENES)[int(rng.integers(len(SCENES)))] for rng in rngs]
+    scenes = [drawn_scene(SCENES, rng) for rng in rngs]
     drawn = [SCENES[scene].draw(rng) for scene, rng in zip(scenes, rngs, strict=True)]
     shown: list[dict[str, float]] = [{}] * len(rngs)
     for name, scene in SCENES.items():

@@ -26,7 +26,7 @@ one who rounds intermediate results to 3 figures may not, and the statement says
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -35,6 +35,8 @@ from problems.answers import Answer, Mistake
 from problems.family import (
     IllPosed,
     Parameter,
+    batch_of_one,
+    drawn_scene,
     redrawn_many_until_well_posed,
     redrawn_until_well_posed,
     remembered,
@@ -296,19 +298,14 @@ PARAMETERS: dict[str, Parameter] = {
 def draw(rng: np.random.Generator) -> dict[str, Any] | None:
     """A scene of :data:`SCENES`, then draws of it until one is well posed (at most
     ``MAX_TRIES``)."""
-    return redrawn_until_well_posed(_scene(rng), _posed, rng, MAX_TRIES)
+    return redrawn_until_well_posed(SCENES[drawn_scene(SCENES, rng)][0], _posed, rng, MAX_TRIES)
 
 
 def draw_many(rngs: list[np.random.Generator]) -> list[dict[str, Any] | None]:
     """:func:`draw` of each generator, each round's tries tested together (the batch form,
     :mod:`problems.family`)."""
-    return redrawn_many_until_well_posed([_scene(rng) for rng in rngs], _posed_many, rngs,
-                                         MAX_TRIES)
-
-
-def _scene(rng: np.random.Generator) -> Callable[[np.random.Generator], dict[str, Any] | None]:
-    """A scene drawn at random: its draw."""
-    return SCENES[list(SCENES)[int(rng.integers(len(SCENES)))]][0]
+    return redrawn_many_until_well_posed([SCENES[drawn_scene(SCENES, rng)][0] for rng in rngs],
+                                         _posed_many, rngs, MAX_TRIES)
 
 
 def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
@@ -331,10 +328,7 @@ def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | Ill
 def _posed(params: Mapping[str, Any]) -> list[tuple]:
     """:func:`_posed_specs` of one scene; IllPosed where it rejects it (the draw's test of
     each try, which builds no answers)."""
-    found = _posed_many([params])[0]
-    if isinstance(found, IllPosed):
-        raise found
-    return found
+    return batch_of_one(_posed_many, params)
 
 
 def _posed_many(many: list[Mapping[str, Any]]) -> list[list[tuple] | IllPosed]:

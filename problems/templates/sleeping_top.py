@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from problems.answers import Answer, Mistake
-from problems.family import IllPosed, Parameter, distinguishable, reject_unless
+from problems.family import IllPosed, Parameter, batch_of_one, distinguishable, reject_unless
 from problems.genuine import statement_number
 from problems.rounding import latex_sig, round_sig
 from problems.written import Written
@@ -326,10 +326,7 @@ def answers(params: Mapping[str, Any]) -> tuple[Answer, ...]:
     Raises :class:`~problems.family.IllPosed` when the given spin is within
     ``THRESHOLD_MARGIN`` of the critical one, or a known mistake is close to the key.
     """
-    found = answers_many([params])[0]
-    if isinstance(found, IllPosed):
-        raise found
-    return found
+    return batch_of_one(answers_many, params)
 
 
 def answers_many(many: list[Mapping[str, Any]]) -> list[tuple[Answer, ...] | IllPosed]:

@@ -19,8 +19,10 @@ from problems.family import (
     FamilyError,
     IllPosed,
     Parameter,
+    batch_of_one,
     distinguishable,
     draw_parameters,
+    drawn_scene,
     redrawn_many_until_well_posed,
     redrawn_until_well_posed,
     reject_unless,
@@ -159,6 +161,26 @@ def test_rejected_draws_are_drawn_again_from_the_same_generator():
     assert len(seen) == 3 and v.params["h"] == seen[2]
     rng = np.random.default_rng(0)
     assert [round_sig(rng.uniform(1.0, 20.0), 3) for _ in range(3)] == seen
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_a_scene_is_drawn_by_one_integer_of_the_generator(seed):
+    scenes = {"rod": None, "disc": None, "box": None}
+    rng, twin = np.random.default_rng(seed), np.random.default_rng(seed)
+    assert drawn_scene(scenes, rng) == ["rod", "disc", "box"][int(twin.integers(3))]
+    assert rng.random() == twin.random()  # the next draw is the same: one integer was used
+
+
+def test_a_batch_form_of_one_gives_its_result_or_raises_its_rejection():
+    rejection = IllPosed("a mistake close to the key")
+
+    def many(params):
+        return [rejection if p["h"] < 0 else p["h"] * 2 for p in params]
+
+    assert batch_of_one(many, {"h": 1.5}) == 3.0
+    with pytest.raises(IllPosed) as raised:
+        batch_of_one(many, {"h": -1.0})
+    assert raised.value is rejection
 
 
 def test_no_acceptable_draw_is_an_error_naming_the_family():
