@@ -27,6 +27,7 @@ coefficient such as ``0.5``; any wrong term changes the values by far more at ge
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Mapping, Sequence
 from functools import cache
 from typing import Any
@@ -35,6 +36,7 @@ import numpy as np
 import sympy as sp
 
 from problems.answers import Answer, Mistake
+from problems.derivation_cache import kept
 from problems.family import IllPosed, Parameter, drawn_scene, reject_unless
 from problems.rounding import latex_sig, round_sig
 from solver.euler_angles import kinetic_energy_euler
@@ -96,6 +98,18 @@ def _symmetric_top_energy() -> sp.Expr:
 
 @cache
 def _expression_answer() -> Answer:
+    texts = kept(f"{NAME}.T_expr", [sys.modules[__name__]], _derived_texts)
+    return Answer(
+        "T_expr", "expression", texts["key"], unit="J", rtol=RTOL_EXPRESSION, points=1.0,
+        symbols=EXPRESSION_SYMBOLS, description="T of a symmetric top (I2 = I1) in Euler angles",
+        mistakes=tuple(Mistake(n, e, f) for n, e, f in texts["mistakes"]),
+    )
+
+
+def _derived_texts() -> dict[str, Any]:
+    """The symmetric top's ``T`` (:func:`_symmetric_top_energy`) and its mistakes, as the text
+    of each expression: what :func:`_expression_answer` keeps between runs
+    (:func:`problems.derivation_cache.kept`)."""
     S = SYMBOLS
     I1, I3, beta = S["I1"], S["I3"], S["beta"]
     T = _symmetric_top_energy()
@@ -110,16 +124,13 @@ def _expression_answer() -> Answer:
          "sin β and cos β are exchanged: β is measured from the upward vertical, so the "
          "component of α̇ ẑ along ê₃ is α̇ cos β (R12)."),
     )
-    return Answer(
-        "T_expr", "expression", str(T), unit="J", rtol=RTOL_EXPRESSION, points=1.0,
-        symbols=EXPRESSION_SYMBOLS, description="T of a symmetric top (I2 = I1) in Euler angles",
-        mistakes=tuple(Mistake(n, str(e), f) for n, e, f in mistakes),
-    )
+    return {"key": str(T), "mistakes": [[n, str(e), f] for n, e, f in mistakes]}
 
 
 def prepare() -> None:
-    """Derive the expression answer (about a third of a second of sympy) before the first
-    draw; the generator calls it once, before forking its worker processes."""
+    """Derive the expression answer (about a third of a second of sympy, kept between runs:
+    :func:`problems.derivation_cache.kept`) before the first draw; the generator calls it once,
+    before forking its worker processes."""
     _expression_answer()
 
 

@@ -18,13 +18,14 @@ symbols (graded by evaluation at random points), and then for its value for a re
     The coefficient of ``β²`` in ``V_eff`` of a top at ``p_α = p_γ`` near ``β = 0``,
     ``p_γ²/(8 I1) − Mgl/2`` (R19).
 
-Every key is *derived* by :mod:`solver.symbolic` (cached: the first call costs about a second of
-sympy, later ones nothing). Each known mistake is the derivation redone with the mistaken
-physics — a term dropped by the chain rule, ``β`` taken from the horizontal (``sin``/``cos``
-exchanged) or from the downward vertical (the sign of gravity), ``I1`` and ``I3`` swapped, the
-momenta exchanged, the factor ½ of ``1 − cos β ≈ β²/2`` lost — and the numerical answer has the
-same mistakes evaluated at the state, plus ``β`` read as degrees. The expressions and their
-``lambdify``'d functions are cached per quantity, so drawing does no sympy work beyond that.
+Every key is *derived* by :mod:`solver.symbolic` (about a second of sympy, kept between runs as
+text by :func:`problems.derivation_cache.kept`). Each known mistake is the derivation redone
+with the mistaken physics — a term dropped by the chain rule, ``β`` taken from the horizontal
+(``sin``/``cos`` exchanged) or from the downward vertical (the sign of gravity), ``I1`` and
+``I3`` swapped, the momenta exchanged, the factor ½ of ``1 − cos β ≈ β²/2`` lost — and the
+numerical answer has the same mistakes evaluated at the state, plus ``β`` read as degrees. The
+expressions and their ``lambdify``'d functions are cached per quantity, so drawing does no sympy
+work beyond that.
 
 Tolerances: the expression has ``rtol = 1e-6`` (a right formula agrees to rounding, ~1e-15; the
 margin absorbs decimal coefficients such as ``0.5``; every mistake changes the value by far more
@@ -36,6 +37,7 @@ each other are resampled.
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
@@ -45,6 +47,7 @@ import numpy as np
 import sympy as sp
 
 from problems.answers import Answer, Mistake
+from problems.derivation_cache import kept
 from problems.family import Parameter, distinguishable
 from problems.rounding import latex_sig, round_sig
 from problems.templates.sleeping_top import Top, draw_top, top_moments
@@ -253,16 +256,30 @@ class _Compiled:
 @cache
 def _compiled(index: int) -> _Compiled:
     q = QUANTITIES[index]
-    key = q.derive()
-    mistakes = q.mistakes(key)
+    texts = kept(f"{NAME}.{q.name}", [sys.modules[__name__]], lambda: _derived_texts(q))
     args = [S[name] for name in q.symbols]
     answer = Answer(
-        f"{q.name}_expr", "expression", str(key), unit=q.unit, rtol=RTOL_EXPRESSION,
+        f"{q.name}_expr", "expression", texts["key"], unit=q.unit, rtol=RTOL_EXPRESSION,
         symbols=q.symbols, description=f"{q.name} as an expression",
-        mistakes=tuple(Mistake(n, str(e), f) for n, e, f in mistakes),
+        mistakes=tuple(Mistake(n, e, f) for n, e, f in texts["mistakes"]),
     )
-    numeric = tuple((n, sp.lambdify(args, e, "math"), f) for n, e, f in mistakes)
-    return _Compiled(answer, sp.lambdify(args, key, "math"), numeric)
+    numeric = tuple((n, sp.lambdify(args, _parsed(e), "math"), f)
+                    for n, e, f in texts["mistakes"])
+    return _Compiled(answer, sp.lambdify(args, _parsed(texts["key"]), "math"), numeric)
+
+
+def _derived_texts(q: Quantity) -> dict[str, Any]:
+    """``q``'s key and mistakes derived (:mod:`solver.symbolic`), as the text of each
+    expression: what :func:`_compiled` keeps between runs
+    (:func:`problems.derivation_cache.kept`)."""
+    key = q.derive()
+    return {"key": str(key), "mistakes": [[n, str(e), f] for n, e, f in q.mistakes(key)]}
+
+
+def _parsed(text: str) -> sp.Expr:
+    """A derived expression from its text (the same expression: ``str`` of one of
+    :mod:`solver.symbolic`'s prints it so that it reads back unchanged)."""
+    return sp.parse_expr(text, local_dict=dict(S))
 
 
 def prepare() -> None:
