@@ -12,6 +12,11 @@ and the median over the runs of
   ``eulertop generate`` waits for;
 - ``CPU``: user + system seconds of that process and its worker processes.
 
+Two families' sympy derivations are read back from the user's cache
+(:mod:`problems.derivation_cache`), kept there by the first run; ``--no-cache`` derives them in
+every run instead (``EULERTOP_CACHE_DIR=off``), as before they were kept. Either way they are
+paid the same for every class size, so the cost of one more student (``--margin``) is the same.
+
 ``--breakdown`` adds one pass in one process that says where the CPU goes: the templates'
 one-time work, drawing the variants, writing the notebooks, and the manifest and key entries.
 
@@ -114,14 +119,19 @@ def breakdown(students: int, questions: int) -> dict[str, float]:
     return parts
 
 
+def child_environment() -> dict[str, str]:
+    """The environment of a run: this one, with this repository first on the path."""
+    return {**os.environ, "PYTHONPATH": os.pathsep.join(
+        p for p in (str(ROOT), os.environ.get("PYTHONPATH", "")) if p)}
+
+
 def _timed_child(students: int, questions: int, jobs: int | None, seed: int,
                  where: str | None = None) -> dict:
     """One fresh process generating ``students`` (:func:`child`) into a temporary folder in
     ``where`` (default: the temporary folder's usual place): its JSON line."""
     import tempfile
 
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
-        p for p in (str(ROOT), os.environ.get("PYTHONPATH", "")) if p)}
+    env = child_environment()
     with tempfile.TemporaryDirectory(dir=where) as folder:
         command = [sys.executable, str(Path(__file__).resolve()), "--child",
                    str(Path(folder) / "HW"), "--seed", str(seed), "--students", str(students),
@@ -346,6 +356,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--jobs", type=int, default=None,
                         help="worker processes (default: one per core)")
     parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--no-cache", action="store_true",
+                        help="derive the symbolic keys in every run (EULERTOP_CACHE_DIR=off)")
     parser.add_argument("--breakdown", action="store_true",
                         help="also say where the CPU goes (one more pass, in one process)")
     parser.add_argument("--margin", action="store_true",
@@ -356,6 +368,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--child", metavar="OUT", help=argparse.SUPPRESS)
     parser.add_argument("--seed", type=int, default=0, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    if args.no_cache:  # the runs, fresh processes, inherit it
+        os.environ["EULERTOP_CACHE_DIR"] = "off"
     if args.child:
         child(args.students, args.questions, args.jobs, args.seed, args.child)
         return 0
@@ -371,8 +385,7 @@ def main(argv: list[str] | None = None) -> int:
     import tempfile
 
     load_before = os.getloadavg()[0]
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
-        p for p in (str(ROOT), os.environ.get("PYTHONPATH", "")) if p)}
+    env = child_environment()
     runs = []
     for run in range(args.runs):
         with tempfile.TemporaryDirectory() as folder:
