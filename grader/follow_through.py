@@ -120,6 +120,9 @@ def serve() -> None:
     replies = os.fdopen(os.dup(1), "w", encoding="utf-8")
     os.dup2(2, 1)
     sys.stdout = sys.stderr
+    if "--warm" in sys.argv[1:]:  # started ahead (FollowWorker(warm=True)): the slow part first
+        with contextlib.suppress(Exception):  # its request then says what is wrong
+            import problems.templates  # noqa: F401  (numpy, scipy, sympy, the solver)
     for line in sys.stdin:
         try:
             request = json.loads(line)
@@ -132,13 +135,16 @@ def serve() -> None:
         replies.flush()
 
 
-class _Worker:
+class FollowWorker:
     """One :func:`serve` process, and a thread reading its replies (a queue: a reply awaited
     with a time limit, on any system)."""
 
-    def __init__(self) -> None:
+    def __init__(self, warm: bool = False) -> None:
+        """``warm``: the built-in families imported before the first request (a worker started
+        ahead of its first recomputation, :func:`warm_worker`)."""
         self.process = subprocess.Popen(
-            [sys.executable, "-m", "grader.follow_through"], stdin=subprocess.PIPE,
+            [sys.executable, "-m", "grader.follow_through", *(["--warm"] if warm else [])],
+            stdin=subprocess.PIPE,
             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, start_new_session=True)
         self.replies: queue.Queue[bytes] = queue.Queue()
         threading.Thread(target=self._read, name="eulertop-follow-replies", daemon=True).start()
@@ -184,23 +190,30 @@ class FollowThrough:
 
     def __post_init__(self) -> None:
         self._lock = threading.Lock()
-        self._worker: _Worker | None = None
+        self._worker: FollowWorker | None = None
         self._ready: set[str] = set()  # families the worker has loaded
 
     @classmethod
-    def of(cls, a: Assignment) -> FollowThrough | None:
+    def of(cls, a: Assignment, worker: FollowWorker | None = None) -> FollowThrough | None:
         """``a``'s follow-through, or None when its setting turns it off (0).
         :class:`~grader.assignment.UsageError` when a family file its chains need changed since
-        ``eulertop generate`` (:func:`unchanged_families`)."""
-        manifest = a.manifest
-        fraction = float(manifest.get(FRACTION_KEY, 1.0))
-        if fraction <= 0:
-            return None
-        unchanged_families(a)
-        sources = {name: (None if where.get("file") is None
-                          else str(Path(a.folder) / where["file"]))
-                   for name, where in manifest.get("families", {}).items()}
-        return cls(a.students, sources, min(fraction, 1.0), FOLLOW_SECONDS)
+        ``eulertop generate`` (:func:`unchanged_families`). ``worker``: one started ahead
+        (:func:`warm_worker`), which it then owns — or kills, when it gives none."""
+        follow = None
+        try:
+            manifest = a.manifest
+            fraction = float(manifest.get(FRACTION_KEY, 1.0))
+            if fraction > 0:
+                unchanged_families(a)
+                sources = {name: (None if where.get("file") is None
+                                  else str(Path(a.folder) / where["file"]))
+                           for name, where in manifest.get("families", {}).items()}
+                follow = cls(a.students, sources, min(fraction, 1.0), FOLLOW_SECONDS)
+                follow._worker = worker
+        finally:
+            if follow is None and worker is not None:
+                worker.kill()
+        return follow
 
     # -- the worker
 
@@ -216,7 +229,7 @@ class FollowThrough:
         """The worker started and ``family`` loaded in it (its start is not a recomputation's
         time); :class:`FamilyUnavailable` naming the family's file if it cannot be loaded."""
         if self._worker is None:
-            self._worker, self._ready = _Worker(), set()
+            self._worker, self._ready = FollowWorker(), set()
         if family in self._ready:
             return
         path = self.sources.get(family)
@@ -376,6 +389,17 @@ def edited_message(folder: Path, edited: Sequence[Any]) -> str:
         parts.append(f"{os.path.normpath(Path(folder) / e.path)}, family {e.name!r}, {now} "
                      f"since 'eulertop generate' recorded sha256 {e.recorded[:12]}…")
     return "; ".join(parts)
+
+
+def warm_worker(a: Assignment) -> FollowWorker | None:
+    """A worker started now, importing the built-in families while the caller reads and
+    compares the class (their import is most of a worker's start: about a second), for
+    :meth:`FollowThrough.of`; None when ``a`` has no follow-through chain or turns the credit
+    off. Only started, never asked anything: the family it will load is still checked
+    (:meth:`FollowThrough.of`) before it is."""
+    if float(a.manifest.get(FRACTION_KEY, 1.0)) <= 0 or not _chained_families(a):
+        return None
+    return FollowWorker(warm=True)
 
 
 def _chained_families(a: Assignment) -> set[str]:

@@ -35,7 +35,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from grader.assignment import Assignment, UsageError, load_assignment
-from grader.follow_through import FollowThrough
+from grader.follow_through import FollowThrough, FollowWorker, warm_worker
 from grader.grade_one import scored
 from grader.graded_folder import RESULTS, graded_folder
 from grader.overrides import (
@@ -288,12 +288,21 @@ def amended_class(state: Loaded, amendment: Amendment, *, dry_run: bool = False,
     the records met before (:class:`grader.publish.RowCache`). A class not loaded
     (``state.records`` None) has only the records of the students the change reaches read,
     and those alone returned (:func:`grader.publish.stage_scoped_views`)."""
-    scope = _reached(state.a, amendment)
-    old = records(state.a, state.out, scope) if state.records is None else state.records
-    proven = _proven(state.a, old, amendment, scope)
-    a, overrides, reviews = _amended(state.a, state.overrides, state.reviews, amendment, scope,
-                                     proven)
-    report, new = _rescored_class(a, old, overrides, amendment, scope, reviews, follow, proven)
+    # a worker of our own for follow-through credit starts importing the families now, while
+    # the records are read and the keys checked (a second of imports it would otherwise wait)
+    warm = warm_worker(state.a) if follow is None else None
+    try:
+        scope = _reached(state.a, amendment)
+        old = records(state.a, state.out, scope) if state.records is None else state.records
+        proven = _proven(state.a, old, amendment, scope)
+        a, overrides, reviews = _amended(state.a, state.overrides, state.reviews, amendment,
+                                         scope, proven)
+    except BaseException:
+        if warm is not None:
+            warm.kill()
+        raise
+    report, new = _rescored_class(a, old, overrides, amendment, scope, reviews, follow, proven,
+                                  warm)
     report = replace(report, dry_run=dry_run)
     if not dry_run:
         _commit(a, state.hw, state.out, old, new, report, reveal, command, scope, rows,
@@ -351,15 +360,17 @@ def _rescored_class(a: Assignment, old: Mapping[str, StudentResult | None],
                     overrides: Sequence[Override], amendment: Amendment,
                     scope: frozenset[str] | None = None, reviews: Reviews = NO_REVIEWS,
                     follow: FollowThrough | None = None,
-                    proven: frozenset[str] = frozenset(),
+                    proven: frozenset[str] = frozenset(), warm: FollowWorker | None = None,
                     ) -> tuple[Rescore, dict[str, StudentResult | None]]:
     """Every record of ``scope`` (None: all) rescored and settled (nothing written): the
     report, and the new records (an unchanged one is the old one, its bytes kept).
     ``follow``: the caller's (kept open), else one made and closed here. The records of
     ``proven`` are settled again from their stored comparisons (:func:`restored`: their
-    follow-through credit with them), the others compared again."""
+    follow-through credit with them), the others compared again. ``warm``: a worker started
+    ahead for our own follow-through (:func:`grader.follow_through.warm_worker`), which it
+    takes."""
     own = follow is None
-    follow = FollowThrough.of(a) if own else follow
+    follow = FollowThrough.of(a, warm) if own else follow
     new: dict[str, StudentResult | None] = dict(old)
     changes: list[Change] = []
     try:
