@@ -21,7 +21,9 @@ paid the same for every class size, so the cost of one more student (``--margin`
 one-time work, drawing the variants, writing the notebooks, and the manifest and key entries.
 
 ``--margin`` measures instead what one more student costs (issue 34), against its floor, in
-one run: ``eulertop generate``'s whole call for ``--students`` and for twice as many, in
+one run: ``eulertop generate``'s whole call for ``--students`` and for ``--large`` (default
+twice as many: on a shared machine a run's time varies by half a second, which over 150
+students added is ±3 ms a student, over 450 ±1 ms), in
 fresh processes and alternating, into a temporary folder on disk and in memory (tmpfs, where
 there is one) in turn, beside what creating a file costs in each (the cost at the margin is
 the difference of a round's two calls over the students added, median of the rounds, in wall
@@ -238,17 +240,19 @@ def file_creation(places: dict[str, str], rounds: int, count: int = 300) -> dict
 
 
 def measure_margin(students: int, questions: int, jobs: int | None, rounds: int,
-                   command: str) -> dict:
-    """Every timing of a ``--margin`` run, as its record holds them."""
+                   command: str, large: int | None = None) -> dict:
+    """Every timing of a ``--margin`` run, as its record holds them (the classes: ``students``
+    and ``large``, default twice as many)."""
+    large = large or 2 * students
     record = {"bench": "bench_generate", "command": command, "date": speed_page.now(),
-              "machine": speed_page.machine(), "students": [students, 2 * students],
+              "machine": speed_page.machine(), "students": [students, large],
               "questions": questions, "jobs": jobs, "rounds": rounds}
     places = _places()
     record["places"] = places
-    runs = {place: {students: [], 2 * students: []} for place in places}
+    runs = {place: {students: [], large: []} for place in places}
     for r in range(rounds):
         for place in places if r % 2 == 0 else list(places)[::-1]:
-            for n in (students, 2 * students) if r % 2 == 0 else (2 * students, students):
+            for n in (students, large) if r % 2 == 0 else (large, students):
                 runs[place][n].append(_timed_child(n, questions, jobs, r, places[place]))
     for key in ("generate", "cpu_generate"):
         record[key] = {place: {str(n): [x[key] for x in found] for n, found in sizes.items()}
@@ -339,7 +343,8 @@ def render_margin(record: dict) -> list[str]:
 def margin_main(args: argparse.Namespace) -> int:
     speed_page.check_page(args.page, "bench_generate")
     command = " ".join(["python benchmarks/bench_generate.py", *sys.argv[1:]])
-    record = measure_margin(args.students, args.questions, args.jobs, args.runs, command)
+    record = measure_margin(args.students, args.questions, args.jobs, args.runs, command,
+                            args.large)
     if args.record:
         speed_page.write_record(args.record, record)
     lines = render_margin(record)
@@ -356,6 +361,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--jobs", type=int, default=None,
                         help="worker processes (default: one per core)")
     parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--large", type=int, default=None,
+                        help="with --margin: the larger class (default twice --students); the "
+                        "more students apart, the less a run's noise weighs on each")
     parser.add_argument("--no-cache", action="store_true",
                         help="derive the symbolic keys in every run (EULERTOP_CACHE_DIR=off)")
     parser.add_argument("--breakdown", action="store_true",
