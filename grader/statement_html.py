@@ -178,5 +178,14 @@ def statement_html(text: str, markdown: Any = None) -> str:
         formulas.append(formula_html(m.group("display" if display else "inline"), display))
         return _SLOT.format(len(formulas) - 1)
 
-    rendered = (markdown or _markdown()).render(_MATH.sub(set_aside, text))
+    slotted = _MATH.sub(set_aside, text)
+    rendered = _rendered(slotted) if markdown is None else markdown.render(slotted)
     return _SLOT_RE.sub(lambda m: formulas[int(m.group(1))], rendered)
+
+
+@functools.lru_cache(maxsize=1024)
+def _rendered(slotted: str) -> str:
+    """A statement's Markdown rendered, its formulas set aside (:func:`statement_html`),
+    remembered: with the numbers inside the formulas, a class's statements are few texts (89
+    among 4200 in a class of 300), each ~0.2 ms to parse and render."""
+    return _markdown().render(slotted)

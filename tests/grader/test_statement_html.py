@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from markdown_it import MarkdownIt
 
 from grader.gradebook import feedback_html
 from grader.results import StudentResult
@@ -100,6 +101,18 @@ def test_formulas_converted_by_their_form_equal_the_formulas_converted_whole(fam
             assert formula_html(latex, display) == _direct(latex, display), latex
             checked += 1
     assert checked > 12
+
+
+@pytest.mark.parametrize("family", sorted(FAMILIES))
+def test_a_statement_rendered_from_what_is_remembered_equals_it_rendered_afresh(family):
+    """statement_html remembers the rendered Markdown of a statement with its formulas set
+    aside (a class's statements are few such texts): every statement of this family's, as
+    the second of its kind, byte for byte what rendering it with a renderer of its own gives."""
+    fresh = MarkdownIt("commonmark", {"html": False}).enable("table").disable("image")
+    texts = [FAMILIES[family].generate(np.random.default_rng(seed)).statement
+             for seed in range(12)]
+    for text in texts + texts:  # the second time round, from what was remembered
+        assert statement_html(text) == statement_html(text, fresh)
 
 
 @pytest.mark.parametrize("latex", [r"\tfrac12 I_1 \dot\beta^2", r"x_0 = 0.5", r"2\pi r = 10.25",
