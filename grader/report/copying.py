@@ -131,10 +131,17 @@ def chance(x: np.ndarray, reference: np.ndarray, tol: float, period: float | Non
     """
     if len(reference) == 0 or tol <= 0:
         return 1.0
+    return _chance_of(np.abs(_offsets(x, reference, period)), tol)
+
+
+def _chance_of(offsets: np.ndarray, tol: float) -> float:
+    """:func:`chance` from the distances (rows, per component) of the reference values to the
+    value, for a tolerance ``tol > 0``."""
+    if len(offsets) == 0:
+        return 1.0
     # A vector matches only if every component does, so the least likely component bounds the
     # chance from above, whatever the correlations (values on a line or plane stay honest).
-    offsets = np.abs(_offsets(x, reference, period))
-    return min(_chance_1d(offsets[:, j], tol, period) for j in range(offsets.shape[1]))
+    return min(_chance_1d(offsets[:, j], tol, None) for j in range(offsets.shape[1]))
 
 
 def _chance_1d(offsets: np.ndarray, tol: float, period: float | None) -> float:
@@ -176,31 +183,40 @@ def _item_matches(data: ClassData, item: Item) -> list[Match]:
                              for s in ids])
         w_ids = [s for s in ids if s in wrong]
         w_rows = np.array([wrong[s] for s in w_ids]).reshape(len(w_ids), *shape)
+        # the class's values a match's chance is weighed against (all but the pair's own):
+        # the keys, for a "key" match; the keys and the wrong answers, for a "wrong" one
+        key_owners = np.array(ids, dtype=object)
+        others_of_shape = [s for s, v in wrong.items() if v.shape == shape]
+        all_rows = np.concatenate([key_rows, np.array([wrong[s] for s in others_of_shape])
+                                   .reshape(len(others_of_shape), *shape)])
+        all_owners = np.array(ids + others_of_shape, dtype=object)
+        column = {t: j for j, t in enumerate(ids)}
         for s in w_ids:
             x, period = wrong[s], answers[s].period
             same_variant = _hits(keys[s], key_rows, key_tols, period)
-            for j in np.flatnonzero(_hits(x, key_rows, key_tols, period) & ~same_variant):
-                t = ids[j]
-                ref = _reference(keys, {}, shape, exclude=(s, t))
-                out.append(Match(item.variable, "key", s, t, x.tolist(), keys[t].tolist(),
-                                 chance(x, ref, key_tols[j], period)))
+            key_matches = np.flatnonzero(_hits(x, key_rows, key_tols, period) & ~same_variant)
+            if len(key_matches):
+                offsets, not_s = np.abs(_offsets(x, key_rows, period)), key_owners != s
+                for j in key_matches:
+                    t = ids[j]
+                    out.append(Match(item.variable, "key", s, t, x.tolist(), keys[t].tolist(),
+                                     _weighed(offsets, not_s & (key_owners != t), key_tols[j])))
             tol = answers[s].atol + answers[s].rtol * float(np.linalg.norm(x))
-            others = _hits(x, w_rows, tol, period)
-            for j in np.flatnonzero(others):
-                t = w_ids[j]
-                if t <= s or same_variant[ids.index(t)]:
-                    continue
-                ref = _reference(keys, wrong, shape, exclude=(s, t))
-                out.append(Match(item.variable, "wrong", s, t, x.tolist(), wrong[t].tolist(),
-                                 chance(x, ref, tol, period)))
+            wrong_matches = [w_ids[j] for j in np.flatnonzero(_hits(x, w_rows, tol, period))
+                             if w_ids[j] > s and not same_variant[column[w_ids[j]]]]
+            if wrong_matches:
+                offsets, not_s = np.abs(_offsets(x, all_rows, period)), all_owners != s
+                for t in wrong_matches:
+                    out.append(Match(item.variable, "wrong", s, t, x.tolist(), wrong[t].tolist(),
+                                     _weighed(offsets, not_s & (all_owners != t), tol)))
     return out
 
 
-def _reference(keys, wrong, shape, exclude) -> np.ndarray:
-    """The class's other values of one shape: keys, and wrong answers when given."""
-    rows = [v for s, v in keys.items() if s not in exclude and v is not None and v.shape == shape]
-    rows += [v for s, v in wrong.items() if s not in exclude and v.shape == shape]
-    return np.array(rows).reshape(len(rows), *shape) if rows else np.empty((0, *shape))
+def _weighed(offsets: np.ndarray, kept: np.ndarray, tol: float) -> float:
+    """:func:`chance` of a value against the reference rows ``kept`` (a mask) of those whose
+    distances from it are ``offsets``: the distances worked out once for every match of one
+    student's value, not once per match."""
+    return 1.0 if tol <= 0 else _chance_of(offsets[kept], tol)
 
 
 def copy_pairs(data: ClassData) -> tuple[CopyPair, ...]:
