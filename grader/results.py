@@ -118,6 +118,9 @@ class AnswerResult:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "submitted", plain_json(self.submitted))
+        # checked once here, not again by each record made around it (:func:`_unstorable`)
+        object.__setattr__(self, "_holds_surrogate", any(
+            _unstorable(getattr(self, f.name)) for f in fields(self)))
 
     def to_dict(self) -> dict:
         """Plain JSON; ``AnswerResult.from_dict(a.to_dict()) == a``."""
@@ -251,6 +254,8 @@ def _unstorable(value: Any) -> bool:
         return False
     if kind is str:
         return not value.isascii() and SURROGATE.search(value) is not None
+    if kind is AnswerResult:  # checked when it was made, its fields never changed since
+        return value._holds_surrogate
     if kind is list or kind is tuple:
         return any(type(v) not in _SCALARS and _unstorable(v) for v in value)
     if kind is dict:

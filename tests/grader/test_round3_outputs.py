@@ -186,6 +186,26 @@ def test_a_record_holding_lone_surrogates_is_written_read_back_and_says_so(tmp_p
     assert clean.message == "fine"
 
 
+@pytest.mark.parametrize("where", ["submitted", "verdict"])
+def test_a_surrogate_in_one_answer_alone_is_found_by_every_record_made_around_it(tmp_path,
+                                                                                 where):
+    """An answer is checked for lone surrogates once, when it is made; a record holding it —
+    first made, or made again around it as a grade is settled — is still rebuilt storable."""
+    nasty = "y\udfff"
+    verdict = Verdict("invalid", 0.0, 1.0, nasty if where == "verdict" else "fine")
+    answer = AnswerResult("q1_x", 1, "x", [nasty] if where == "submitted" else 1.0, verdict)
+    fields = ("bob", "graded", "", (answer,), 0.0, 1.0, None, "sha256:k", {}, True,
+              "2026-01-01T00:00:00+00:00")
+    record = StudentResult(*fields)
+    again = replace(StudentResult(*fields[:3], (), *fields[4:]), answers=(answer,))
+    for n, r in enumerate((record, again)):
+        assert r.message == UNSTORABLE
+        assert "\\udfff" in json.dumps(r.to_dict())  # kept as its escape, as text
+        folder = tmp_path / str(n)
+        folder.mkdir()
+        assert read_result(write_result(folder, r)) == r
+
+
 class _SurrogateAnswer(FakeExecute):
     """The fake execution stage; the notebook of ``victim`` answers with a lone surrogate."""
 
