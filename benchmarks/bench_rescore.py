@@ -38,41 +38,23 @@ ROOT = Path(__file__).resolve().parents[1]
 def submissions(hw: Path, folder: Path) -> int:
     """Each student's notebook (see the module docstring); how many chained answers follow
     from a wrong earlier one."""
-    import nbformat
-    import numpy as np
-
-    from problems.templates import FAMILIES
+    from tests.grader.report.synthetic_class import followed_from_a_slip, literal_notebook
 
     key = json.loads((hw / "key.json").read_text())
     manifest = json.loads((hw / "assignment.json").read_text())
     folder.mkdir(parents=True)
     chained = 0
     for n, (sid, entry) in enumerate(key["students"].items()):
-        answers = {}
-        for k, (q, question) in enumerate(zip(entry["questions"],
-                                              manifest["students"][sid]["questions"],
-                                              strict=True), start=1):
-            values = {a["name"]: a["value"] for a in q["answers"]}
-            for a in q["answers"]:
-                answers[f"q{k}_{a['name']}"] = a["value"]
-            if n % 3 == 1:
-                for a in q["answers"]:
-                    first = (a.get("depends_on") or [None])[0]
-                    if first is None or not isinstance(values[first], float):
-                        continue
-                    earlier = dict(values, **{first: values[first] * 1.2})
-                    value = FAMILIES[question["family"]].follow(
-                        a["name"], question["parameters"],
-                        {d: earlier[d] for d in a["depends_on"]})
-                    answers[f"q{k}_{first}"] = earlier[first]
-                    answers[f"q{k}_{a['name']}"] = np.asarray(value).tolist()
-                    chained += 1
+        if n % 3 == 1:
+            answers, count = followed_from_a_slip(manifest, key, sid, 1.2)
+            chained += count
+        else:
+            answers = {f"q{k}_{a['name']}": a["value"]
+                       for k, q in enumerate(entry["questions"], start=1) for a in q["answers"]}
         if n % 5 == 0:
             name = next(v for v, x in answers.items() if isinstance(x, float))
             answers[name] *= 1.1
-        code = "\n".join(f"{name} = {value!r}" for name, value in answers.items())
-        nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(code)])
-        (folder / f"{sid}.ipynb").write_text(nbformat.writes(nb))
+        (folder / f"{sid}.ipynb").write_text(literal_notebook(answers))
     return chained
 
 

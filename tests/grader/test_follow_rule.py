@@ -17,7 +17,6 @@ import shutil
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
-import nbformat
 import numpy as np
 import pytest
 
@@ -30,7 +29,7 @@ from problems.answers import Answer, Mistake
 from problems.generate import generate_assignment
 from problems.roster import Roster
 from problems.templates import FAMILIES
-from tests.grader.report.synthetic_class import LiteralExecute
+from tests.grader.report.synthetic_class import LiteralExecute, literal_notebook
 
 CHAIN_FAMILIES = ("sleeping_top", "symmetric_free_top", "heavy_top_constants",
                   "inertia_tensor", "energy_momentum", "euler_rotation", "steady_precession",
@@ -261,8 +260,7 @@ def _submission(hw: Path, sid: str) -> str:
         values = {a["name"]: a["value"] for a in entry["answers"]}
         rule = _physics_free(question["family"], values, question["parameters"])
         answers |= {f"q{question['question']}_{n}": v for n, v in rule.items()}
-    code = "\n".join(f"{name} = {value!r}" for name, value in answers.items())
-    return nbformat.writes(nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(code)]))
+    return literal_notebook(answers)
 
 
 @pytest.fixture(scope="module")

@@ -9,8 +9,6 @@ import shutil
 from dataclasses import replace
 from pathlib import Path
 
-import nbformat
-import numpy as np
 import pytest
 
 from grader import follow_through
@@ -23,33 +21,13 @@ from grader.results import read_result
 from problems.generate import generate_assignment
 from problems.roster import Roster
 from problems.templates import FAMILIES
-from tests.grader.report.synthetic_class import LiteralExecute
+from tests.grader.report.synthetic_class import (
+    LiteralExecute,
+    followed_from_a_slip,
+    literal_notebook,
+)
 
 STUDENTS = ("ann", "ben", "cy")
-
-
-def _submission(hw: Path, sid: str) -> str:
-    """The key's answers, but each chain's first answer 20 % off and the later ones worked out
-    from it (what earns follow-through credit)."""
-    manifest = json.loads((hw / "assignment.json").read_text())
-    key = json.loads((hw / "key.json").read_text())
-    answers = {}
-    for question, entry in zip(manifest["students"][sid]["questions"],
-                               key["students"][sid]["questions"], strict=True):
-        values = {a["name"]: a["value"] for a in entry["answers"]}
-        k = question["question"]
-        answers |= {f"q{k}_{n}": v for n, v in values.items()}
-        for a in entry["answers"]:
-            first = (a.get("depends_on") or [None])[0]
-            if first is None or not isinstance(values[first], float):
-                continue
-            earlier = dict(values, **{first: values[first] * 1.2})
-            value = FAMILIES[question["family"]].follow(
-                a["name"], question["parameters"], {d: earlier[d] for d in a["depends_on"]})
-            answers[f"q{k}_{first}"] = earlier[first]
-            answers[f"q{k}_{a['name']}"] = np.asarray(value).tolist()
-    code = "\n".join(f"{name} = {value!r}" for name, value in answers.items())
-    return nbformat.writes(nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(code)]))
 
 
 @pytest.fixture(scope="module")
@@ -59,8 +37,11 @@ def graded(tmp_path_factory) -> Path:
     roster = Roster(("id", "name"), tuple({"id": s, "name": s} for s in STUDENTS))
     generate_assignment(roster, hw, FAMILIES, problems=["heavy_top_constants"], seed=4)
     subs.mkdir()
+    manifest, key = (json.loads((hw / name).read_text()) for name in ("assignment.json",
+                                                                       "key.json"))
     for sid in STUDENTS:
-        (subs / f"{sid}.ipynb").write_text(_submission(hw, sid))
+        answers, _ = followed_from_a_slip(manifest, key, sid)
+        (subs / f"{sid}.ipynb").write_text(literal_notebook(answers))
     grade_assignment(hw, subs, limits="LIMITS", execute=LiteralExecute(), jobs=1)
     return hw
 

@@ -119,6 +119,40 @@ class SyntheticClass:
 # answers
 
 
+def literal_notebook(answers: dict[str, Any]) -> str:
+    """A notebook of one code cell giving each answer variable its value as a literal: what
+    :class:`LiteralExecute` reads back."""
+    import nbformat
+
+    code = "\n".join(f"{name} = {value!r}" for name, value in answers.items())
+    return nbformat.writes(nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(code)]))
+
+
+def followed_from_a_slip(manifest: dict, key: dict, sid: str,
+                         factor: float = 1.2) -> tuple[dict[str, Any], int]:
+    """``sid``'s answers by variable, from a loaded ``assignment.json`` and ``key.json``: the
+    key's, but the first (numeric) answer of each follow-through chain ``factor`` times the key
+    and the later ones worked out from it by the family's ``follow`` — what earns
+    follow-through credit; and how many later ones."""
+    answers, chained = {}, 0
+    for question, entry in zip(manifest["students"][sid]["questions"],
+                               key["students"][sid]["questions"], strict=True):
+        values = {a["name"]: a["value"] for a in entry["answers"]}
+        k = question["question"]
+        answers |= {f"q{k}_{n}": v for n, v in values.items()}
+        for a in entry["answers"]:
+            first = (a.get("depends_on") or [None])[0]
+            if first is None or not isinstance(values[first], float):
+                continue
+            earlier = dict(values, **{first: values[first] * factor})
+            value = FAMILIES[question["family"]].follow(
+                a["name"], question["parameters"], {d: earlier[d] for d in a["depends_on"]})
+            answers[f"q{k}_{first}"] = earlier[first]
+            answers[f"q{k}_{a['name']}"] = np.asarray(value).tolist()
+            chained += 1
+    return answers, chained
+
+
 def _noisy(value: Any, rng: np.random.Generator) -> Any:
     if isinstance(value, list):
         return [float(v * (1 + NOISE * rng.standard_normal())) for v in value]
