@@ -23,8 +23,8 @@ FORMAT = 1
 """Bumped when what a kept file holds changes shape."""
 
 CACHE_ENV = "EULERTOP_CACHE_DIR"
-"""A folder to keep derivations in instead of ``$XDG_CACHE_HOME/eulertop`` (or
-``~/.cache/eulertop``); ``off`` keeps none."""
+"""A folder to keep derivations in instead of ``$XDG_CACHE_HOME/eulertop/derivations`` (or
+``~/.cache/eulertop/derivations``); ``off`` keeps none."""
 
 
 def cache_folder() -> Path | None:
@@ -48,15 +48,15 @@ def kept(name: str, sources: Iterable[ModuleType], derive: Callable[[], Any]) ->
     kept there under the same digest (:func:`_digest` of ``name`` and ``sources``), else derived
     and kept."""
     folder = cache_folder()
+    if folder is None:
+        return derive()
     digest = _digest(name, sources)
-    path = None if folder is None else folder / f"{name}-{digest[:32]}.json"
-    if path is not None:
-        found = _read(path, digest)
-        if found is not None:
-            return found["value"]
+    path = folder / f"{name}-{digest[:32]}.json"
+    found = _read(path, digest)
+    if found is not None:
+        return found["value"]
     value = derive()
-    if path is not None:
-        _write(path, {"format": FORMAT, "digest": digest, "value": value})
+    _write(path, {"format": FORMAT, "digest": digest, "value": value})
     return value
 
 
