@@ -129,22 +129,21 @@ def chance(x: np.ndarray, reference: np.ndarray, tol: float, period: float | Non
     >>> round(chance(np.array([50.0]), ref, 0.1, None), 4)
     0.0021
     """
-    if len(reference) == 0 or tol <= 0:
-        return 1.0
     return _chance_of(np.abs(_offsets(x, reference, period)), tol)
 
 
 def _chance_of(offsets: np.ndarray, tol: float) -> float:
     """:func:`chance` from the distances (rows, per component) of the reference values to the
-    value, for a tolerance ``tol > 0``."""
-    if len(offsets) == 0:
+    value: worked out once for all the matches of one student's value, each match weighing it
+    against the rows that are not the pair's own."""
+    if len(offsets) == 0 or tol <= 0:
         return 1.0
     # A vector matches only if every component does, so the least likely component bounds the
     # chance from above, whatever the correlations (values on a line or plane stay honest).
-    return min(_chance_1d(offsets[:, j], tol, None) for j in range(offsets.shape[1]))
+    return min(_chance_1d(offsets[:, j], tol) for j in range(offsets.shape[1]))
 
 
-def _chance_1d(offsets: np.ndarray, tol: float, period: float | None) -> float:
+def _chance_1d(offsets: np.ndarray, tol: float) -> float:
     """:func:`chance` in one dimension, from the distances of the class's values to ``x``."""
     reach = WINDOW * tol
     near = int(np.sum(offsets <= reach))
@@ -200,7 +199,7 @@ def _item_matches(data: ClassData, item: Item) -> list[Match]:
                 for j in key_matches:
                     t = ids[j]
                     out.append(Match(item.variable, "key", s, t, x.tolist(), keys[t].tolist(),
-                                     _weighed(offsets, not_s & (key_owners != t), key_tols[j])))
+                                     _chance_of(offsets[not_s & (key_owners != t)], key_tols[j])))
             tol = answers[s].atol + answers[s].rtol * float(np.linalg.norm(x))
             wrong_matches = [w_ids[j] for j in np.flatnonzero(_hits(x, w_rows, tol, period))
                              if w_ids[j] > s and not same_variant[column[w_ids[j]]]]
@@ -208,15 +207,8 @@ def _item_matches(data: ClassData, item: Item) -> list[Match]:
                 offsets, not_s = np.abs(_offsets(x, all_rows, period)), all_owners != s
                 for t in wrong_matches:
                     out.append(Match(item.variable, "wrong", s, t, x.tolist(), wrong[t].tolist(),
-                                     _weighed(offsets, not_s & (all_owners != t), tol)))
+                                     _chance_of(offsets[not_s & (all_owners != t)], tol)))
     return out
-
-
-def _weighed(offsets: np.ndarray, kept: np.ndarray, tol: float) -> float:
-    """:func:`chance` of a value against the reference rows ``kept`` (a mask) of those whose
-    distances from it are ``offsets``: the distances worked out once for every match of one
-    student's value, not once per match."""
-    return 1.0 if tol <= 0 else _chance_of(offsets[kept], tol)
 
 
 def copy_pairs(data: ClassData) -> tuple[CopyPair, ...]:
