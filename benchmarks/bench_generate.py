@@ -45,6 +45,7 @@ Run from the repository root (or after ``pip install -e .``):
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import platform
@@ -200,12 +201,10 @@ def _places() -> dict[str, str]:
     import tempfile
 
     places = {"disk": tempfile.gettempdir()}
-    try:
-        with open("/proc/mounts", encoding="utf-8") as mounts:
-            if any(line.split()[1:3] == ["/dev/shm", "tmpfs"] for line in mounts):
-                places["memory"] = "/dev/shm"
-    except OSError:
-        pass
+    # no /proc/mounts (not Linux): no place in memory to measure
+    with contextlib.suppress(OSError), open("/proc/mounts", encoding="utf-8") as mounts:
+        if any(line.split()[1:3] == ["/dev/shm", "tmpfs"] for line in mounts):
+            places["memory"] = "/dev/shm"
     return places
 
 

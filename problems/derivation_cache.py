@@ -6,6 +6,7 @@ The design (digest, safety, location): problems/API.md, "Symbolic derivations ke
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -56,7 +57,11 @@ def kept(name: str, sources: Iterable[ModuleType], derive: Callable[[], Any]) ->
     if found is not None:
         return found["value"]
     value = derive()
-    _write(path, {"format": FORMAT, "digest": digest, "value": value})
+    with contextlib.suppress(OSError):  # not keeping it is all a failure costs
+        _write(path, {"format": FORMAT, "digest": digest, "value": value})
+        for old in folder.glob(f"{name}-*.json"):  # the digests kept before under this name
+            if old != path:
+                old.unlink(missing_ok=True)
     return value
 
 
@@ -114,22 +119,14 @@ def _safe(status: os.stat_result) -> bool:
 
 
 def _write(path: Path, record: dict) -> None:
-    """Keep ``record`` at ``path`` (written whole, then renamed into place: a reader never sees
-    half of it), and drop the other digests kept under the same name. Failing is only not
-    keeping it."""
+    """Keep ``record`` at ``path``, in a folder of the user's alone: written whole, then renamed
+    into place (a reader never sees half of it). OSError where it cannot be."""
+    path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
+    fd, temporary = tempfile.mkstemp(dir=path.parent, prefix=".", suffix=".tmp")
     try:
-        path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
-        fd, temporary = tempfile.mkstemp(dir=path.parent, prefix=".", suffix=".tmp")
-        try:
-            with os.fdopen(fd, "w", encoding="utf-8") as file:
-                json.dump(record, file, ensure_ascii=False)
-            os.replace(temporary, path)
-        except BaseException:
-            os.unlink(temporary)
-            raise
-        prefix = path.name.rsplit("-", 1)[0] + "-"
-        for old in path.parent.glob(f"{prefix}*.json"):
-            if old != path and len(old.name) == len(path.name):
-                old.unlink(missing_ok=True)
-    except OSError:
-        pass
+        with os.fdopen(fd, "w", encoding="utf-8") as file:
+            json.dump(record, file, ensure_ascii=False)
+        os.replace(temporary, path)
+    except BaseException:
+        os.unlink(temporary)
+        raise
