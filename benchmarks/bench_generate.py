@@ -143,15 +143,23 @@ def _timed_child(students: int, questions: int, jobs: int | None, seed: int,
     return json.loads(done.stdout.splitlines()[-1])
 
 
+COLLECTOR = "paused"
+"""How the parts of a ``--margin`` run are timed (its record's ``collector``): with Python's
+cycle collector paused, as the generator's workers pause it for each batch
+(:func:`problems.generate._collector_paused`); a record without it had the collector on."""
+
+
 def margin_parts(students: int, questions: int, rounds: int) -> dict[str, list]:
     """In this process, per round: the CPU seconds per student of drawing one student at a
-    time, drawing in one pass, and writing the files of the students drawn."""
+    time, drawing in one pass, and writing the files of the students drawn — each with the
+    cycle collector paused, as a worker draws and writes (:data:`COLLECTOR`)."""
     import tempfile
 
     from problems.generate import (
         RELEASE,
         SOLUTIONS,
         Question,
+        _collector_paused,
         _write_student,
         class_variants,
         prepare_families,
@@ -185,11 +193,17 @@ def margin_parts(students: int, questions: int, rounds: int) -> dict[str, list]:
     def question(k: int):
         return lambda: class_variants(families, [asked[k]], 0, ids, {})
 
+    def paused(part):
+        def run():
+            with _collector_paused():
+                part()
+        return run
+
     one_pass()
     contenders = {"one at a time": one_at_a_time, "one pass": one_pass,
                   "notebooks": notebooks, "entries": entries}
     contenders |= {f"question {k + 1}": question(k) for k in range(len(asked))}
-    times = speed_page.interleaved(contenders, rounds)
+    times = speed_page.interleaved({k: paused(f) for k, f in contenders.items()}, rounds)
     return {name: [r["cpu"] / students for r in rows] for name, rows in times.items()}
 
 
@@ -262,6 +276,7 @@ def measure_margin(students: int, questions: int, jobs: int | None, rounds: int,
     record["problems"] = [[name, FAMILIES[name].batched]
                           for name in _setup(students, questions)[1]]
     record["per_student_cpu"] = margin_parts(students, questions, rounds)
+    record["collector"] = COLLECTOR
     record["load_after"] = [round(x, 2) for x in os.getloadavg()]
     return record
 
@@ -312,7 +327,9 @@ def render_margin(record: dict) -> list[str]:
         "|---|---|---|---|---|---|",
         *rows,
         "",
-        "Per student, in one process (CPU time, medians of the same rounds, files on disk):",
+        "Per student, in one process (CPU time, medians of the same rounds, files on disk"
+        + (", Python's cycle collector paused as the generator's workers pause it):"
+           if record.get("collector") == COLLECTOR else "):"),
         "",
         "| per student, all questions | CPU |",
         "|---|---|",

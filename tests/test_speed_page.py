@@ -79,3 +79,14 @@ def test_the_cost_of_one_more_student_pairs_each_rounds_two_calls():
     assert margin == pytest.approx(0.2 / 100)
     record["generate"]["disk"]["200"] = [3.2, 1.2, 2.2]  # the same calls, rounds shuffled
     assert bench._margin(record, "generate", "disk")[2] != pytest.approx(0.2 / 100)
+
+
+def test_the_generation_parts_say_how_the_collector_ran():
+    """A record says whether its parts were timed with the cycle collector paused, as the
+    generator's workers run (``collector``); the text says so only where the record does."""
+    record = json.loads((ROOT / "docs" / "bench" / "generate.json").read_text(encoding="utf-8"))
+    said = "cycle collector paused"
+    record.pop("collector", None)
+    assert said not in _rendered("bench_generate", record)
+    record["collector"] = _bench("bench_generate").COLLECTOR
+    assert said in _rendered("bench_generate", record)
