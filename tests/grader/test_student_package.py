@@ -294,7 +294,8 @@ def test_both_distributions_in_one_venv_keep_each_other_whole(full_wheel, wheel,
     subprocess.run([sys.executable, "-m", "venv", str(folder)], check=True, timeout=120)
     path = generated_assignment.solutions()
     for wheel_file in (full_wheel, wheel):
-        assert _in(folder, "pip", "install", *QUICK, str(wheel_file)).returncode == 0
+        installed = _in(folder, "python", "-m", "pip", "install", *QUICK, str(wheel_file))
+        assert installed.returncode == 0
     files = _files_of_each(folder)
     assert files["eulertop"] & files["eulertop-check"] == set()
     full, student = _both_check(folder, path, ("eulertop", "eulertop-check"))
