@@ -128,9 +128,24 @@ def _leave(status: list[int]) -> None:
     os._exit(status[0])
 
 
+def _innermost(parser: argparse.ArgumentParser,
+               args: argparse.Namespace) -> argparse.ArgumentParser:
+    """The parser of the innermost subcommand ``args`` name (``eulertop key set``'s for
+    ``key set``), ``parser`` itself if none."""
+    while True:
+        chosen = [action.choices[getattr(args, action.dest)] for action in parser._actions
+                  if isinstance(action, argparse._SubParsersAction)
+                  and getattr(args, action.dest, None) in action.choices]
+        if not chosen:
+            return parser
+        parser = chosen[0]
+
+
 def _dispatch(argv: list[str]) -> int:
     parser = build_parser(next((a for a in argv if a in SUBCOMMANDS), None))
-    args = parser.parse_args(argv)
+    args, unknown = parser.parse_known_args(argv)
+    if unknown:  # said by the (sub)command given them, with its usage, not eulertop's
+        _innermost(parser, args).error(f"unrecognized arguments: {' '.join(unknown)}")
     if args.command is None:
         parser.print_help(sys.stderr)
         return 2

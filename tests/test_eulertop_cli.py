@@ -1,10 +1,13 @@
-"""The `eulertop` console script itself: --version, and a reader that leaves the pipe early."""
+"""The `eulertop` console script itself: --version, arguments a command does not take, and a
+reader that leaves the pipe early."""
 
 from __future__ import annotations
 
 import subprocess
 import sys
 from importlib import metadata
+
+import pytest
 
 from eulertop.cli import main
 
@@ -15,6 +18,35 @@ def test_version_prints_the_installed_version(capsys):
     except SystemExit as done:  # argparse's version action exits
         assert done.code == 0
     assert capsys.readouterr().out.strip() == f"eulertop {metadata.version('eulertop')}"
+
+
+@pytest.mark.parametrize("argv, command, option", [
+    # a value where an option was meant: `override` takes its points as --points
+    (["override", "HW", "s1", "q1_moments", "5"], "eulertop override", "--points"),
+    (["key", "set", "HW", "s1:q1_moments", "1e-2"], "eulertop key set", "--rtol"),
+    (["late", "set", "HW", "tomorrow"], "eulertop late set", "--due"),
+    (["generate", "--out", "HW", "stray"], "eulertop generate", "--roster"),
+])
+def test_arguments_a_command_does_not_take_are_named_with_its_usage(argv, command, option,
+                                                                     capsys):
+    """Said by the command given them, with its own usage (which names the option meant),
+    not with eulertop's, which lists none; nothing is run (usage error, status 2)."""
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"usage: {command} ")
+    assert option in err
+    assert f"{command}: error: unrecognized arguments: {argv[-1]}" in err
+
+
+def test_an_unknown_option_before_any_command_is_eulertops_to_name(capsys):
+    with pytest.raises(SystemExit) as stop:
+        main(["--nosuch"])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith("usage: eulertop [-h]")
+    assert "eulertop: error: unrecognized arguments: --nosuch" in err
 
 
 def test_a_closed_pipe_prints_no_traceback():
