@@ -13,7 +13,7 @@ from pathlib import Path
 
 from grader.compare import KeyAnswer, key_answers
 from problems.answers import WRITTEN, Answer
-from problems.generate import key_hash
+from problems.generate import ASSIGNMENT, key_hash
 from problems.variant import variable_name
 
 
@@ -119,12 +119,26 @@ def _read_json(path: Path, what: str) -> dict:
         raise UsageError(f"{path}: cannot read the {what}: {e}") from None
 
 
-def load_assignment(hw: Path) -> Assignment:
-    """Read ``HW/assignment.json`` and ``HW/key.json``; :class:`UsageError` if unusable."""
+_MANIFEST = "assignment manifest (assignment.json)"
+
+
+def require_assignment_folder(hw: Path) -> Path:
+    """``hw``, a folder holding an assignment manifest; else :class:`UsageError` naming what is
+    missing. Checked first by every command on a class, before its graded folder is looked
+    for: a mistyped folder is not a class that has not been graded yet."""
     hw = Path(hw)
     if not hw.is_dir():
         raise UsageError(f"{hw}: no such assignment folder")
-    manifest = _read_json(hw / "assignment.json", "assignment manifest (assignment.json)")
+    if not (hw / ASSIGNMENT).is_file():
+        raise UsageError(f"{hw / ASSIGNMENT}: no {_MANIFEST} here (is this an "
+                         "assignment folder written by 'eulertop generate'?)")
+    return hw
+
+
+def load_assignment(hw: Path) -> Assignment:
+    """Read ``HW/assignment.json`` and ``HW/key.json``; :class:`UsageError` if unusable."""
+    hw = require_assignment_folder(hw)
+    manifest = _read_json(hw / ASSIGNMENT, _MANIFEST)
     key = _read_json(hw / "key.json", "answer key (key.json)")
     try:
         rows = tuple(manifest["roster"]["rows"])

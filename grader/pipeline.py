@@ -65,7 +65,12 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
-from grader.assignment import Assignment, UsageError, load_assignment
+from grader.assignment import (
+    Assignment,
+    UsageError,
+    load_assignment,
+    require_assignment_folder,
+)
 from grader.discover import discover, require_handed_in
 from grader.executors import Interrupted
 from grader.executors.local import run_local, warm_kernels
@@ -296,8 +301,7 @@ def grade_assignment(
     """
     if cluster is not None:
         _require_cluster(cluster)
-    if not Path(hw).is_dir():  # before the output folder is made in it
-        raise UsageError(f"{hw}: no such assignment folder")
+    require_assignment_folder(hw)  # before the output folder is made in it
     submissions, archive = _submissions_input(Path(submissions))
     out = graded_folder(hw, out)
     require_out_outside(out, submissions)

@@ -34,7 +34,12 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from grader.assignment import Assignment, UsageError, load_assignment
+from grader.assignment import (
+    Assignment,
+    UsageError,
+    load_assignment,
+    require_assignment_folder,
+)
 from grader.follow_through import FollowThrough, FollowWorker, warm_worker
 from grader.grade_one import scored
 from grader.graded_folder import RESULTS, graded_folder
@@ -246,7 +251,7 @@ def rescore(hw: Path, out: Path | None = None, *, change: Amend | None = None,
         file; another command holding the class longer than ``wait``
         (:class:`grader.graded_folder.RunInProgress`). Nothing is written then.
     """
-    hw = Path(hw)
+    hw = require_assignment_folder(hw)
     out = graded_folder(hw, out)
     if not (out / RESULTS).is_dir():
         raise UsageError(f"{out / RESULTS}: no result records here; run 'eulertop grade' "

@@ -45,7 +45,12 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from grader.assignment import Assignment, UsageError, load_assignment
+from grader.assignment import (
+    Assignment,
+    UsageError,
+    load_assignment,
+    require_assignment_folder,
+)
 from grader.audit import AUDIT, who
 from grader.follow_through import FollowThrough
 from grader.grade_one import now
@@ -120,7 +125,8 @@ class ReviewSession:
 
     def __init__(self, hw: Path, out: Path | None = None, *, grader: str | None = None,
                  reveal: bool = False, wait: float = WAIT) -> None:
-        self.hw, self.out = Path(hw), graded_folder(hw, out)
+        self.hw = require_assignment_folder(hw)
+        self.out = graded_folder(hw, out)
         if not (self.out / RESULTS).is_dir():
             raise ReviewError(f"{self.out / RESULTS}: no result records here; run 'eulertop "
                               "grade' first")

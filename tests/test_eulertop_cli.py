@@ -64,3 +64,38 @@ def test_head_one_through_a_shell_shows_the_first_line_only():
                           capture_output=True, text=True, timeout=60)
     assert done.stderr == ""
     assert done.stdout.split()[0] == "inertia_tensor" and done.stdout.count("\n") == 1
+
+
+CLASS_COMMANDS = [
+    ["rescore", "{hw}"],
+    ["key", "set", "{hw}", "q1_T", "--rtol", "0.01"],
+    ["rekey", "{hw}"],
+    ["override", "{hw}", "ada", "--points", "1", "--reason", "r"],
+    ["late", "set", "{hw}", "--due", "2026-01-01T00:00:00+00:00"],
+    ["export", "{hw}", "--to", "moodle"],
+    ["review", "{hw}", "--no-browser"],
+    ["report", "{hw}"],
+    ["grade", "{hw}", "{subs}"],
+]
+
+
+@pytest.mark.parametrize("folder, fragment", [
+    ("HW-typo", "HW-typo: no such assignment folder"),
+    ("empty", "assignment.json: no assignment manifest (assignment.json) here"),
+])
+@pytest.mark.parametrize("argv", CLASS_COMMANDS,
+                         ids=lambda argv: " ".join(a for a in argv[:2] if "{" not in a))
+def test_every_command_on_a_class_names_a_wrong_assignment_folder_first(
+        tmp_path, capsys, argv, folder, fragment):
+    """A mistyped or wrong HW folder is said to be one, not taken for a class that has not
+    been graded yet ("run 'eulertop grade' first"); one line, status 2, nothing written."""
+    (tmp_path / "empty").mkdir()
+    (tmp_path / "subs").mkdir()
+    hw = tmp_path / folder
+    before = sorted(tmp_path.rglob("*"))
+    code = main([a.format(hw=hw, subs=tmp_path / "subs") for a in argv])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert fragment in err and "eulertop grade' first" not in err and "Traceback" not in err
+    assert err.count("\n") == 1
+    assert sorted(tmp_path.rglob("*")) == before

@@ -150,10 +150,11 @@ def write_export(hw: Path, lms: str, out: Path | None = None, graded: Path | Non
     :class:`ExportError`, ``grader.assignment.UsageError``, ``problems.roster.RosterError`` or
     ``grader.lms.classlist.ImportError_`` on bad input.
     """
+    from grader.assignment import require_assignment_folder
     from grader.graded_folder import graded_folder
     from grader.transaction import class_lock
 
-    graded = graded_folder(hw, graded)
+    graded = graded_folder(require_assignment_folder(hw), graded)
     if not graded.is_dir():
         raise ExportError(f"{graded}: no results/ here — run 'eulertop grade' first")
     with class_lock(graded, Path(hw), command="eulertop export"):  # no change read half-way
