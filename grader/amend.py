@@ -119,7 +119,7 @@ def add_late_arguments(parser: argparse.ArgumentParser) -> None:
     extend.add_argument("--remove", action="store_true", help="take the extension back")
 
 
-def _say_rescore(command: str, report) -> None:
+def _say_rescore(command: str, report, reveal: bool = False) -> None:
     from grader.rescore import change_lines
 
     verb = "would change" if report.dry_run else "changed"
@@ -131,6 +131,12 @@ def _say_rescore(command: str, report) -> None:
     print(f"{command}: {len(report.rescored)} student(s) rescored, {len(students)} {verb}, "
           f"{report.unchanged} unchanged" + ("; nothing written (--dry-run)"
                                              if report.dry_run else ""))
+    if report.every_page:  # a change of some students, and the pages showed otherwise
+        before = {None: "what they showed was not recorded", True: "they showed them",
+                  False: "they did not show them"}[report.pages_showed]
+        print(f"{command}: every student's feedback page written again "
+              f"{'with' if reveal else 'without'} their key values, as this command was"
+              f"{'' if reveal else ' not'} given --reveal ({before})")
     if report.unread:
         answers = sorted({v for vs in report.unread.values() for v in vs})
         print(f"{command}: {len(report.unread)} student(s) answered before the key had "
@@ -166,7 +172,7 @@ def _rescore(args: argparse.Namespace, command: str, change=None) -> int:
             return 0
         if amendment.key is not None and not args.dry_run:
             print(f"{command}: wrote {Path(args.hw) / 'key.json'} (the old one kept beside it)")
-        _say_rescore(command, report)
+        _say_rescore(command, report, args.reveal)
         return 0
 
     return _run(command, body)

@@ -21,6 +21,9 @@ RESULTS, FEEDBACK, GRADES, LOCK = "results", "feedback", "grades.csv", ".lock"
 ANSWERS, DOWNLOAD, LMS_SUBMISSIONS = "answers.csv", "download", "submissions.csv"
 REPORT = "report.html"
 """The class report's page (with its CSV files beside it)."""
+PAGES = "pages.json"
+"""What the feedback pages show: ``{"reveal": true}`` when each student's key values, as the
+command that last wrote every page was told (``--reveal``); absent where that is not known."""
 
 
 def graded_folder(hw: Path, out: Path | None = None) -> Path:

@@ -77,11 +77,12 @@ from grader.executors.local import run_local, warm_kernels
 from grader.follow_through import FollowThrough
 from grader.grade_one import Execute, submission_bytes, ungraded_result, unreadable
 from grader.gradebook import gradebook_csv, ran_code
-from grader.graded_folder import DOWNLOAD, FEEDBACK, LMS_SUBMISSIONS, RESULTS, graded_folder
+from grader.graded_folder import DOWNLOAD, FEEDBACK, LMS_SUBMISSIONS, PAGES, RESULTS, graded_folder
 from grader.lms.classlist import merge_rows
 from grader.overrides import check_overrides, read_overrides, without_overrides
 from grader.publish import (
     NO_REVIEWS,
+    pages_reveal,
     prepare_report,
     records,
     settled,
@@ -432,6 +433,8 @@ class _Writer:
         self.run = uuid.uuid4().hex  # names the run's lines in the trail
         self.graded: tuple[str, ...] = ()
         self._lock = threading.Lock()
+        # pages of both kinds until finish() writes every one: what they show is not known then
+        self._mixes = pages_reveal(out) not in (None, reveal)
 
     def __call__(self, result: StudentResult) -> None:
         result = replace(result, submitted=self.times.get(result.student_id, {}))
@@ -439,6 +442,9 @@ class _Writer:
         with self._lock:
             tx = Transaction(self.out)
             stage_record(tx, self.a, self.out, result, self.reveal)
+            if self._mixes:
+                tx.remove(self.out / PAGES)
+                self._mixes = False
             tx.trail("graded", [_graded_change(self.before.get(result.student_id), result)],
                      why="eulertop grade", run=self.run)
             tx.commit()

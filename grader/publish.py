@@ -10,6 +10,7 @@ Floor 6 of grader/ (where grade_one runs; where submissions come from; grader/AP
 
 from __future__ import annotations
 
+import json
 import sys
 import threading
 from collections.abc import Callable, Mapping, Sequence, Set
@@ -20,7 +21,7 @@ from typing import Any
 from grader.assignment import Assignment
 from grader.follow_through import FollowThrough
 from grader.gradebook import feedback_html
-from grader.graded_folder import ANSWERS, FEEDBACK, GRADES, REPORT, RESULTS
+from grader.graded_folder import ANSWERS, FEEDBACK, GRADES, PAGES, REPORT, RESULTS
 from grader.late import policy_of
 from grader.overrides import Override, apply_overrides
 from grader.results import StudentResult, read_result, result_json
@@ -165,9 +166,10 @@ def stage_views(tx: Transaction, a: Assignment, out: Path,
                 published: Set[str] = frozenset(), pages: Set[str] | None = None,
                 cache: RowCache | None = None) -> None:
     """Stage the gradebook, the answers table and the feedback pages of ``pages`` (None: every
-    student) from ``results``; but the pages of ``published`` (staged with their records). A
-    file whose text is unchanged is left as it is (:meth:`Transaction.write`). ``cache``: the
-    rows of records met before, kept (:class:`RowCache`)."""
+    student, and :data:`~grader.graded_folder.PAGES` saying what they show) from ``results``;
+    but the pages of ``published`` (staged with their records). A file whose text is unchanged
+    is left as it is (:meth:`Transaction.write`). ``cache``: the rows of records met before,
+    kept (:class:`RowCache`)."""
     present = {sid: r for sid, r in results.items() if r is not None}
     grades, answers = _tables(a, present, cache if cache is not None else RowCache())
     tx.write(out / GRADES, grades, durable=False)
@@ -175,6 +177,18 @@ def stage_views(tx: Transaction, a: Assignment, out: Path,
     for sid, r in present.items():
         if sid not in published and (pages is None or sid in pages):
             tx.write(out / FEEDBACK / f"{sid}.html", _page(a, r, reveal), durable=False)
+    if pages is None:  # every page is as ``reveal`` says now
+        tx.write(out / PAGES, json.dumps({"reveal": reveal}) + "\n", durable=False)
+
+
+def pages_reveal(out: Path) -> bool | None:
+    """Whether every feedback page in ``out`` shows its student's key values (:data:`PAGES`):
+    None where that is not known (pages written before it was kept, or since mixed)."""
+    try:
+        reveal = json.loads((out / PAGES).read_text(encoding="utf-8")).get("reveal")
+    except (OSError, UnicodeDecodeError, ValueError, AttributeError):
+        return None
+    return reveal if type(reveal) is bool else None
 
 
 def stage_scoped_views(tx: Transaction, a: Assignment, out: Path,

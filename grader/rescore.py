@@ -55,6 +55,7 @@ from grader.overrides import (
 from grader.publish import (
     NO_REVIEWS,
     RowCache,
+    pages_reveal,
     records,
     report_notebooks,
     settled,
@@ -128,6 +129,8 @@ class Rescore:
     dry_run: bool
     amendment: Amendment = Amendment()
     unread: Mapping[str, tuple[str, ...]] = field(default_factory=dict)  # id → answers unread
+    every_page: bool = False  # a change of some students wrote every feedback page (_commit)
+    pages_showed: bool | None = None  # the key values on every page before (None: not known)
 
 
 def _unread(a: Assignment, old: StudentResult) -> tuple[str, ...]:
@@ -310,8 +313,9 @@ def amended_class(state: Loaded, amendment: Amendment, *, dry_run: bool = False,
                                   warm)
     report = replace(report, dry_run=dry_run)
     if not dry_run:
-        _commit(a, state.hw, state.out, old, new, report, reveal, command, scope, rows,
-                whole=state.records is not None or scope is None)
+        every_page, showed = _commit(a, state.hw, state.out, old, new, report, reveal, command,
+                                     scope, rows, whole=state.records is not None or scope is None)
+        report = replace(report, every_page=every_page, pages_showed=showed)
     return report, new
 
 
@@ -402,10 +406,12 @@ def _rescored_class(a: Assignment, old: Mapping[str, StudentResult | None],
 def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult | None],
             new: Mapping[str, StudentResult | None], report: Rescore, reveal: bool,
             command: str, scope: frozenset[str] | None = None,
-            rows: RowCache | None = None, whole: bool = True) -> None:
+            rows: RowCache | None = None, whole: bool = True) -> tuple[bool, bool | None]:
     """The change, its records and their views, and its line of the trail, as one
     transaction. ``whole``: ``old`` holds every record of the class (else those of
-    ``scope``)."""
+    ``scope``). Whether a change of some students wrote every feedback page again (they
+    showed the key values where ``reveal`` says not to, or the other way round, or that was
+    not known), and what they showed before (:func:`grader.publish.pages_reveal`)."""
     amendment, details = report.amendment, dict(report.amendment.details)
     tx = Transaction(out)
     if amendment.key is not None:
@@ -421,7 +427,13 @@ def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult 
     changed = {sid for sid, r in new.items() if r is not None and r is not old[sid]}
     for sid in changed:
         stage_record(tx, a, out, new[sid], reveal)
-    if whole:
+    showed = pages_reveal(out)
+    every_page = scope is not None and showed is not reveal
+    if every_page:  # the other pages show the key values otherwise (or that is not known): all
+        # of them again as this command is told, never a class of pages of both kinds
+        every = new if whole else {**records(a, out, frozenset(a.ids) - frozenset(new)), **new}
+        stage_views(tx, a, out, every, reveal, published=changed, cache=rows)
+    elif whole:
         stage_views(tx, a, out, new, reveal, published=changed,
                     pages=None if scope is None else frozenset(), cache=rows)
     else:
@@ -435,6 +447,7 @@ def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult 
              **({"unread": dict(report.unread)} if report.unread else {}),
              **details)
     tx.commit()
+    return every_page, showed
 
 
 def override_amendment(a: Assignment, existing: Sequence[Override], student: str,

@@ -195,8 +195,9 @@ def test_records_round_trip_and_the_gradebook_is_built_from_them(hw, first_run):
         assert float(row["total"]) == r.points == float(row["q1"]) + float(row["q2"])
         assert (float(row["maximum"]), row["status"]) == (r.max_points, r.status)
     assert sorted(p.name for p in out.iterdir()) == ["answers.csv", "audit.jsonl", "feedback",
-                                                     "grades.csv", "report.csv", "report.html",
-                                                     "report_items.csv", "results"]
+                                                     "grades.csv", "pages.json", "report.csv",
+                                                     "report.html", "report_items.csv",
+                                                     "results"]
 
 
 def test_a_rerun_skips_what_is_unchanged(hw, subs, first_run):
