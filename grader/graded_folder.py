@@ -22,8 +22,9 @@ ANSWERS, DOWNLOAD, LMS_SUBMISSIONS = "answers.csv", "download", "submissions.csv
 REPORT = "report.html"
 """The class report's page (with its CSV files beside it)."""
 PAGES = "pages.json"
-"""What the feedback pages show: ``{"reveal": true}`` when each student's key values, as the
-command that last wrote every page was told (``--reveal``); absent where that is not known."""
+"""What every feedback page shows: ``{"reveal": true}`` when each page has its student's key
+values, ``false`` when none has, as the command that last wrote every page was told
+(``--reveal``); absent where that is not known."""
 
 
 def graded_folder(hw: Path, out: Path | None = None) -> Path:
