@@ -109,10 +109,14 @@ class Assignment:
         return self.key["students"][student_id]["hash"]
 
 
-def _read_json(path: Path, what: str) -> dict:
+def _require_file(path: Path, what: str) -> None:
     if not path.is_file():
         raise UsageError(f"{path}: no {what} here (is this an assignment folder written by "
                          "'eulertop generate'?)")
+
+
+def _read_json(path: Path, what: str) -> dict:
+    _require_file(path, what)
     try:
         return json.loads(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
@@ -129,9 +133,7 @@ def require_assignment_folder(hw: Path) -> Path:
     hw = Path(hw)
     if not hw.is_dir():
         raise UsageError(f"{hw}: no such assignment folder")
-    if not (hw / ASSIGNMENT).is_file():
-        raise UsageError(f"{hw / ASSIGNMENT}: no {_MANIFEST} here (is this an "
-                         "assignment folder written by 'eulertop generate'?)")
+    _require_file(hw / ASSIGNMENT, _MANIFEST)
     return hw
 
 

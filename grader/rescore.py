@@ -427,7 +427,7 @@ def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult 
     changed = {sid for sid, r in new.items() if r is not None and r is not old[sid]}
     for sid in changed:
         stage_record(tx, a, out, new[sid], reveal)
-    showed = pages_reveal(out)
+    showed = pages_reveal(out) if scope is not None else None  # every page is written else
     every_page = scope is not None and showed is not reveal
     if every_page:  # the other pages show the key values otherwise (or that is not known): all
         # of them again as this command is told, never a class of pages of both kinds
