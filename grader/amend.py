@@ -143,6 +143,14 @@ def _say_rescore(command: str, report, reveal: bool = False) -> None:
               f"{', '.join(answers)}: those answers are unread until their notebooks run "
               f"again; 'eulertop grade HW SUBMISSIONS' runs exactly these: "
               f"{', '.join(sorted(report.unread))}")
+    if report.other_variant:
+        who = sorted(report.other_variant)
+        print(f"{command}: {len(who)} student(s) graded as a variant of theirs that has "
+              f"changed since (a reroll?): {', '.join(who[:SHOWN])}"
+              f"{f' and {len(who) - SHOWN} more' if len(who) > SHOWN else ''}; their stored "
+              "answers are compared with their new keys all the same, and their records say "
+              "so; 'eulertop grade HW SUBMISSIONS' grades the notebooks they submit for their "
+              "new variants")
 
 
 def _run(command: str, body) -> int:

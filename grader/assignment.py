@@ -10,6 +10,7 @@ import json
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
+from typing import Any
 
 from grader.compare import KeyAnswer, key_answers
 from problems.answers import WRITTEN, Answer
@@ -54,6 +55,17 @@ class Assignment:
                 raise UsageError(f"{self.folder / 'key.json'}: {student_id}'s entry cannot be "
                                  f"read: {e}") from None
         return self._expected[student_id]
+
+    def parameters(self, student_id: str) -> dict[str, Any]:
+        """``student_id``'s parameters by notebook variable (``q2_M``), as ``assignment.json``
+        records them and their notebook's parameters cell writes them; ``{}`` for a manifest
+        without them (or a student it does not hold)."""
+        try:
+            return {variable_name(q["question"], name): value
+                    for q in self.students[student_id]["questions"]
+                    for name, value in q.get("params", {}).items()}
+        except (KeyError, TypeError, AttributeError):
+            return {}
 
     def verified(self, student_id: str) -> bool:
         """Whether ``student_id``'s key entry is the one its hash names (as ``generate`` and

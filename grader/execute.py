@@ -302,7 +302,8 @@ def execute_submission(
         return Execution("invalid_notebook", f"not a valid notebook: {err}", {}, (),
                          time.monotonic() - start, False)
     run = _Run(loaded.cells, limits)
-    whose, notes = identity_of(loaded.notebook.get("metadata")), loaded.notes
+    whose, notes = identity_of(loaded.notebook.get("metadata"),
+                                 loaded.notebook.get("cells")), loaded.notes
     del loaded  # its outputs may be large: not kept while the kernel runs
     kernel = None
     from grader.sandbox import fresh_folder, run_folder

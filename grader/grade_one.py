@@ -8,6 +8,7 @@ Floor 4 of grader/ (the unit, what it is graded against, where its records go; g
 from __future__ import annotations
 
 import hashlib
+import json
 from collections.abc import Mapping, Sequence
 from datetime import UTC, datetime
 from pathlib import Path
@@ -55,13 +56,28 @@ def now() -> str:
     return datetime.now(UTC).isoformat(timespec="seconds")
 
 
-def _execution_record(execution: Any, foreign: str = "") -> dict:
+VARIANT = "variant"
+"""The execution record's hash of the parameters the notebook was graded as
+(:func:`parameters_hash`): a rescore tells by it that the student's variant changed since."""
+
+
+def parameters_hash(parameters: Mapping[str, Any]) -> str:
+    """``"sha256:<hex>"`` of a student's parameters by notebook variable, in canonical JSON."""
+    canonical = json.dumps(dict(parameters), sort_keys=True, separators=(",", ":"),
+                           ensure_ascii=False, allow_nan=False)
+    return "sha256:" + hashlib.sha256(canonical.encode("utf-8")).hexdigest()
+
+
+def _execution_record(execution: Any, foreign: str = "",
+                      parameters: Mapping[str, Any] | None = None) -> dict:
     # no duration: it differs on every run, and graded_at is the record's one volatile field
     record = {"status": execution.status, "message": execution.message,
               "cell_errors": list(execution.cell_errors),
               "output_truncated": execution.output_truncated}
-    if foreign:  # the notebook that ran is not this assignment's, or another student's
+    if foreign:  # the notebook that ran is not this assignment's, another student's or variant's
         record["foreign"] = foreign
+    if parameters:
+        record[VARIANT] = parameters_hash(parameters)
     if getattr(execution, "retry", False):
         record["retry"] = True
     if getattr(execution, "isolation", ""):
@@ -102,12 +118,16 @@ def _answers_read(expected: Sequence[KeyAnswer], run: Run) -> dict[str, Any]:
 
 
 def record(student_id: str, expected: Sequence[KeyAnswer], key_sha256: str,
-           run: Run) -> StudentResult:
+           run: Run, parameters: Mapping[str, Any] | None = None) -> StudentResult:
     """The record of a submission that ran (or could not): its answers compared with
     ``expected``. A notebook that cannot be loaded, a kernel that dies, a time-out, or a grader
-    fault gives a ``failed`` record saying so, with no points (fail closed)."""
+    fault gives a ``failed`` record saying so, with no points (fail closed). ``parameters``:
+    the student's, by notebook variable (:meth:`grader.assignment.Assignment.parameters`);
+    given, a notebook holding others is named another variant's, and the record keeps their
+    hash (:data:`VARIANT`)."""
     execution = run.execution
-    foreign = run.identity.not_for(student_id) if run.identity and execution else ""
+    foreign = run.identity.not_for(student_id, parameters) if run.identity and execution \
+        else ""
     notes = [run.problem] if run.problem else []
     extracted = _answers_read(expected, run)
     if execution is not None and (execution.status != "ok" or not extracted):
@@ -119,8 +139,8 @@ def record(student_id: str, expected: Sequence[KeyAnswer], key_sha256: str,
         student_id, expected, key_sha256,
         status="graded" if extracted else "failed",  # fail closed: nothing read, nothing given
         message="\n".join(notes), extracted=extracted,
-        execution=(_execution_record(execution, foreign) if execution is not None else
-                   {"retry": True} if run.fault else {}),
+        execution=(_execution_record(execution, foreign, parameters) if execution is not None
+                   else {"retry": True} if run.fault else {}),
         sandboxed=bool(getattr(execution, "sandboxed", False)), submission_sha256=run.sha256)
 
 
@@ -134,7 +154,8 @@ def ungraded_result(
 
 def grade_one(submission: Submission, expected: Sequence[KeyAnswer], key_hash: str,
               limits: Any, execute: Execute | None = None, sha: str | None = None,
-              copies: Path | None = None) -> StudentResult:
+              copies: Path | None = None,
+              parameters: Mapping[str, Any] | None = None) -> StudentResult:
     """Grade ONE submission — the unit every way of grading shares (the local pool, Dask
     workers, the hosted entrypoints): :func:`run_one`, then its answers compared with
     ``expected`` in this process (:func:`record`); never an exception. A submission that could
@@ -144,4 +165,4 @@ def grade_one(submission: Submission, expected: Sequence[KeyAnswer], key_hash: s
                   written_names(expected))
     if run.sha256 is None:
         return ungraded_result(submission.student_id, "failed", run.problem, expected, key_hash)
-    return record(submission.student_id, expected, key_hash, run)
+    return record(submission.student_id, expected, key_hash, run, parameters)

@@ -523,7 +523,8 @@ def summary_table(results: Sequence[StudentResult], problems: Sequence[Problem] 
                    f"{len(waiting)} student(s); they count 0 until reviewed")
     foreign = [r.student_id for r in results if r.execution.get("foreign")]
     if foreign:
-        out.append(f"not this assignment's notebook, or another student's, graded all the same "
+        out.append(f"not this assignment's notebook, another student's or another variant's, "
+                   f"graded all the same "
                    f"({len(foreign)}): {', '.join(foreign)}")
     out += answer_counts(results)
     stray = [p for p in problems if p.student_id is None]

@@ -206,7 +206,7 @@ def _plan(a: Assignment, found, out: Path, force: bool, sandboxed: bool = False,
             if _unchanged(old, sha, key_hash, sandboxed=sandboxed):
                 kept.append(sid)
             else:
-                to_run.append((by_id[sid], expected, key_hash, sha))
+                to_run.append((by_id[sid], expected, key_hash, sha, a.parameters(sid)))
                 if len(data) <= PRELOAD_SCAN_BYTES and json_shape(data) is None:
                     packages |= packages_imported(data)
             continue

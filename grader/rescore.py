@@ -41,7 +41,7 @@ from grader.assignment import (
     require_assignment_folder,
 )
 from grader.follow_through import FollowThrough, FollowWorker, warm_worker
-from grader.grade_one import scored
+from grader.grade_one import VARIANT, parameters_hash, scored
 from grader.graded_folder import RESULTS, graded_folder
 from grader.overrides import (
     OVERRIDES,
@@ -129,6 +129,7 @@ class Rescore:
     dry_run: bool
     amendment: Amendment = Amendment()
     unread: Mapping[str, tuple[str, ...]] = field(default_factory=dict)  # id → answers unread
+    other_variant: tuple[str, ...] = ()  # graded as a variant of theirs that has changed since
     every_page: bool = False  # a change of some students wrote every feedback page (_commit)
     pages_showed: bool | None = None  # the key values on every page before (None: not known)
 
@@ -141,12 +142,31 @@ def _unread(a: Assignment, old: StudentResult) -> tuple[str, ...]:
                  if k.variable not in had or k.variable in before)
 
 
+VARIANT_CHANGED = ("this student's variant changed after the notebook was graded (its "
+                   "parameters are no longer theirs: a reroll?)")
+"""A record's ``foreign`` note when the parameters it was graded as (:data:`VARIANT`) are not
+the student's any more: its answers are compared with their new key all the same."""
+
+
+def variant_changed(a: Assignment, old: StudentResult) -> bool:
+    """Whether ``old`` was graded as parameters of its student's that ``a`` no longer holds
+    (a record without their hash, made before records kept it, is taken as it is)."""
+    was, own = old.execution.get(VARIANT), a.parameters(old.student_id)
+    return bool(was and own) and was != parameters_hash(own)
+
+
 def rescored(a: Assignment, old: StudentResult) -> StudentResult:
     """``old`` compared again with ``a``'s key (the module docstring's rules), before
-    follow-through credit and overrides."""
+    follow-through credit and overrides; a record graded as a variant of its student's that
+    has changed since says so (:data:`VARIANT_CHANGED`)."""
     sid = old.student_id
     expected, execution, extracted = a.expected(sid), dict(old.execution), None
     execution.pop(UNREAD, None)
+    message = old.message
+    if not execution.get("foreign") and variant_changed(a, old):
+        execution["foreign"] = VARIANT_CHANGED
+        message = "\n".join(filter(None, (message, f"{VARIANT_CHANGED}; its answers are "
+                                                    "compared with their new key all the same")))
     unread = _unread(a, old) if old.status == "graded" else ()
     if old.status == "graded":
         kinds = {k.variable: k.answer.kind for k in expected}
@@ -155,7 +175,7 @@ def rescored(a: Assignment, old: StudentResult) -> StudentResult:
         extracted.update({k.variable: None for k in expected if k.variable not in extracted})
         if unread:
             execution[UNREAD] = list(unread)
-    new = replace(scored(sid, expected, a.key_hash(sid), status=old.status, message=old.message,
+    new = replace(scored(sid, expected, a.key_hash(sid), status=old.status, message=message,
                          extracted=extracted, execution=execution, sandboxed=old.sandboxed,
                          submission_sha256=old.submission_sha256), submitted=old.submitted)
     if not unread:
@@ -398,9 +418,10 @@ def _rescored_class(a: Assignment, old: Mapping[str, StudentResult | None],
                  if r is not None and (scope is None or sid in scope))
     unread = {sid: tuple(r.execution[UNREAD]) for sid, r in new.items()
               if r is not None and r.execution.get(UNREAD)}
+    other = tuple(sid for sid in done if new[sid] is not None and variant_changed(a, new[sid]))
     touched = {c.student for c in changes}
     return Rescore(tuple(changes), done, len(done) - len(touched), False, amendment,
-                   unread), new
+                   unread, other), new
 
 
 def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult | None],
@@ -445,6 +466,7 @@ def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult 
     tx.trail(amendment.event, (c.as_dict() for c in report.changes), why=amendment.why,
              students=len(report.rescored), unchanged=report.unchanged,
              **({"unread": dict(report.unread)} if report.unread else {}),
+             **({"other_variant": list(report.other_variant)} if report.other_variant else {}),
              **details)
     tx.commit()
     return every_page, showed

@@ -157,7 +157,9 @@ class StudentResult:
     execution : dict
         ``status``, ``message``, ``cell_errors`` (list), ``output_truncated``; ``{}`` when
         nothing was executed. (No duration: it would differ on every run.) ``foreign``: why
-        the notebook that ran is not this assignment's, or another student's (issue 30).
+        the notebook that ran is not this assignment's, another student's (issue 30) or
+        another variant's; ``variant``: the hash of the student's parameters it was graded as
+        (:func:`grader.grade_one.parameters_hash`).
     sandboxed : bool
         Whether the kernel ran inside the sandbox (:mod:`grader.sandbox`); False when graded
         with ``--no-sandbox``, or when nothing was executed.

@@ -48,9 +48,9 @@ import os
 import re
 import socket
 import threading
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import ExitStack, contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -94,6 +94,7 @@ class Task:
     sha: str
     expected: tuple[KeyAnswer, ...]
     key_hash: str
+    parameters: dict = field(default_factory=dict)  # the student's, by notebook variable
 
 
 def require_distributed() -> None:
@@ -284,7 +285,7 @@ def grade_remote(task: Task, limits: Any, execute: Callable | None, plugin: str)
         with os.fdopen(fd, "wb") as f:
             f.write(task.data)
         result = grade_one(Submission(task.student_id, path), task.expected, task.key_hash,
-                           limits, execute, task.sha, copies)
+                           limits, execute, task.sha, copies, task.parameters)
         return result.to_dict()
     finally:
         shutil.rmtree(folder, ignore_errors=True)
@@ -320,7 +321,7 @@ def _fault_record(run: tuple, why: str) -> StudentResult:
 
     from grader.grade_one import ungraded_result
 
-    submission, expected, key_hash, sha = run
+    submission, expected, key_hash, sha = run[:4]
     record = ungraded_result(submission.student_id, "failed",
                              f"the grader could not run this notebook ({why})", expected,
                              key_hash)
@@ -331,7 +332,7 @@ def _unreadable(run: tuple, err: Exception) -> StudentResult:
     """The record :func:`grade_one` gives a submission it cannot read (its wording)."""
     from grader.grade_one import ungraded_result, unreadable
 
-    submission, expected, key_hash, _ = run
+    submission, expected, key_hash = run[:3]
     return ungraded_result(submission.student_id, "failed", unreadable(submission.path, err),
                            expected, key_hash)
 
@@ -353,7 +354,7 @@ def grade_on_cluster(
     Parameters
     ----------
     client : distributed.Client
-    to_run : sequence of (Submission, expected answers, key hash, sha256)
+    to_run : sequence of (Submission, expected answers, key hash, sha256, parameters)
     limits : grader.limits.Limits
     publish : callable
         Writes one record (and shows progress); called here, in the client, once per student.
@@ -382,8 +383,9 @@ def grade_on_cluster(
     return run.grade(as_completed([]))
 
 
-Planned = tuple[Submission, Sequence[KeyAnswer], str, str | None]
-"""One submission of the pipeline's plan: (submission, expected answers, key hash, sha256)."""
+Planned = tuple[Submission, Sequence[KeyAnswer], str, str | None, Mapping[str, Any]]
+"""One submission of the pipeline's plan: (submission, expected answers, key hash, sha256, the
+student's parameters by notebook variable)."""
 
 
 class _ClusterRun:
@@ -453,15 +455,15 @@ class _ClusterRun:
 
     def submit(self, run: Planned, data: bytes, completed: Any) -> None:
         """One :class:`Task` to the cluster, under a key of its own."""
-        submission, expected, key_hash, sha = run
+        submission, expected, key_hash, sha, parameters = run
         sha = sha or hashlib.sha256(data).hexdigest()
         task = Task(submission.student_id, submission.path.name, data, sha, tuple(expected),
-                    key_hash)
+                    key_hash, dict(parameters))
         future = self.client.submit(grade_remote, task, self.limits, self.execute, self.plugin,
                                     pure=False, retries=TASK_RETRIES,
                                     key=f"eulertop-grade-{submission.student_id}-"
                                         f"{os.urandom(4).hex()}")
-        self.by_key[future.key] = (submission, expected, key_hash, sha)
+        self.by_key[future.key] = (submission, expected, key_hash, sha, parameters)
         completed.add(future)
 
     def outcome(self, future: Any, run: Planned, completed: Any, finished: int

@@ -49,7 +49,7 @@ def warm_kernels(warm: bool, slots: int, sandbox: Any = None,
             yield pool.kernel
 
 
-Task = tuple  # (Submission, expected key answers, key hash, submission's SHA-256)
+Task = tuple  # (Submission, expected key answers, key hash, submission's SHA-256, parameters)
 
 
 def run_local(to_run: Sequence[Task], execute: Callable, limits: Any, jobs: int,
@@ -62,10 +62,11 @@ def run_local(to_run: Sequence[Task], execute: Callable, limits: Any, jobs: int,
     stop = threading.Event()
     published = []
 
-    def work(submission, expected, key_hash, sha):
+    def work(submission, expected, key_hash, sha, parameters):
         if stop.is_set():
             return
-        result = grade_one(submission, expected, key_hash, limits, execute, sha, copies)
+        result = grade_one(submission, expected, key_hash, limits, execute, sha, copies,
+                           parameters)
         if stop.is_set():
             return  # stopped by Ctrl-C while it ran: no record, the next run grades it
         publish(result)

@@ -150,7 +150,7 @@ def grade_notebook(a: Assignment, student_id: str, path: Path, limits: Limits,
     ``docs/instructors/hosted.md``), neither read nor counted in the score."""
     expected = tuple(k for k in a.expected(student_id) if k.answer.kind != WRITTEN)
     result = grade_one(Submission(student_id, Path(path)), expected, a.key_hash(student_id),
-                       limits, isolation.execute)
+                       limits, isolation.execute, parameters=a.parameters(student_id))
     follow = FollowThrough.of(a)
     if follow is None:
         return result

@@ -89,7 +89,7 @@ def graded(tmp_path_factory):
 # -- for another student, one from elsewhere (no eulertop metadata), an answer that cannot
 # -- be read — graded all the same
 
-TOLD = ("ann", "ben", "cy", "dot", "eve")
+TOLD = ("ann", "ben", "cy", "dot", "eve", "fay")
 
 
 @pytest.fixture(scope="module")
@@ -111,8 +111,10 @@ def told(tmp_path_factory):
     eve = solution("eve")
     eve["cells"].append(code_cell(UNREADABLE_CLASSES + "q1_moments = wrapped(Hangs, q1_moments)",
                                   "unreadable"))
+    fay = solution("cy")
+    fay["metadata"]["eulertop"]["student"] = "fay"  # a classmate's copy, its name made hers
     for sid, nb in {"ann": ann, "ben": solution("cy"), "cy": solution("cy"), "dot": elsewhere,
-                    "eve": eve}.items():
+                    "eve": eve, "fay": fay}.items():
         (subs / f"{sid}.ipynb").write_text(json.dumps(nb))
     stdout = io.StringIO()
     with redirect_stdout(stdout), redirect_stderr(io.StringIO()):
@@ -145,11 +147,30 @@ def test_a_notebook_not_this_assignments_is_graded_and_named_so(told):
                                      "file name, all the same")
     assert rows["dot"]["total"] == rows["dot"]["maximum"]  # its answers are right: credited
     assert records["ben"].points < records["ben"].max_points  # cy's values on ben's key
-    assert {s for s, r in records.items() if r.execution.get("foreign")} == {"ben", "dot"}
-    assert "not this assignment's notebook, or another student's, graded all the same (2): " \
-           "ben, dot" in stdout
+    assert {s for s, r in records.items() if r.execution.get("foreign")} == {"ben", "dot", "fay"}
+    assert "not this assignment's notebook, another student's or another variant's, graded all " \
+           "the same (3): ben, dot, fay" in stdout
     page = html.unescape((hw / "graded" / "feedback" / "dot.html").read_text())
     assert "not this assignment's notebook: it has no eulertop answer list" in page
+
+
+def test_a_classmates_notebook_renamed_as_ones_own_is_named_another_variants(told):
+    """fay handed in cy's notebook with its metadata made to name her: its parameters cell
+    holds cy's parameters, drawn for another shape of body than hers (read here from the
+    manifest), and the row says so."""
+    hw, _, _, rows, records = told
+    manifest = json.loads((hw / "assignment.json").read_text())
+    (cy,), (fay,) = (manifest["students"][s]["questions"] for s in ("cy", "fay"))
+    assert not set(cy["params"]) & set(fay["params"])  # the premise of this seed's class
+    theirs = [f"q1_{name}" for name in cy["params"]]
+    assert rows["fay"]["reason"] == (
+        f"another variant's notebook: its parameters cell holds none of this student's "
+        f"parameters ({', '.join(theirs[:3])}{', …' if len(theirs) > 3 else ''} instead); it "
+        f"was graded as 'fay', from its file name, all the same")
+    assert records["fay"].points < records["fay"].max_points  # cy's values on fay's key
+    assert not records["cy"].execution.get("foreign") and rows["cy"]["reason"] == ""
+    # each record keeps which parameters it was graded as: the student's own
+    assert records["fay"].execution["variant"] != records["cy"].execution["variant"]
 
 
 def test_an_answer_that_cannot_be_read_is_named_in_its_row_and_fails_alone(told):

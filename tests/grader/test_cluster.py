@@ -290,7 +290,7 @@ def test_a_task_that_kills_its_worker_is_resubmitted(klass, local_run, tmp_path,
     a = load_assignment(hw)
     few = CLASS[:3]
     to_run = [(Submission(sid, subs / f"{sid}.ipynb"), key_answers(a.key, sid), a.key_hash(sid),
-               None) for sid in few]
+               None, a.parameters(sid)) for sid in few]
     written = collections.Counter()
     records = {}
 
