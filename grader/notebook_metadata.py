@@ -30,6 +30,9 @@ not parsed, and its notebook's parameters are not told."""
 SHOWN_PARAMETERS = 3
 """Most parameters whose values :meth:`Identity.not_for` names; it counts the rest."""
 
+SHOWN_CHARACTERS = 40
+"""Longest value it shows, as its literal (longer ones are cut, ``…``)."""
+
 
 class NoAnswerList(ValueError):
     """The notebook has no eulertop answer list, or a damaged one: not a notebook the generator
@@ -106,11 +109,18 @@ def other_variant(found: Mapping[str, Any], own: Mapping[str, Any]) -> str:
     differ = [name for name in shared if not _same(found[name], own[name])]
     if not differ:
         return ""
-    named = "; ".join(f"{name} = {found[name]!r} where theirs is {own[name]!r}"
+    named = "; ".join(f"{name} = {_shown(found[name])} where theirs is {_shown(own[name])}"
                       for name in differ[:SHOWN_PARAMETERS])
     more = len(differ) - SHOWN_PARAMETERS
     return (f"another variant's notebook: its parameters are not this student's ({named}"
             f"{f'; {more} more differ' if more > 0 else ''})")
+
+
+def _shown(value: Any) -> str:
+    """A value as its literal, cut to :data:`SHOWN_CHARACTERS` (a cell is the student's to
+    fill with a long one)."""
+    text = repr(value)
+    return text if len(text) <= SHOWN_CHARACTERS else text[:SHOWN_CHARACTERS - 1] + "…"
 
 
 def _same(a: Any, b: Any) -> bool:

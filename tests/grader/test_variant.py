@@ -96,6 +96,14 @@ def test_other_values_are_named_beside_the_students_own_and_counted_past_three()
         "where theirs is True; 1 more differ)")
 
 
+def test_a_long_value_is_shown_cut():
+    found = {**OWN, "q1_r": [0.123456789] * 20}
+    said = other_variant(found, OWN)
+    assert said.startswith("another variant's notebook: its parameters are not this student's "
+                           "(q1_r = [0.123456789, 0.123456789, 0.123456789,… where theirs is "
+                           "[0.1, 0.2, 0.3])")  # 39 characters of the literal, and the cut
+
+
 def test_a_cell_of_other_parameters_altogether_is_named_by_them():
     assert other_variant({"q1_a": 1.0, "q1_b": 2.0}, OWN) == (
         "another variant's notebook: its parameters cell holds none of this student's "
