@@ -148,9 +148,9 @@ def _say_rescore(command: str, report, reveal: bool = False) -> None:
         print(f"{command}: {len(who)} student(s) graded as a variant of theirs that has "
               f"changed since (a reroll?): {', '.join(who[:SHOWN])}"
               f"{f' and {len(who) - SHOWN} more' if len(who) > SHOWN else ''}; their stored "
-              "answers are compared with their new keys all the same, and their records say "
-              "so; 'eulertop grade HW SUBMISSIONS' grades the notebooks they submit for their "
-              "new variants")
+              "answers are compared with their new keys all the same, and their records "
+              f"{'would say' if report.dry_run else 'say'} so; 'eulertop grade HW SUBMISSIONS' "
+              "grades the notebooks they submit for their new variants")
 
 
 def _run(command: str, body) -> int:

@@ -157,6 +157,10 @@ def test_a_record_keeps_the_hash_of_the_parameters_it_was_graded_as(rerolled):
 def test_a_rescore_after_a_reroll_says_whose_variant_changed(rerolled, capsys):
     hw, _, before = rerolled
     capsys.readouterr()
+    assert main(["rescore", str(hw), "--dry-run"]) == 0
+    assert "s2; their stored answers are compared with their new keys all the same, and their " \
+        "records would say so;" in capsys.readouterr().out
+    assert read_result(hw / "graded" / "results" / "s2.json") == before["s2"]  # nothing written
     assert main(["rescore", str(hw)]) == 0
     out = capsys.readouterr().out
     assert ("eulertop rescore: 1 student(s) graded as a variant of theirs that has changed "
