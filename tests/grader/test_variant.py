@@ -17,6 +17,8 @@ import shutil
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from eulertop.cli import main
 from grader.notebook_metadata import (
@@ -68,6 +70,18 @@ def test_no_parameters_cell_or_one_that_cannot_be_read_tells_nothing(cells):
 
 def test_a_value_reassigned_by_code_is_not_taken_from_an_earlier_line():
     assert notebook_parameters([_cell("q1_M = 1.5\nq1_M = q1_M * 2\n")]) == {}
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.text(max_size=300) | st.lists(st.sampled_from(
+    ["q1_M = ", "1.5", "-", "[", "]", "(", ")", ", ", "\n", "1e999", "'s'", "True", "*", "j",
+     "0x1", "lambda: 0", "# x", "=", "q2_g", "{1: 2}", "{1}", "b''", "...", "\\"]),
+    max_size=40).map("".join))
+def test_any_text_in_the_parameters_cell_is_read_or_told_nothing(source):
+    """The cell is the student's: whatever it holds, reading it never raises, and what is
+    read is the value of a name assigned a literal."""
+    found = notebook_parameters([_cell(source)])
+    assert found is None or all(isinstance(k, str) and k.isidentifier() for k in found)
 
 
 # -- comparing them with the student's
