@@ -402,6 +402,7 @@ def _rescored_class(a: Assignment, old: Mapping[str, StudentResult | None],
     follow = FollowThrough.of(a, warm) if own else follow
     new: dict[str, StudentResult | None] = dict(old)
     changes: list[Change] = []
+    other: list[str] = []  # graded as a variant of theirs that has changed since
     try:
         for sid, record in old.items():
             if record is None or (scope is not None and sid not in scope):
@@ -410,7 +411,11 @@ def _rescored_class(a: Assignment, old: Mapping[str, StudentResult | None],
             result = settled(a, restored(record) if again else rescored(a, record),
                              None if again else follow, overrides, reviews)
             new[sid] = record if same_record(record, result) else result
-            changes += changes_between(record, result, amendment.why)
+            moved = variant_changed(a, result)
+            if moved:
+                other.append(sid)
+            changes += changes_between(record, result, amendment.why + (
+                "; their variant changed after grading" if moved else ""))
     finally:
         if own and follow is not None:
             follow.close()  # its worker, if one was started
@@ -418,10 +423,9 @@ def _rescored_class(a: Assignment, old: Mapping[str, StudentResult | None],
                  if r is not None and (scope is None or sid in scope))
     unread = {sid: tuple(r.execution[UNREAD]) for sid, r in new.items()
               if r is not None and r.execution.get(UNREAD)}
-    other = tuple(sid for sid in done if new[sid] is not None and variant_changed(a, new[sid]))
     touched = {c.student for c in changes}
     return Rescore(tuple(changes), done, len(done) - len(touched), False, amendment,
-                   unread, other), new
+                   unread, tuple(other)), new
 
 
 def _commit(a: Assignment, hw: Path, out: Path, old: Mapping[str, StudentResult | None],

@@ -179,6 +179,9 @@ def test_a_rescore_after_a_reroll_says_whose_variant_changed(rerolled, capsys):
     out = capsys.readouterr().out
     assert ("eulertop rescore: 1 student(s) graded as a variant of theirs that has changed "
             "since (a reroll?): s2;") in out
+    lines = [line for line in out.splitlines() if "→" in line]
+    assert lines and all(line.split()[0] == "s2" for line in lines)
+    assert all(line.endswith("(rescore; their variant changed after grading)") for line in lines)
     after = {sid: read_result(hw / "graded" / "results" / f"{sid}.json") for sid in STUDENTS}
     assert after["s2"].execution["foreign"] == VARIANT_CHANGED
     assert after["s2"].message.count(VARIANT_CHANGED) == 1
