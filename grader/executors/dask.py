@@ -321,7 +321,7 @@ def _fault_record(run: tuple, why: str) -> StudentResult:
 
     from grader.grade_one import ungraded_result
 
-    submission, expected, key_hash, sha = run[:4]
+    submission, expected, key_hash, sha, _ = run
     record = ungraded_result(submission.student_id, "failed",
                              f"the grader could not run this notebook ({why})", expected,
                              key_hash)
@@ -332,7 +332,7 @@ def _unreadable(run: tuple, err: Exception) -> StudentResult:
     """The record :func:`grade_one` gives a submission it cannot read (its wording)."""
     from grader.grade_one import ungraded_result, unreadable
 
-    submission, expected, key_hash = run[:3]
+    submission, expected, key_hash, _, _ = run
     return ungraded_result(submission.student_id, "failed", unreadable(submission.path, err),
                            expected, key_hash)
 

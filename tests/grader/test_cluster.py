@@ -308,4 +308,6 @@ def test_a_task_that_kills_its_worker_is_resubmitted(klass, local_run, tmp_path,
     for sid in few:
         local = read_result(local_run / "results" / f"{sid}.json")
         assert records[sid].status == "graded" and records[sid].points == local.points
+        # the student's parameters went with the task: the record says which it was graded as
+        assert records[sid].execution["variant"] == local.execution["variant"]
         assert records[sid].answers == local.answers
