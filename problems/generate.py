@@ -1007,5 +1007,14 @@ def reroll_students(
             if progress:
                 progress(done, len(ids))
         _write_json(tmp, manifest, key)
-    notes = tuple(f"{sid}: reroll {manifest['students'][sid]['reroll']}" for sid in ids)
+    notes = tuple(f"{sid}: reroll {manifest['students'][sid]['reroll']}"
+                  + (GRADED_BEFORE if (out / "graded" / "results" / f"{sid}.json").is_file()
+                     else "") for sid in ids)
     return Summary(out, seed, problems, ids, notes)
+
+
+GRADED_BEFORE = ("; graded already: their record holds the answers of their old variant's "
+                 "notebook (a rescore compares them with the new key, and names them), and "
+                 "'eulertop grade' grades the notebook they hand in for the new one")
+"""What :func:`reroll_students` says of a student with a record in ``HW/graded`` (the
+grader's default output folder; a class graded elsewhere is not looked for)."""

@@ -146,7 +146,7 @@ def _grade(hw: Path, submissions: Path) -> dict:
 
 
 @pytest.fixture
-def rerolled(tmp_path):
+def rerolled(tmp_path, capsys):
     """A class graded on its solutions, then s2 rerolled: (HW, the old notebooks, records)."""
     hw = tmp_path / "HW"
     generate_assignment(Roster(("id",), tuple({"id": s} for s in STUDENTS)), hw, FAMILIES,
@@ -157,6 +157,9 @@ def rerolled(tmp_path):
     before = _parameters(hw, "s2")
     assert main(["generate", "--reroll", "s2", "--out", str(hw)]) == 0
     assert _parameters(hw, "s2") != before
+    said = capsys.readouterr().err
+    assert "s2: reroll 1; graded already: their record holds the answers of their old " \
+        "variant's notebook" in said
     return hw, old, records
 
 
