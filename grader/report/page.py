@@ -169,6 +169,8 @@ def look_first(report: ClassReport) -> str:
     for c in report.code:
         items.append(f"code of <b>{e(c.students[0])}</b> and <b>{e(c.students[1])}</b> is "
                      f"nearly identical (Jaccard {c.jaccard:.2f})")
+    for sid, why in foreign_notebooks(report):
+        items.append(f"the notebook graded as <b>{e(sid)}</b>'s: {e(why)}")
     if not items:
         return "<p>Nothing stands out: no flagged question, common slip or matching pair.</p>"
     return '<ul class="look">' + "".join(f"<li>{i}</li>" for i in items) + "</ul>"
@@ -344,6 +346,25 @@ def _match_text(m) -> str:
             f"{e(shown(m.other))} (chance {m.chance:.1e})")
 
 
+def foreign_notebooks(report: ClassReport) -> list[tuple[str, str]]:
+    """``(student, why)`` of each record whose notebook is not the student's own, in roster
+    order: not this assignment's, another student's or another variant's
+    (``execution["foreign"]``, :func:`grader.grade_one.record`)."""
+    results = report.data.results
+    return [(sid, str(results[sid].execution["foreign"])) for sid in report.data.ids
+            if sid in results and results[sid].execution.get("foreign")]
+
+
+def _foreign_part(report: ClassReport) -> str:
+    rows = [[e(sid), e(why)] for sid, why in foreign_notebooks(report)]
+    body = table(["student", "why"], rows, True) if rows else \
+        ("<p>None: no notebook graded is another student's or another variant's, as far as "
+         "its metadata and its parameters cell tell.</p>")
+    return ("<h3>Notebooks that are not the student's own</h3>"
+            '<p class="note">Each was graded as the student its file name says, against their '
+            "key, all the same; its row and feedback page say why.</p>" + body)
+
+
 def copying_section(report: ClassReport) -> str:
     intro = ('<p class="note">Flags for a person to look at, never penalties. A wrong answer '
              "equal to another student's key, or two students' identical wrong answers, are "
@@ -374,7 +395,7 @@ def copying_section(report: ClassReport) -> str:
         cbody += (f'<p class="note">Only the first {MAX_COMPARED_CHARS:,} characters of code were '
                   f"compared for {', '.join(e(s) for s in report.code_cut)}: their notebooks "
                   "hold more.</p>")
-    return ('<h2 id="copying">Copied answers</h2>' + intro + body +
+    return ('<h2 id="copying">Copied answers</h2>' + intro + body + _foreign_part(report) +
             "<h3>Nearly identical code (weaker evidence)</h3>"
             '<p class="note">Token shingles of each notebook\'s own code (what the student was '
             "handed and the class's common idioms removed), compared by the Jaccard index.</p>"

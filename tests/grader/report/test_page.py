@@ -16,7 +16,7 @@ from matplotlib.image import imread
 from grader.report import build_report, write_report
 from grader.report.figures import COLOURS
 from grader.report.page import SORT_SCRIPT, STYLE
-from tests.grader.report.synthetic_class import CHROMIUM_FLAGS, chromium, screenshot
+from tests.grader.report.synthetic_class import CHROMIUM_FLAGS, PLANTED, chromium, screenshot
 
 
 def _page(planted_class) -> str:
@@ -55,6 +55,37 @@ def test_instructor_and_roster_text_is_escaped(planted_class, tmp_path):
     page = write_report(build_report(hostile), tmp_path / "r.html").read_text(encoding="utf-8")
     assert "<script>alert(1)" not in page and "<img src=x" not in page
     assert "&lt;script&gt;alert(1)&lt;/script&gt;" in page
+
+
+def test_notebooks_not_the_students_own_are_listed_first_and_escaped(planted_class, tmp_path):
+    """A record whose notebook is another variant's (or another student's) is named at the top
+    and in the copying section; the why holds the student's own text, escaped."""
+    data = planted_class.report.data
+    first, second = data.graded[:2]
+    why = "another variant's notebook: its parameters are not this student's (q1_M = " \
+          "'<img src=x onerror=alert(1)>' where theirs is 1.5)"
+    results = dict(data.results)
+    results[second] = replace(results[second],
+                              execution={**results[second].execution, "foreign": why})
+    page = write_report(build_report(replace(data, results=results)),
+                        tmp_path / "r.html").read_text(encoding="utf-8")
+    escaped = why.replace("'", "&#x27;").replace("<", "&lt;").replace(">", "&gt;")
+    assert f"the notebook graded as <b>{second}</b>'s: {escaped}" in page
+    section = page.split('<h2 id="copying">')[1].split("<h3>Nearly identical code")[0]
+    assert f"<td>{second}</td><td>{escaped}</td>" in section
+    assert f"<td>{first}</td>" not in section and "<img src=x" not in page
+
+
+
+def test_a_classmates_notebook_handed_in_is_listed_and_an_honest_class_lists_none(
+        planted_class, honest_class):
+    copier, source = PLANTED["notebook"]  # handed in the source's notebook as it is
+    section = _page(planted_class).split("Notebooks that are not the student's own")[1]
+    assert (f"<td>{copier}</td><td>another student&#x27;s notebook: its metadata names student "
+            f"&#x27;{source}&#x27;</td>") in section.split("<h3>")[0]
+    honest = (honest_class.made.graded / "report.html").read_text(encoding="utf-8")
+    assert "None: no notebook graded is another student's or another variant's" \
+        in honest and "the notebook graded as" not in honest
 
 
 def test_the_same_records_give_the_same_page(planted_class, tmp_path):
