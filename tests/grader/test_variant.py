@@ -147,7 +147,8 @@ def _grade(hw: Path, submissions: Path) -> dict:
 
 @pytest.fixture
 def rerolled(tmp_path, capsys):
-    """A class graded on its solutions, then s2 rerolled: (HW, the old notebooks, records)."""
+    """A class graded on its solutions, then s2 rerolled: (HW, the old notebooks, records, s2's
+    parameters before the reroll, as the manifest recorded them)."""
     hw = tmp_path / "HW"
     generate_assignment(Roster(("id",), tuple({"id": s} for s in STUDENTS)), hw, FAMILIES,
                         problems=["sleeping_top", "steady_precession"], seed=4)
@@ -160,11 +161,11 @@ def rerolled(tmp_path, capsys):
     said = capsys.readouterr().err
     assert "s2: reroll 1; graded already: their record holds the answers of their old " \
         "variant's notebook" in said
-    return hw, old, records
+    return hw, old, records, before
 
 
 def test_a_record_keeps_the_hash_of_the_parameters_it_was_graded_as(rerolled):
-    hw, _, records = rerolled
+    hw, _, records, _ = rerolled
     for sid in ("s1", "s3"):
         assert records[sid].execution["variant"] == _hash(_parameters(hw, sid))
         assert "foreign" not in records[sid].execution
@@ -172,7 +173,7 @@ def test_a_record_keeps_the_hash_of_the_parameters_it_was_graded_as(rerolled):
 
 
 def test_a_rescore_after_a_reroll_says_whose_variant_changed(rerolled, capsys):
-    hw, _, before = rerolled
+    hw, _, before, _ = rerolled
     capsys.readouterr()
     assert main(["rescore", str(hw), "--dry-run"]) == 0
     assert "s2; their stored answers are compared with their new keys all the same, and their " \
@@ -201,10 +202,9 @@ def test_a_rescore_after_a_reroll_says_whose_variant_changed(rerolled, capsys):
 
 
 def test_the_old_notebook_graded_after_a_reroll_is_named_another_variants(rerolled):
-    hw, old, _ = rerolled
+    hw, old, _, found = rerolled  # found: the old notebook's values, from the old manifest
     records = _grade(hw, old)  # the key changed: s2 is graded again, their old notebook
-    was, now = (json.loads((old / "s2.ipynb").read_text()), _parameters(hw, "s2"))
-    found = notebook_parameters(was["cells"])
+    now = _parameters(hw, "s2")
     differ = [name for name in now if name in found and found[name] != now[name]]
     assert differ  # the premise: the reroll drew other values of parameters of the same name
     first = differ[0]
