@@ -8,7 +8,6 @@ Floor 4 of grader/ (the unit, what it is graded against, where its records go; g
 from __future__ import annotations
 
 import hashlib
-import json
 from collections.abc import Mapping, Sequence
 from datetime import UTC, datetime
 from pathlib import Path
@@ -28,6 +27,7 @@ from grader.run_file import run_one as run_one
 from grader.run_file import submission_bytes as submission_bytes
 from grader.run_file import unreadable as unreadable
 from grader.submissions import Submission
+from problems.generate import canonical_hash
 
 
 def file_sha256(path: Path) -> str:
@@ -62,10 +62,9 @@ VARIANT = "variant"
 
 
 def parameters_hash(parameters: Mapping[str, Any]) -> str:
-    """``"sha256:<hex>"`` of a student's parameters by notebook variable, in canonical JSON."""
-    canonical = json.dumps(dict(parameters), sort_keys=True, separators=(",", ":"),
-                           ensure_ascii=False, allow_nan=False)
-    return "sha256:" + hashlib.sha256(canonical.encode("utf-8")).hexdigest()
+    """``"sha256:<hex>"`` of a student's parameters by notebook variable
+    (:func:`problems.generate.canonical_hash`, as a key entry's hash)."""
+    return canonical_hash(dict(parameters))
 
 
 def _execution_record(execution: Any, foreign: str = "",

@@ -381,12 +381,17 @@ def _entry_text(entry: Any) -> str | bytes:
 
 
 def key_hash(questions: Sequence[Mapping]) -> str:
-    """``"sha256:<hex>"`` of a student's key entry ``questions`` in canonical compact JSON.
+    """``"sha256:<hex>"`` of a student's key entry ``questions`` (:func:`canonical_hash`).
 
     The grader recomputes it to detect that a student's key changed (a reroll, a regeneration).
     """
+    return canonical_hash(questions)
+
+
+def canonical_hash(value: Any) -> str:
+    """``"sha256:<hex>"`` of a plain-JSON value in canonical compact JSON (keys sorted)."""
     canonical = json.dumps(
-        questions, sort_keys=True, separators=(",", ":"), ensure_ascii=False, allow_nan=False
+        value, sort_keys=True, separators=(",", ":"), ensure_ascii=False, allow_nan=False
     )
     return "sha256:" + hashlib.sha256(canonical.encode("utf-8")).hexdigest()
 
